@@ -1,0 +1,2 @@
+//! Symbolic core of `dae`.
+pub mod system;

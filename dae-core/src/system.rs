@@ -1,0 +1,386 @@
+//! The runtime trait: what a solver sees of a formulation.
+//!
+//! A formulation is a quasi-linear DAE
+//!
+//! ```text
+//!     E(y) y' = f(t, y),        E: M×N,  y ∈ ℝᴺ,  M ≥ N
+//! ```
+//!
+//! with `M > N` for the overdetermined formulations (`ovd1`, `ovd0`) and `E`
+//! depending on `y` for the projected ones (`psi1`, `psi0`). Two
+//! implementations exist and share one test suite: straight-line code emitted
+//! by the `dae!` macro (fastest, sizes known at compile time, see
+//! [`StaticSize`]) and the interpreter in [`crate::interp`] for models read at
+//! run time.
+//!
+//! Every evaluation is in place: the caller owns the output buffers (one
+//! allocation before the step loop, none inside it). Matrices are
+//! [`nalgebra::DMatrix`] and are overwritten whole, zeros included.
+//!
+//! Besides the formulation's own rows, every system can evaluate the
+//! *model's* constraint chain — the original constraints and all their hidden
+//! derivatives, whichever of them the formulation uses — so that consistent
+//! initialisation, drift reports and projections work the same for every
+//! formulation.
+
+use nalgebra::DMatrix;
+use serde::Serialize;
+
+/// Whether an unknown appears differentiated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VarKind {
+    /// `der(u)` appears in the model.
+    Differential,
+    /// Algebraic: a Lagrange multiplier or similar.
+    Algebraic,
+}
+
+/// One unknown of a formulation.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct VarInfo {
+    /// Name as written in the model (`eta` for the GGL multipliers).
+    pub name: String,
+    /// Differential or algebraic.
+    pub kind: VarKind,
+    /// Index of the unknown in this formulation (1, 2 or 3): how many
+    /// differentiations of the formulation's constraints determine it, plus
+    /// one. Radau-type solvers scale the error of index-k components by
+    /// `h^(k-1)` (Hairer–Wanner VII.8); BDF codes may leave index ≥ 2
+    /// components out of the error test (DASPK).
+    pub index: u8,
+}
+
+/// What a row of a formulation is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum RowKind {
+    /// A dynamic equation (possibly a projected combination of several):
+    /// the row of `E` is not zero.
+    Differential,
+    /// `0 = g`, constraint `source` (0-based, in model order) differentiated
+    /// `level` times along the model's dynamics.
+    Constraint {
+        /// Number of total time derivatives taken.
+        level: u8,
+        /// 0-based index of the original constraint.
+        source: u16,
+    },
+}
+
+impl RowKind {
+    /// The constraint level, `None` for differential rows.
+    pub fn level(&self) -> Option<u8> {
+        match self {
+            RowKind::Differential => None,
+            RowKind::Constraint { level, .. } => Some(*level),
+        }
+    }
+}
+
+/// One row of a formulation.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct RowInfo {
+    /// Kind of the row.
+    pub kind: RowKind,
+    /// The row in the model language, e.g. `m*der(v) = -2*x*lambda`.
+    pub text: String,
+}
+
+/// One member of the model's constraint chain.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct ConstraintInfo {
+    /// Number of total time derivatives taken (0 = as written).
+    pub level: u8,
+    /// 0-based index of the original constraint.
+    pub source: u16,
+    /// `0 = expr`: the expression in the model language.
+    pub expr: String,
+}
+
+/// A named model parameter and its default value.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ParamInfo {
+    /// Name in the model.
+    pub name: String,
+    /// Default value from the `parameters { … }` block.
+    pub default: f64,
+}
+
+/// Static description of a formulation: everything a solver or a report
+/// needs besides the numbers.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FormulationInfo {
+    /// Model name, e.g. `Pendulum`.
+    pub model: String,
+    /// Formulation name, e.g. `rcd1`.
+    pub name: String,
+    /// Unknowns in order (`y`).
+    pub variables: Vec<VarInfo>,
+    /// Rows in order.
+    pub rows: Vec<RowInfo>,
+    /// Differentiation index; `None` where undefined (overdetermined).
+    pub d_index: Option<u8>,
+    /// Strangeness index.
+    pub s_index: u8,
+    /// Maximal constraint level: the highest level of hidden constraint the
+    /// formulation leaves out.
+    pub c_level: u8,
+    /// `true` when `E` does not depend on `y`.
+    pub constant_leading: bool,
+    /// The model's constraint chain evaluated by [`DaeSystem::constraints`].
+    pub constraints: Vec<ConstraintInfo>,
+    /// Names of the invariants evaluated by [`DaeSystem::invariants`].
+    pub invariants: Vec<String>,
+    /// Parameter names in the order of the model.
+    pub parameters: Vec<String>,
+}
+
+impl FormulationInfo {
+    /// Number of unknowns `N`.
+    pub fn unknowns(&self) -> usize {
+        self.variables.len()
+    }
+    /// Number of equations `M` (`M > N` for overdetermined formulations).
+    pub fn equations(&self) -> usize {
+        self.rows.len()
+    }
+    /// Position of the unknown called `name`.
+    pub fn variable(&self, name: &str) -> Option<usize> {
+        self.variables.iter().position(|v| v.name == name)
+    }
+    /// Number of differential rows.
+    pub fn differential_equations(&self) -> usize {
+        self.rows
+            .iter()
+            .filter(|r| r.kind == RowKind::Differential)
+            .count()
+    }
+    /// `true` for `M > N`.
+    pub fn is_overdetermined(&self) -> bool {
+        self.equations() > self.unknowns()
+    }
+    /// The largest index of any unknown.
+    pub fn max_index(&self) -> u8 {
+        self.variables.iter().map(|v| v.index).max().unwrap_or(1)
+    }
+}
+
+/// A formulation `E(y) y' = f(t, y)` ready to integrate.
+///
+/// All methods write into caller-owned buffers and never allocate. Slices
+/// have length `N` (unknowns), `M` (equations), `K` (the constraint chain,
+/// `info().constraints.len()`) or `I` (invariants) as documented; matrices
+/// must already have the documented shape. Implementations may panic on
+/// wrong buffer sizes (a programming error), never on values: non-finite
+/// inputs give non-finite outputs for the solver to detect.
+pub trait DaeSystem {
+    /// Static description: variables, rows, structural numbers.
+    fn info(&self) -> &FormulationInfo;
+
+    /// Current parameter values, in the order of `info().parameters`.
+    fn parameter_values(&self) -> Vec<f64>;
+
+    /// `f(t, y)` into `f` (length M).
+    fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]);
+
+    /// The residual `r = E(y) yp − f(t, y)` into `r` (length M).
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]);
+
+    /// `E(y)` into `e` (M×N).
+    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>);
+
+    /// `∂f/∂y` into `j` (M×N).
+    fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>);
+
+    /// `∂(E(y) z)/∂y` into `j` (M×N); all zeros when
+    /// `info().constant_leading`.
+    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>);
+
+    /// The model's constraint chain `g_k(t, y)` into `g` (length K), in the
+    /// order of `info().constraints`.
+    fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]);
+
+    /// `∂g_k/∂y` into `j` (K×N).
+    fn constraints_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>);
+
+    /// The model's invariants (e.g. energy) into `out` (length I).
+    fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]);
+}
+
+impl<T: DaeSystem + ?Sized> DaeSystem for Box<T> {
+    fn info(&self) -> &FormulationInfo {
+        (**self).info()
+    }
+    fn parameter_values(&self) -> Vec<f64> {
+        (**self).parameter_values()
+    }
+    fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
+        (**self).rhs(t, y, f)
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
+        (**self).residual(t, y, yp, r)
+    }
+    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
+        (**self).leading(y, e)
+    }
+    fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+        (**self).rhs_jacobian(t, y, j)
+    }
+    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+        (**self).leading_jacobian(y, z, j)
+    }
+    fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
+        (**self).constraints(t, y, g)
+    }
+    fn constraints_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+        (**self).constraints_jacobian(t, y, j)
+    }
+    fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        (**self).invariants(t, y, out)
+    }
+}
+
+impl<T: DaeSystem + ?Sized> DaeSystem for &T {
+    fn info(&self) -> &FormulationInfo {
+        (**self).info()
+    }
+    fn parameter_values(&self) -> Vec<f64> {
+        (**self).parameter_values()
+    }
+    fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
+        (**self).rhs(t, y, f)
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
+        (**self).residual(t, y, yp, r)
+    }
+    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
+        (**self).leading(y, e)
+    }
+    fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+        (**self).rhs_jacobian(t, y, j)
+    }
+    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+        (**self).leading_jacobian(y, z, j)
+    }
+    fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
+        (**self).constraints(t, y, g)
+    }
+    fn constraints_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+        (**self).constraints_jacobian(t, y, j)
+    }
+    fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        (**self).invariants(t, y, out)
+    }
+}
+
+/// Sizes known at compile time: implemented by macro-generated formulations
+/// so that a solver can use stack arrays (`[f64; N]`, `SMatrix`) on its fast
+/// path.
+pub trait StaticSize {
+    /// Number of unknowns `N`.
+    const UNKNOWNS: usize;
+    /// Number of equations `M`.
+    const EQUATIONS: usize;
+    /// Length of the constraint chain `K`.
+    const CONSTRAINTS: usize;
+}
+
+/// A boxed formulation that can move to another thread (parallel sweeps
+/// build one per job).
+pub type BoxedSystem = Box<dyn DaeSystem + Send>;
+
+/// Static description of a model.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ModelInfo {
+    /// Model name.
+    pub name: String,
+    /// Doc comment, if any.
+    pub doc: String,
+    /// The model's unknowns (differential first, in declaration order, then
+    /// algebraic).
+    pub variables: Vec<VarInfo>,
+    /// Parameters with defaults.
+    pub parameters: Vec<ParamInfo>,
+    /// The constraint chain (all levels).
+    pub constraints: Vec<ConstraintInfo>,
+    /// Invariant names.
+    pub invariants: Vec<String>,
+    /// Formulations this model provides.
+    pub formulations: Vec<String>,
+}
+
+/// Why a parameter could not be set.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ParameterError {
+    /// No parameter of that name.
+    #[error("unknown parameter `{name}` (model `{model}` has: {known})")]
+    Unknown {
+        /// Model name.
+        model: String,
+        /// Name asked for.
+        name: String,
+        /// Comma-separated list of the model's parameters.
+        known: String,
+    },
+    /// NaN or infinite value.
+    #[error("parameter `{name}` must be finite, got {value}")]
+    NotFinite {
+        /// Parameter name.
+        name: String,
+        /// The offending value.
+        value: f64,
+    },
+}
+
+/// Why a formulation could not be built.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum FormulationError {
+    /// The name is not one of the eight formulations.
+    #[error("unknown formulation `{name}` (known: ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0)")]
+    Unknown {
+        /// Name asked for.
+        name: String,
+    },
+    /// A known formulation the model does not provide (not listed in its
+    /// `formulations { … }` block, or not applicable to its structure).
+    #[error("model `{model}` does not provide formulation `{name}` (it provides: {available})")]
+    NotProvided {
+        /// Model name.
+        model: String,
+        /// Name asked for.
+        name: String,
+        /// Comma-separated list.
+        available: String,
+    },
+}
+
+/// A model with parameters: the struct the `dae!` macro generates, or an
+/// interpreted model read from a `.dae` file.
+pub trait Model {
+    /// Static description.
+    fn model_info(&self) -> &ModelInfo;
+    /// Current value of a parameter.
+    fn parameter(&self, name: &str) -> Option<f64>;
+    /// Set a parameter by name; rejects unknown names and non-finite values.
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), ParameterError>;
+    /// Build the named formulation with the current parameter values.
+    fn formulation(&self, name: &str) -> Result<BoxedSystem, FormulationError>;
+}
+
+/// The eight formulation names, in the paper's order.
+pub const FORMULATION_NAMES: [&str; 8] = [
+    "ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0",
+];
+
+/// Check a parameter value (shared by generated and interpreted models).
+pub fn check_parameter(name: &str, value: f64) -> Result<(), ParameterError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(ParameterError::NotFinite {
+            name: name.to_string(),
+            value,
+        })
+    }
+}

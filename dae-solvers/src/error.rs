@@ -1,0 +1,99 @@
+//! Typed solver errors.
+
+use serde::Serialize;
+
+/// Why an integration stopped.
+#[derive(Clone, Debug, PartialEq, thiserror::Error, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum SolveError {
+    /// The step size fell below the round-off limit at `t`.
+    #[error("step size too small at t = {t:e}: h = {h:e}")]
+    StepSizeTooSmall {
+        /// Time reached.
+        t: f64,
+        /// Step size tried last.
+        h: f64,
+    },
+    /// Newton iteration failed repeatedly (divergence or too slow
+    /// convergence) even after step-size reductions.
+    #[error("Newton iteration failed at t = {t:e} with h = {h:e} after {iterations} iterations")]
+    NewtonFailure {
+        /// Time reached.
+        t: f64,
+        /// Step size tried last.
+        h: f64,
+        /// Iterations in the last attempt.
+        iterations: usize,
+    },
+    /// The iteration matrix is singular and stays so after step-size
+    /// reductions.
+    #[error("singular iteration matrix at t = {t:e} (h = {h:e})")]
+    SingularMatrix {
+        /// Time reached.
+        t: f64,
+        /// Step size tried last.
+        h: f64,
+    },
+    /// A NaN or infinity appeared in the solution or the residual.
+    #[error("non-finite value in {what} at t = {t:e}")]
+    NonFinite {
+        /// Time reached.
+        t: f64,
+        /// Where it appeared (`residual`, `solution`, …).
+        what: &'static str,
+    },
+    /// The maximum number of steps was reached before `t_end`.
+    #[error("step limit of {max_steps} reached at t = {t:e}")]
+    StepLimit {
+        /// Time reached.
+        t: f64,
+        /// The limit in force.
+        max_steps: usize,
+    },
+    /// The initial values violate an equation and may not be projected.
+    #[error("inconsistent initial values: {equation} has residual {residual:e}")]
+    InconsistentInitialValues {
+        /// The violated equation (in the model language).
+        equation: String,
+        /// Its residual.
+        residual: f64,
+    },
+    /// The problem or the options are invalid (negative tolerance, wrong
+    /// length, `t_end <= t0`, a formulation the solver cannot take, …).
+    #[error("invalid input: {what}")]
+    InvalidInput {
+        /// What is wrong, naming the field.
+        what: String,
+    },
+}
+
+impl SolveError {
+    /// Short machine-readable name of the variant (`step_size_too_small`, …).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            SolveError::StepSizeTooSmall { .. } => "step_size_too_small",
+            SolveError::NewtonFailure { .. } => "newton_failure",
+            SolveError::SingularMatrix { .. } => "singular_matrix",
+            SolveError::NonFinite { .. } => "non_finite",
+            SolveError::StepLimit { .. } => "step_limit",
+            SolveError::InconsistentInitialValues { .. } => "inconsistent_initial_values",
+            SolveError::InvalidInput { .. } => "invalid_input",
+        }
+    }
+
+    /// Time at which the failure happened, where there is one.
+    pub fn t(&self) -> Option<f64> {
+        match self {
+            SolveError::StepSizeTooSmall { t, .. }
+            | SolveError::NewtonFailure { t, .. }
+            | SolveError::SingularMatrix { t, .. }
+            | SolveError::NonFinite { t, .. }
+            | SolveError::StepLimit { t, .. } => Some(*t),
+            _ => None,
+        }
+    }
+
+    pub(crate) fn invalid(what: impl Into<String>) -> Self {
+        SolveError::InvalidInput { what: what.into() }
+    }
+}

@@ -1,0 +1,1 @@
+//! Consistent initial values (to be written).

@@ -1,0 +1,20 @@
+//! Machine-independent work counters.
+
+use serde::Serialize;
+
+/// What an integration cost, in counts that do not depend on the machine.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Rejected steps (error test or Newton failure).
+    pub rejected: usize,
+    /// Evaluations of the right-hand side / residual.
+    pub residual_evals: usize,
+    /// Evaluations of the Jacobians.
+    pub jacobian_evals: usize,
+    /// LU factorisations of iteration matrices (a complex one counts once).
+    pub factorizations: usize,
+    /// Newton iterations, summed over all attempted steps.
+    pub newton_iterations: usize,
+}
