@@ -1,0 +1,151 @@
+//! Lowering a symbolic formulation to tapes: the analytic Jacobians are
+//! differentiated here, once, and both back ends (macro and interpreter)
+//! consume the result.
+
+use crate::derive::Derived;
+use crate::expr::{self, Expr, Sym};
+use crate::formulation::Formulation;
+use crate::system::{ConstraintInfo, FormulationInfo, RowInfo};
+use crate::tape::{Tape, TapeBuilder};
+
+/// A sparse matrix whose entries are the outputs of a tape.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sparse {
+    /// `(row, column)` of each output, in output order.
+    pub entries: Vec<(u32, u32)>,
+    /// The entries' values.
+    pub tape: Tape,
+}
+
+impl Sparse {
+    fn build(cells: Vec<(usize, usize, Expr)>) -> Sparse {
+        let mut b = TapeBuilder::new();
+        let mut entries = Vec::new();
+        for (i, j, e) in cells {
+            if e.is_zero() {
+                continue;
+            }
+            b.output(&e);
+            entries.push((i as u32, j as u32));
+        }
+        Sparse {
+            entries,
+            tape: b.finish(),
+        }
+    }
+}
+
+/// Everything needed to evaluate one formulation numerically.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Compiled {
+    /// Static description.
+    pub info: FormulationInfo,
+    /// `E(y) y' − f(t, y)` (inputs `t, y, yp, p`), M outputs.
+    pub residual: Tape,
+    /// `f(t, y)`, M outputs.
+    pub rhs: Tape,
+    /// Entries of `E(y)`.
+    pub leading: Sparse,
+    /// Entries of `∂f/∂y`.
+    pub rhs_jacobian: Sparse,
+    /// Entries of `∂(E(y) z)/∂y` (inputs `y, z, p`).
+    pub leading_jacobian: Sparse,
+    /// The model's constraint chain, K outputs.
+    pub constraints: Tape,
+    /// Entries of `∂g/∂y` (K×N).
+    pub constraints_jacobian: Sparse,
+    /// The invariants.
+    pub invariants: Tape,
+    /// Default parameter values.
+    pub parameter_defaults: Vec<f64>,
+}
+
+/// Lower formulation `f` of `d`.
+pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
+    let model = &d.model;
+    let n = f.vars.len();
+    let m = f.rows.len();
+    let info = FormulationInfo {
+        model: model.name.clone(),
+        name: f.name.to_string(),
+        variables: f.vars.clone(),
+        rows: (0..m)
+            .map(|i| RowInfo {
+                kind: f.rows[i].kind,
+                text: f.row_text(model, i),
+            })
+            .collect(),
+        d_index: f.d_index,
+        s_index: f.s_index,
+        c_level: f.c_level,
+        constant_leading: f.constant_leading,
+        constraints: d.constraint_infos(),
+        invariants: model.invariants.iter().map(|i| i.name.clone()).collect(),
+        parameters: model.params.iter().map(|p| p.name.clone()).collect(),
+    };
+
+    let mut res = TapeBuilder::new();
+    let mut rhs = TapeBuilder::new();
+    let mut e_cells = Vec::new();
+    let mut fj_cells = Vec::new();
+    let mut ej_cells = Vec::new();
+    for (i, row) in f.rows.iter().enumerate() {
+        res.output(&f.residual(i));
+        rhs.output(&row.f);
+        for (j, c) in &row.e {
+            e_cells.push((i, *j, c.clone()));
+        }
+        for k in 0..n {
+            let s = Sym::Var(k as u32);
+            fj_cells.push((i, k, expr::diff(&row.f, s)));
+            if !f.constant_leading {
+                let ez = expr::add_all(
+                    row.e
+                        .iter()
+                        .map(|(j, c)| expr::mul(&expr::diff(c, s), &Expr::sym(Sym::Dir(*j as u32)))),
+                );
+                ej_cells.push((i, k, ez));
+            }
+        }
+    }
+    let chain = d.analysis.flat();
+    let mut cons = TapeBuilder::new();
+    let mut cj_cells = Vec::new();
+    for (r, (_, _, e)) in chain.iter().enumerate() {
+        cons.output(e);
+        for k in 0..n {
+            cj_cells.push((r, k, expr::diff(e, Sym::Var(k as u32))));
+        }
+    }
+    let mut inv = TapeBuilder::new();
+    for i in &model.invariants {
+        inv.output(&i.expr);
+    }
+    Compiled {
+        info,
+        residual: res.finish(),
+        rhs: rhs.finish(),
+        leading: Sparse::build(e_cells),
+        rhs_jacobian: Sparse::build(fj_cells),
+        leading_jacobian: Sparse::build(ej_cells),
+        constraints: cons.finish(),
+        constraints_jacobian: Sparse::build(cj_cells),
+        invariants: inv.finish(),
+        parameter_defaults: model.params.iter().map(|p| p.default).collect(),
+    }
+}
+
+impl Derived {
+    /// The constraint chain as reported (source-major, then level).
+    pub fn constraint_infos(&self) -> Vec<ConstraintInfo> {
+        self.analysis
+            .flat()
+            .into_iter()
+            .map(|(source, level, e)| ConstraintInfo {
+                level: level as u8,
+                source: source as u16,
+                expr: self.model.text(e),
+            })
+            .collect()
+    }
+}

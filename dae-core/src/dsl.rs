@@ -1,0 +1,623 @@
+//! The model language: one parser over `proc_macro2::TokenStream`, used by
+//! the `dae!` macro at compile time and by the binary at run time (via
+//! [`parse_str`]).
+//!
+//! ```text
+//! /// doc comment (optional)
+//! pub Pendulum {
+//!     parameters { m = 1.0, l = 1.0, g = 13.7503716373294544 }
+//!     differential { x, y, v, w }
+//!     algebraic { lambda }
+//!     equations {
+//!         der(x) = v;
+//!         der(y) = w;
+//!         m * der(v) = -2 * x * lambda;
+//!         m * der(w) = -2 * y * lambda - m * g;
+//!         0 = x^2 + y^2 - l^2;
+//!     }
+//!     invariants { energy = m * (v^2 + w^2) / 2 + m * g * y; }
+//!     formulations { ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0 }
+//! }
+//! ```
+//!
+//! Expressions have their own grammar (a Pratt parser): Rust's `syn::Expr`
+//! would read `^` as XOR with the wrong precedence. Binding, loosest first:
+//! `+ -` (left), `* /` (left), unary `-` / `+`, `^` (right). So `-x^2` is
+//! `-(x^2)` and `2^-1` is `2^(-1)`.
+//!
+//! Errors are [`syn::Error`]s at the offending token; several are combined
+//! into one so the user sees every problem at once.
+
+use crate::expr::Q;
+use num_bigint::BigInt;
+use proc_macro2::{Delimiter, Span, TokenStream, TokenTree};
+use std::str::FromStr;
+
+/// Binary operators.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BinOp {
+    /// `+`
+    Add,
+    /// `-`
+    Sub,
+    /// `*`
+    Mul,
+    /// `/`
+    Div,
+    /// `^`
+    Pow,
+}
+
+/// An expression as written, with spans.
+#[derive(Clone, Debug)]
+pub enum Ast {
+    /// Numeric literal, exact.
+    Num(Q, Span),
+    /// A name.
+    Ident(String, Span),
+    /// `name(args…)`.
+    Call(String, Span, Vec<Ast>),
+    /// Unary minus.
+    Neg(Box<Ast>, Span),
+    /// Binary operation; the span is the operator's.
+    Bin(BinOp, Box<Ast>, Box<Ast>, Span),
+}
+
+impl Ast {
+    /// A span for error messages: the leftmost token.
+    pub fn span(&self) -> Span {
+        match self {
+            Ast::Num(_, s) | Ast::Ident(_, s) | Ast::Call(_, s, _) | Ast::Neg(_, s) => *s,
+            Ast::Bin(_, l, _, _) => l.span(),
+        }
+    }
+}
+
+/// A name with its span.
+#[derive(Clone, Debug)]
+pub struct Name {
+    /// The identifier.
+    pub name: String,
+    /// Where it was written.
+    pub span: Span,
+}
+
+/// `name = value` in `parameters { … }`.
+#[derive(Clone, Debug)]
+pub struct ParamDecl {
+    /// Parameter name.
+    pub name: Name,
+    /// Default value.
+    pub value: f64,
+}
+
+/// `lhs = rhs;` in `equations { … }`.
+#[derive(Clone, Debug)]
+pub struct Equation {
+    /// Left-hand side.
+    pub lhs: Ast,
+    /// Right-hand side.
+    pub rhs: Ast,
+    /// Span of the `=`.
+    pub span: Span,
+}
+
+/// `name = expr;` in `invariants { … }`.
+#[derive(Clone, Debug)]
+pub struct InvariantDecl {
+    /// Invariant name.
+    pub name: Name,
+    /// Its expression.
+    pub expr: Ast,
+}
+
+/// A parsed (not yet checked) model.
+#[derive(Clone, Debug)]
+pub struct ModelAst {
+    /// Doc comment lines joined.
+    pub doc: String,
+    /// `pub` was written.
+    pub public: bool,
+    /// Model name.
+    pub name: Name,
+    /// Parameters in order.
+    pub parameters: Vec<ParamDecl>,
+    /// Differential unknowns in order.
+    pub differential: Vec<Name>,
+    /// Algebraic unknowns in order.
+    pub algebraic: Vec<Name>,
+    /// Equations in order.
+    pub equations: Vec<Equation>,
+    /// Invariants in order.
+    pub invariants: Vec<InvariantDecl>,
+    /// Requested formulations (`None` when the block is absent).
+    pub formulations: Option<Vec<Name>>,
+    /// Span of the model body (for errors about the whole model).
+    pub body_span: Span,
+}
+
+/// Collects errors instead of stopping at the first.
+#[derive(Default)]
+pub struct Errors {
+    errors: Option<syn::Error>,
+}
+
+impl Errors {
+    /// Record an error at `span`.
+    pub fn push(&mut self, span: Span, msg: impl std::fmt::Display) {
+        self.push_error(syn::Error::new(span, msg));
+    }
+    /// Record a ready error.
+    pub fn push_error(&mut self, e: syn::Error) {
+        match &mut self.errors {
+            Some(all) => all.combine(e),
+            None => self.errors = Some(e),
+        }
+    }
+    /// `true` when nothing was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.errors.is_none()
+    }
+    /// `Err` with every error, or `Ok(value)`.
+    pub fn finish<T>(self, value: T) -> Result<T, syn::Error> {
+        match self.errors {
+            Some(e) => Err(e),
+            None => Ok(value),
+        }
+    }
+}
+
+/// Parse model text read at run time (a `.dae` file). Lexer errors are
+/// reported with their position too.
+pub fn parse_str(src: &str) -> Result<ModelAst, syn::Error> {
+    let tokens = TokenStream::from_str(src).map_err(|e| syn::Error::new(e.span(), format!("cannot read model: {e}")))?;
+    parse(tokens)
+}
+
+/// Parse a model from tokens (the body of `dae! { … }`).
+pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
+    let toks: Vec<TokenTree> = tokens.into_iter().collect();
+    let mut errors = Errors::default();
+    let mut i = 0;
+    let mut doc = Vec::new();
+    // Doc comments arrive as `# [doc = "..."]`.
+    while i < toks.len() {
+        match (&toks[i], toks.get(i + 1)) {
+            (TokenTree::Punct(p), Some(TokenTree::Group(g))) if p.as_char() == '#' && g.delimiter() == Delimiter::Bracket => {
+                let inner: Vec<TokenTree> = g.stream().into_iter().collect();
+                match inner.as_slice() {
+                    [TokenTree::Ident(id), TokenTree::Punct(eq), TokenTree::Literal(lit)] if id == "doc" && eq.as_char() == '=' => {
+                        doc.push(unquote(&lit.to_string()));
+                    }
+                    _ => errors.push(g.span(), "only doc comments (`/// …`) may precede a model"),
+                }
+                i += 2;
+            }
+            _ => break,
+        }
+    }
+    let mut public = false;
+    if let Some(TokenTree::Ident(id)) = toks.get(i) {
+        if id == "pub" {
+            public = true;
+            i += 1;
+        }
+    }
+    let name = match toks.get(i) {
+        Some(TokenTree::Ident(id)) => Name {
+            name: id.to_string(),
+            span: id.span(),
+        },
+        Some(t) => return Err(syn::Error::new(t.span(), "expected the model name, e.g. `pub Pendulum { … }`")),
+        None => return Err(syn::Error::new(Span::call_site(), "empty model: expected `pub Name { … }`")),
+    };
+    i += 1;
+    let body = match toks.get(i) {
+        Some(TokenTree::Group(g)) if g.delimiter() == Delimiter::Brace => g.clone(),
+        Some(t) => return Err(syn::Error::new(t.span(), "expected `{` after the model name")),
+        None => return Err(syn::Error::new(name.span, "expected `{ … }` with the model's sections after its name")),
+    };
+    if let Some(t) = toks.get(i + 1) {
+        errors.push(t.span(), "unexpected tokens after the model body");
+    }
+    let mut model = ModelAst {
+        doc: doc.iter().map(|s| s.trim()).collect::<Vec<_>>().join("\n"),
+        public,
+        name,
+        parameters: Vec::new(),
+        differential: Vec::new(),
+        algebraic: Vec::new(),
+        equations: Vec::new(),
+        invariants: Vec::new(),
+        formulations: None,
+        body_span: body.span(),
+    };
+    let sections: Vec<TokenTree> = body.stream().into_iter().collect();
+    let mut seen: Vec<String> = Vec::new();
+    let mut j = 0;
+    while j < sections.len() {
+        let TokenTree::Ident(kw) = &sections[j] else {
+            errors.push(
+                sections[j].span(),
+                "expected a section: parameters, differential, algebraic, equations, invariants or formulations",
+            );
+            break;
+        };
+        let kw_name = kw.to_string();
+        let Some(TokenTree::Group(g)) = sections.get(j + 1).filter(|t| matches!(t, TokenTree::Group(g) if g.delimiter() == Delimiter::Brace)) else {
+            errors.push(kw.span(), format!("expected `{{ … }}` after `{kw_name}`"));
+            break;
+        };
+        if seen.contains(&kw_name) {
+            errors.push(kw.span(), format!("section `{kw_name}` appears twice"));
+        }
+        seen.push(kw_name.clone());
+        let inner: Vec<TokenTree> = g.stream().into_iter().collect();
+        match kw_name.as_str() {
+            "parameters" => model.parameters.extend(parse_parameters(&inner, &mut errors)),
+            "differential" => model.differential.extend(parse_names(&inner, &mut errors)),
+            "algebraic" => model.algebraic.extend(parse_names(&inner, &mut errors)),
+            "equations" => model.equations.extend(parse_equations(&inner, &mut errors)),
+            "invariants" => model.invariants.extend(parse_invariants(&inner, &mut errors)),
+            "formulations" => model.formulations = Some(parse_names(&inner, &mut errors)),
+            other => errors.push(
+                kw.span(),
+                format!("unknown section `{other}` (expected parameters, differential, algebraic, equations, invariants or formulations)"),
+            ),
+        }
+        j += 2;
+    }
+    errors.finish(model)
+}
+
+fn unquote(lit: &str) -> String {
+    // A doc literal is a plain Rust string literal.
+    syn::parse_str::<syn::LitStr>(lit).map(|l| l.value()).unwrap_or_else(|_| lit.trim_matches('"').to_string())
+}
+
+/// Split tokens at a separator punct (`,` or `;`), dropping empty pieces
+/// after the last separator.
+fn split(tokens: &[TokenTree], sep: char) -> Vec<(&[TokenTree], Option<Span>)> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for (k, t) in tokens.iter().enumerate() {
+        if let TokenTree::Punct(p) = t {
+            if p.as_char() == sep {
+                out.push((&tokens[start..k], Some(p.span())));
+                start = k + 1;
+            }
+        }
+    }
+    if start < tokens.len() {
+        out.push((&tokens[start..], None));
+    }
+    out
+}
+
+fn parse_names(tokens: &[TokenTree], errors: &mut Errors) -> Vec<Name> {
+    let mut out = Vec::new();
+    for (piece, sep) in split(tokens, ',') {
+        match piece {
+            [TokenTree::Ident(id)] => out.push(Name {
+                name: id.to_string(),
+                span: id.span(),
+            }),
+            [] => errors.push(sep.unwrap_or_else(Span::call_site), "expected a name before `,`"),
+            [first, ..] => errors.push(first.span(), "expected a single name"),
+        }
+    }
+    out
+}
+
+fn parse_parameters(tokens: &[TokenTree], errors: &mut Errors) -> Vec<ParamDecl> {
+    let mut out = Vec::new();
+    for (piece, sep) in split(tokens, ',') {
+        let (name, rest) = match piece {
+            [TokenTree::Ident(id), TokenTree::Punct(eq), rest @ ..] if eq.as_char() == '=' => (id, rest),
+            [] => {
+                errors.push(sep.unwrap_or_else(Span::call_site), "expected `name = value` before `,`");
+                continue;
+            }
+            [first, ..] => {
+                errors.push(first.span(), "expected `name = value`, e.g. `m = 1.0`");
+                continue;
+            }
+        };
+        let (negative, lit_tokens) = match rest {
+            [TokenTree::Punct(p), tail @ ..] if p.as_char() == '-' => (true, tail),
+            _ => (false, rest),
+        };
+        let value = match lit_tokens {
+            [TokenTree::Literal(lit)] => match number(&lit.to_string()) {
+                Some(v) => {
+                    let f = crate::expr::q_to_f64(&v);
+                    if negative {
+                        -f
+                    } else {
+                        f
+                    }
+                }
+                None => {
+                    errors.push(lit.span(), format!("default of `{name}` must be a number, found `{lit}`"));
+                    continue;
+                }
+            },
+            [] => {
+                errors.push(name.span(), format!("parameter `{name}` needs a default value"));
+                continue;
+            }
+            [t, ..] => {
+                errors.push(t.span(), format!("default of `{name}` must be a numeric literal, found `{t}`"));
+                continue;
+            }
+        };
+        out.push(ParamDecl {
+            name: Name {
+                name: name.to_string(),
+                span: name.span(),
+            },
+            value,
+        });
+    }
+    out
+}
+
+fn parse_equations(tokens: &[TokenTree], errors: &mut Errors) -> Vec<Equation> {
+    let mut out = Vec::new();
+    for (piece, sep) in split(tokens, ';') {
+        if piece.is_empty() {
+            continue;
+        }
+        if sep.is_none() {
+            errors.push(piece[piece.len() - 1].span(), "expected `;` after the equation");
+        }
+        let eqs: Vec<usize> = piece
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| matches!(t, TokenTree::Punct(p) if p.as_char() == '='))
+            .map(|(k, _)| k)
+            .collect();
+        if eqs.len() != 1 {
+            let span = eqs.get(1).map(|&k| piece[k].span()).unwrap_or(piece[0].span());
+            errors.push(span, "an equation has exactly one `=`: `coef * der(u) = rhs` or `0 = constraint`");
+            continue;
+        }
+        let k = eqs[0];
+        let span = piece[k].span();
+        if let TokenTree::Punct(p) = &piece[k] {
+            if p.spacing() == proc_macro2::Spacing::Joint {
+                if let Some(TokenTree::Punct(next)) = piece.get(k + 1) {
+                    if next.as_char() == '=' {
+                        errors.push(span, "use a single `=` in equations");
+                        continue;
+                    }
+                }
+            }
+        }
+        let lhs = parse_expr(&piece[..k], span, errors);
+        let rhs = parse_expr(&piece[k + 1..], span, errors);
+        if let (Some(lhs), Some(rhs)) = (lhs, rhs) {
+            out.push(Equation { lhs, rhs, span });
+        }
+    }
+    out
+}
+
+fn parse_invariants(tokens: &[TokenTree], errors: &mut Errors) -> Vec<InvariantDecl> {
+    let mut out = Vec::new();
+    for (piece, _) in split(tokens, ';') {
+        match piece {
+            [] => {}
+            [TokenTree::Ident(id), TokenTree::Punct(eq), rest @ ..] if eq.as_char() == '=' => {
+                if let Some(expr) = parse_expr(rest, eq.span(), errors) {
+                    out.push(InvariantDecl {
+                        name: Name {
+                            name: id.to_string(),
+                            span: id.span(),
+                        },
+                        expr,
+                    });
+                }
+            }
+            [first, ..] => errors.push(first.span(), "expected `name = expression;`"),
+        }
+    }
+    out
+}
+
+/// Parse an exact decimal literal (`2`, `1.5`, `13.75`, `1e-3`, `2.5E+2`,
+/// `1_000`). Type suffixes are not allowed.
+pub fn number(lit: &str) -> Option<Q> {
+    let s: String = lit.chars().filter(|&c| c != '_').collect();
+    let (mantissa, exponent) = match s.find(['e', 'E']) {
+        Some(k) => (&s[..k], s[k + 1..].parse::<i32>().ok()?),
+        None => (s.as_str(), 0),
+    };
+    let (int, frac) = match mantissa.find('.') {
+        Some(k) => (&mantissa[..k], &mantissa[k + 1..]),
+        None => (mantissa, ""),
+    };
+    if int.is_empty() || !int.chars().all(|c| c.is_ascii_digit()) || !frac.chars().all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let digits = BigInt::from_str(&format!("{int}{frac}")).ok()?;
+    let scale = exponent - frac.len() as i32;
+    if scale.abs() > 400 {
+        return None;
+    }
+    let ten = BigInt::from(10);
+    let p = num_traits::pow(ten, scale.unsigned_abs() as usize);
+    Some(if scale >= 0 {
+        Q::from_integer(digits * p)
+    } else {
+        Q::new(digits, p)
+    })
+}
+
+/// Parse an expression from a token slice; `at` locates errors in an empty
+/// slice.
+pub fn parse_expr(tokens: &[TokenTree], at: Span, errors: &mut Errors) -> Option<Ast> {
+    if tokens.is_empty() {
+        errors.push(at, "expected an expression");
+        return None;
+    }
+    let mut p = ExprParser { toks: tokens, pos: 0 };
+    match p.expr(0) {
+        Ok(e) => {
+            if let Some(t) = p.toks.get(p.pos) {
+                errors.push(t.span(), format!("unexpected `{t}` in expression"));
+                None
+            } else {
+                Some(e)
+            }
+        }
+        Err(e) => {
+            errors.push_error(e);
+            None
+        }
+    }
+}
+
+struct ExprParser<'a> {
+    toks: &'a [TokenTree],
+    pos: usize,
+}
+
+const BP_ADD: u8 = 10;
+const BP_MUL: u8 = 20;
+const BP_UNARY: u8 = 25;
+const BP_POW: u8 = 30;
+
+impl ExprParser<'_> {
+    fn peek_op(&self) -> Option<(BinOp, Span)> {
+        match self.toks.get(self.pos) {
+            Some(TokenTree::Punct(p)) => {
+                let op = match p.as_char() {
+                    '+' => BinOp::Add,
+                    '-' => BinOp::Sub,
+                    '*' => BinOp::Mul,
+                    '/' => BinOp::Div,
+                    '^' => BinOp::Pow,
+                    _ => return None,
+                };
+                Some((op, p.span()))
+            }
+            _ => None,
+        }
+    }
+
+    fn expr(&mut self, min_bp: u8) -> Result<Ast, syn::Error> {
+        let mut lhs = self.prefix()?;
+        while let Some((op, span)) = self.peek_op() {
+            let (lbp, rbp) = match op {
+                BinOp::Add | BinOp::Sub => (BP_ADD, BP_ADD + 1),
+                BinOp::Mul | BinOp::Div => (BP_MUL, BP_MUL + 1),
+                BinOp::Pow => (BP_POW, BP_POW),
+            };
+            if lbp < min_bp {
+                break;
+            }
+            self.pos += 1;
+            let rhs = if op == BinOp::Pow {
+                // The exponent may carry its own sign: `x^-2`.
+                self.expr_or_unary(rbp)?
+            } else {
+                self.expr(rbp)?
+            };
+            lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs), span);
+        }
+        Ok(lhs)
+    }
+
+    fn expr_or_unary(&mut self, bp: u8) -> Result<Ast, syn::Error> {
+        if let Some(TokenTree::Punct(p)) = self.toks.get(self.pos) {
+            if p.as_char() == '-' || p.as_char() == '+' {
+                let span = p.span();
+                let negative = p.as_char() == '-';
+                self.pos += 1;
+                let inner = self.expr_or_unary(bp)?;
+                return Ok(if negative { Ast::Neg(Box::new(inner), span) } else { inner });
+            }
+        }
+        self.expr(bp)
+    }
+
+    fn prefix(&mut self) -> Result<Ast, syn::Error> {
+        let Some(tok) = self.toks.get(self.pos) else {
+            let span = self.toks.last().map(|t| t.span()).unwrap_or_else(Span::call_site);
+            return Err(syn::Error::new(span, "expression ends unexpectedly"));
+        };
+        self.pos += 1;
+        match tok {
+            TokenTree::Literal(lit) => {
+                let s = lit.to_string();
+                number(&s)
+                    .map(|v| Ast::Num(v, lit.span()))
+                    .ok_or_else(|| syn::Error::new(lit.span(), format!("`{s}` is not a number the model language understands")))
+            }
+            TokenTree::Ident(id) => {
+                let name = id.to_string();
+                if let Some(TokenTree::Group(g)) = self.toks.get(self.pos) {
+                    if g.delimiter() == Delimiter::Parenthesis {
+                        self.pos += 1;
+                        let inner: Vec<TokenTree> = g.stream().into_iter().collect();
+                        let mut errs = Errors::default();
+                        let mut args = Vec::new();
+                        for (piece, _) in split(&inner, ',') {
+                            if let Some(a) = parse_expr(piece, g.span(), &mut errs) {
+                                args.push(a);
+                            }
+                        }
+                        errs.finish(())?;
+                        if args.is_empty() {
+                            return Err(syn::Error::new(g.span(), format!("`{name}(…)` needs an argument")));
+                        }
+                        return Ok(Ast::Call(name, id.span(), args));
+                    }
+                }
+                Ok(Ast::Ident(name, id.span()))
+            }
+            TokenTree::Group(g) if g.delimiter() == Delimiter::Parenthesis => {
+                let inner: Vec<TokenTree> = g.stream().into_iter().collect();
+                let mut errs = Errors::default();
+                let e = parse_expr(&inner, g.span(), &mut errs);
+                errs.finish(())?;
+                e.ok_or_else(|| syn::Error::new(g.span(), "expected an expression inside parentheses"))
+            }
+            TokenTree::Punct(p) if p.as_char() == '-' || p.as_char() == '+' => {
+                let inner = self.expr(BP_UNARY)?;
+                Ok(if p.as_char() == '-' { Ast::Neg(Box::new(inner), p.span()) } else { inner })
+            }
+            other => Err(syn::Error::new(other.span(), format!("unexpected `{other}` in expression"))),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_exact() {
+        assert_eq!(number("0.5").unwrap(), crate::expr::qr(1, 2));
+        assert_eq!(number("1e-3").unwrap(), crate::expr::qr(1, 1000));
+        assert_eq!(number("2.5E+2").unwrap(), crate::expr::q(250));
+        assert!(number("1f64").is_none());
+        assert!(number("0x10").is_none());
+    }
+
+    #[test]
+    fn precedence() {
+        let mut errs = Errors::default();
+        let toks: Vec<TokenTree> = TokenStream::from_str("-x^2 * 3 + 2^-1").unwrap().into_iter().collect();
+        let e = parse_expr(&toks, Span::call_site(), &mut errs).unwrap();
+        // (-(x^2) * 3) + (2^(-1))
+        match e {
+            Ast::Bin(BinOp::Add, l, r, _) => {
+                assert!(matches!(*l, Ast::Bin(BinOp::Mul, ref a, _, _) if matches!(**a, Ast::Neg(ref b, _) if matches!(**b, Ast::Bin(BinOp::Pow, ..)))));
+                assert!(matches!(*r, Ast::Bin(BinOp::Pow, _, ref b, _) if matches!(**b, Ast::Neg(..))));
+            }
+            other => panic!("wrong tree {other:?}"),
+        }
+    }
+}

@@ -1,0 +1,886 @@
+//! Symbolic expressions in canonical form.
+//!
+//! An [`Expr`] is an immutable tree with shared (`Rc`) children, built only
+//! through the constructors of this module ([`add`], [`mul`], [`pow`], …),
+//! which keep it in a canonical form:
+//!
+//! * numbers are exact rationals ([`Q`]); there are no floating-point
+//!   constants in an expression, so `x/2 + x/2` is `x` exactly;
+//! * a sum is a constant plus a sorted list of `(term, coefficient)` pairs,
+//!   like terms collected, zero coefficients dropped;
+//! * a product is a sorted list of `(base, exponent)` pairs with rational
+//!   exponents, like bases merged (`m · m⁻¹ = 1`), the numeric coefficient
+//!   living in the enclosing sum;
+//! * products of sums are expanded while the result stays small
+//!   ([`EXPANSION_LIMIT`] terms), so polynomial identities such as
+//!   `d/dt (2xv + 2yw) = 2v² + 2w² + …` are decided by structural equality.
+//!   Larger products stay factored: expansion is bounded and never blows up
+//!   on user input.
+//!
+//! Ordering is the derived structural order, so everything downstream —
+//! printing, code generation, JSON — is deterministic.
+
+use num_bigint::BigInt;
+use num_integer::Integer;
+use num_rational::BigRational;
+use num_traits::{One, Signed, ToPrimitive, Zero};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::rc::Rc;
+
+/// Exact rational number.
+pub type Q = BigRational;
+
+/// Largest number of terms a product of sums may expand into before it is
+/// kept factored.
+pub const EXPANSION_LIMIT: usize = 64;
+
+/// Largest positive integer power of a sum that is expanded.
+pub const POWER_EXPANSION_LIMIT: i64 = 6;
+
+/// A symbol: something an expression depends on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Sym {
+    /// Unknown `y_i` (model order: differential, then algebraic, then any
+    /// unknowns a formulation adds such as GGL's `eta`).
+    Var(u32),
+    /// Its time derivative `der(y_i)`.
+    Der(u32),
+    /// Model parameter `p_k`.
+    Param(u32),
+    /// Time `t`.
+    Time,
+    /// Component `z_i` of an auxiliary direction (for `∂(E(y) z)/∂y`).
+    Dir(u32),
+}
+
+/// Elementary functions of the model language.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Func {
+    /// `sin`
+    Sin,
+    /// `cos`
+    Cos,
+    /// `tan`
+    Tan,
+    /// `exp`
+    Exp,
+    /// `ln` (natural logarithm)
+    Ln,
+}
+
+impl Func {
+    /// Name in the model language.
+    pub fn name(self) -> &'static str {
+        match self {
+            Func::Sin => "sin",
+            Func::Cos => "cos",
+            Func::Tan => "tan",
+            Func::Exp => "exp",
+            Func::Ln => "ln",
+        }
+    }
+
+    /// Evaluate on a float.
+    pub fn apply(self, x: f64) -> f64 {
+        match self {
+            Func::Sin => x.sin(),
+            Func::Cos => x.cos(),
+            Func::Tan => x.tan(),
+            Func::Exp => x.exp(),
+            Func::Ln => x.ln(),
+        }
+    }
+}
+
+/// A canonical sum `constant + Σ coefficient·term`.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Sum {
+    /// Sorted by term, coefficients non-zero; no term is a number or a sum.
+    pub terms: Vec<(Expr, Q)>,
+    /// Constant part.
+    pub constant: Q,
+}
+
+/// A canonical product `Π base^exponent` (coefficient 1).
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Prod {
+    /// Sorted by base, exponents non-zero; no base is a product.
+    pub factors: Vec<(Expr, Q)>,
+}
+
+/// A symbolic expression in canonical form. Build with the free functions
+/// of this module; the variants are public for inspection.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Expr {
+    /// Exact rational constant.
+    Num(Rc<Q>),
+    /// A symbol.
+    Sym(Sym),
+    /// Sum.
+    Sum(Rc<Sum>),
+    /// Product.
+    Prod(Rc<Prod>),
+    /// `base ^ exponent` with a non-numeric exponent.
+    Pow(Rc<(Expr, Expr)>),
+    /// Elementary function.
+    Func(Func, Rc<Expr>),
+}
+
+/// The rational `n`.
+pub fn q(n: i64) -> Q {
+    Q::from_integer(BigInt::from(n))
+}
+
+/// The rational `n/d`.
+pub fn qr(n: i64, d: i64) -> Q {
+    Q::new(BigInt::from(n), BigInt::from(d))
+}
+
+impl Expr {
+    /// Numeric constant.
+    pub fn num(v: Q) -> Expr {
+        Expr::Num(Rc::new(v))
+    }
+    /// Integer constant.
+    pub fn int(n: i64) -> Expr {
+        Expr::num(q(n))
+    }
+    /// Zero.
+    pub fn zero() -> Expr {
+        Expr::int(0)
+    }
+    /// One.
+    pub fn one() -> Expr {
+        Expr::int(1)
+    }
+    /// Symbol.
+    pub fn sym(s: Sym) -> Expr {
+        Expr::Sym(s)
+    }
+    /// Unknown `y_i`.
+    pub fn var(i: usize) -> Expr {
+        Expr::Sym(Sym::Var(i as u32))
+    }
+    /// `der(y_i)`.
+    pub fn der(i: usize) -> Expr {
+        Expr::Sym(Sym::Der(i as u32))
+    }
+    /// Parameter `p_k`.
+    pub fn param(k: usize) -> Expr {
+        Expr::Sym(Sym::Param(k as u32))
+    }
+
+    /// The value if this is a number.
+    pub fn as_num(&self) -> Option<&Q> {
+        match self {
+            Expr::Num(v) => Some(v),
+            _ => None,
+        }
+    }
+    /// `true` for the number zero.
+    pub fn is_zero(&self) -> bool {
+        self.as_num().is_some_and(|v| v.is_zero())
+    }
+    /// `true` for the number one.
+    pub fn is_one(&self) -> bool {
+        self.as_num().is_some_and(|v| v.is_one())
+    }
+
+    /// Does the expression depend on `s`?
+    pub fn contains(&self, s: Sym) -> bool {
+        match self {
+            Expr::Num(_) => false,
+            Expr::Sym(t) => *t == s,
+            Expr::Sum(sum) => sum.terms.iter().any(|(t, _)| t.contains(s)),
+            Expr::Prod(p) => p.factors.iter().any(|(b, _)| b.contains(s)),
+            Expr::Pow(be) => be.0.contains(s) || be.1.contains(s),
+            Expr::Func(_, a) => a.contains(s),
+        }
+    }
+
+    /// Does the expression contain any symbol satisfying `pred`?
+    pub fn any_sym(&self, pred: &dyn Fn(Sym) -> bool) -> bool {
+        match self {
+            Expr::Num(_) => false,
+            Expr::Sym(t) => pred(*t),
+            Expr::Sum(sum) => sum.terms.iter().any(|(t, _)| t.any_sym(pred)),
+            Expr::Prod(p) => p.factors.iter().any(|(b, _)| b.any_sym(pred)),
+            Expr::Pow(be) => be.0.any_sym(pred) || be.1.any_sym(pred),
+            Expr::Func(_, a) => a.any_sym(pred),
+        }
+    }
+
+    /// All symbols, sorted.
+    pub fn symbols(&self) -> Vec<Sym> {
+        let mut out = std::collections::BTreeSet::new();
+        self.collect_symbols(&mut out);
+        out.into_iter().collect()
+    }
+
+    fn collect_symbols(&self, out: &mut std::collections::BTreeSet<Sym>) {
+        match self {
+            Expr::Num(_) => {}
+            Expr::Sym(t) => {
+                out.insert(*t);
+            }
+            Expr::Sum(sum) => sum.terms.iter().for_each(|(t, _)| t.collect_symbols(out)),
+            Expr::Prod(p) => p.factors.iter().for_each(|(b, _)| b.collect_symbols(out)),
+            Expr::Pow(be) => {
+                be.0.collect_symbols(out);
+                be.1.collect_symbols(out);
+            }
+            Expr::Func(_, a) => a.collect_symbols(out),
+        }
+    }
+
+    /// Evaluate with `env` giving every symbol's value.
+    pub fn eval(&self, env: &dyn Fn(Sym) -> f64) -> f64 {
+        match self {
+            Expr::Num(v) => q_to_f64(v),
+            Expr::Sym(s) => env(*s),
+            Expr::Sum(sum) => {
+                let mut acc = q_to_f64(&sum.constant);
+                for (t, c) in &sum.terms {
+                    acc += q_to_f64(c) * t.eval(env);
+                }
+                acc
+            }
+            Expr::Prod(p) => p
+                .factors
+                .iter()
+                .map(|(b, e)| pow_f64(b.eval(env), e))
+                .product(),
+            Expr::Pow(be) => be.0.eval(env).powf(be.1.eval(env)),
+            Expr::Func(f, a) => f.apply(a.eval(env)),
+        }
+    }
+
+    /// Number of nodes (a measure of size; shared subtrees count each time).
+    pub fn size(&self) -> usize {
+        match self {
+            Expr::Num(_) | Expr::Sym(_) => 1,
+            Expr::Sum(s) => 1 + s.terms.iter().map(|(t, _)| t.size()).sum::<usize>(),
+            Expr::Prod(p) => 1 + p.factors.iter().map(|(b, _)| b.size()).sum::<usize>(),
+            Expr::Pow(be) => 1 + be.0.size() + be.1.size(),
+            Expr::Func(_, a) => 1 + a.size(),
+        }
+    }
+}
+
+/// Nearest `f64` of a rational.
+pub fn q_to_f64(v: &Q) -> f64 {
+    if v.denom().is_one() {
+        return v.numer().to_f64().unwrap_or(f64::NAN);
+    }
+    v.to_f64().unwrap_or_else(|| {
+        let n = v.numer().to_f64().unwrap_or(f64::NAN);
+        let d = v.denom().to_f64().unwrap_or(f64::NAN);
+        n / d
+    })
+}
+
+/// `x^e` for a rational exponent, using `powi`/`sqrt` where exact.
+pub fn pow_f64(x: f64, e: &Q) -> f64 {
+    if e.denom().is_one() {
+        match e.numer().to_i32() {
+            Some(1) => x,
+            Some(k) => x.powi(k),
+            None => x.powf(q_to_f64(e)),
+        }
+    } else if *e == qr(1, 2) {
+        x.sqrt()
+    } else if *e == qr(-1, 2) {
+        1.0 / x.sqrt()
+    } else {
+        x.powf(q_to_f64(e))
+    }
+}
+
+/// Split a term into `(coefficient, rest)` with `rest` not a number and not
+/// a single-term sum. A number gives `(value, 1)`.
+fn split_coefficient(e: &Expr) -> (Q, Expr) {
+    match e {
+        Expr::Num(v) => ((**v).clone(), Expr::one()),
+        Expr::Sum(s) if s.constant.is_zero() && s.terms.len() == 1 => {
+            (s.terms[0].1.clone(), s.terms[0].0.clone())
+        }
+        _ => (q(1), e.clone()),
+    }
+}
+
+/// Build a sum from a collected map.
+fn make_sum(constant: Q, map: BTreeMap<Expr, Q>) -> Expr {
+    let terms: Vec<(Expr, Q)> = map.into_iter().filter(|(_, c)| !c.is_zero()).collect();
+    if terms.is_empty() {
+        return Expr::num(constant);
+    }
+    if constant.is_zero() && terms.len() == 1 && terms[0].1.is_one() {
+        return terms.into_iter().next().map(|(t, _)| t).unwrap_or_else(Expr::zero);
+    }
+    Expr::Sum(Rc::new(Sum { terms, constant }))
+}
+
+fn add_into(constant: &mut Q, map: &mut BTreeMap<Expr, Q>, e: &Expr, scale: &Q) {
+    match e {
+        Expr::Num(v) => *constant += &**v * scale,
+        Expr::Sum(s) => {
+            *constant += &s.constant * scale;
+            for (t, c) in &s.terms {
+                *map.entry(t.clone()).or_insert_with(Q::zero) += c * scale;
+            }
+        }
+        _ => *map.entry(e.clone()).or_insert_with(Q::zero) += scale.clone(),
+    }
+}
+
+/// `Σ items`.
+pub fn add_all<I: IntoIterator<Item = Expr>>(items: I) -> Expr {
+    let mut constant = Q::zero();
+    let mut map = BTreeMap::new();
+    let one = q(1);
+    for e in items {
+        add_into(&mut constant, &mut map, &e, &one);
+    }
+    make_sum(constant, map)
+}
+
+/// `a + b`.
+pub fn add(a: &Expr, b: &Expr) -> Expr {
+    add_all([a.clone(), b.clone()])
+}
+
+/// `a − b`.
+pub fn sub(a: &Expr, b: &Expr) -> Expr {
+    let mut constant = Q::zero();
+    let mut map = BTreeMap::new();
+    add_into(&mut constant, &mut map, a, &q(1));
+    add_into(&mut constant, &mut map, b, &q(-1));
+    make_sum(constant, map)
+}
+
+/// `c · e` for a rational `c`.
+pub fn scale(c: &Q, e: &Expr) -> Expr {
+    if c.is_zero() {
+        return Expr::zero();
+    }
+    let mut constant = Q::zero();
+    let mut map = BTreeMap::new();
+    add_into(&mut constant, &mut map, e, c);
+    make_sum(constant, map)
+}
+
+/// `−e`.
+pub fn neg(e: &Expr) -> Expr {
+    scale(&q(-1), e)
+}
+
+/// Collected product factors: coefficient, bases with exponents, and sums
+/// still to be distributed.
+struct ProdBuilder {
+    coef: Q,
+    factors: BTreeMap<Expr, Q>,
+    sums: Vec<Expr>,
+}
+
+impl ProdBuilder {
+    fn new() -> Self {
+        ProdBuilder {
+            coef: q(1),
+            factors: BTreeMap::new(),
+            sums: Vec::new(),
+        }
+    }
+
+    fn push_factor(&mut self, base: Expr, exp: Q) {
+        *self.factors.entry(base).or_insert_with(Q::zero) += exp;
+    }
+
+    fn push(&mut self, e: &Expr) {
+        match e {
+            Expr::Num(v) => self.coef *= &**v,
+            Expr::Prod(p) => {
+                for (b, x) in &p.factors {
+                    self.push_factor(b.clone(), x.clone());
+                }
+            }
+            Expr::Sum(_) => {
+                let (c, rest) = split_coefficient(e);
+                if !matches!(rest, Expr::Sum(_)) {
+                    self.coef *= c;
+                    self.push(&rest);
+                } else if self.factors.contains_key(e) {
+                    // (a+b)^k · (a+b) merges exponents instead of expanding.
+                    self.push_factor(e.clone(), q(1));
+                } else {
+                    self.sums.push(e.clone());
+                }
+            }
+            _ => self.push_factor(e.clone(), q(1)),
+        }
+    }
+
+    fn finish(mut self) -> Expr {
+        if self.coef.is_zero() {
+            return Expr::zero();
+        }
+        // A sum that also appears as a factor base merges with it.
+        let mut sums = Vec::new();
+        for s in std::mem::take(&mut self.sums) {
+            if let Some(x) = self.factors.get_mut(&s) {
+                *x += q(1);
+            } else {
+                sums.push(s);
+            }
+        }
+        let mut factors: Vec<(Expr, Q)> = Vec::new();
+        for (b, x) in std::mem::take(&mut self.factors) {
+            if x.is_zero() {
+                continue;
+            }
+            if let Expr::Num(v) = &b {
+                // Integer powers of numbers fold into the coefficient.
+                if x.denom().is_one() {
+                    if let Some(k) = x.numer().to_i64() {
+                        if let Some(p) = pow_q(v, k) {
+                            self.coef *= p;
+                            continue;
+                        }
+                    }
+                }
+            }
+            factors.push((b, x));
+        }
+        let monomial = make_prod(factors);
+        if sums.is_empty() {
+            return scale(&self.coef, &monomial);
+        }
+        // Distribute over the sums while the result stays small.
+        let mut acc = scale(&self.coef, &monomial);
+        let mut kept = Vec::new();
+        for s in sums {
+            let n_acc = term_count(&acc);
+            let n_s = term_count(&s);
+            if n_acc * n_s <= EXPANSION_LIMIT {
+                acc = distribute(&acc, &s);
+            } else {
+                kept.push(s);
+            }
+        }
+        if kept.is_empty() {
+            return acc;
+        }
+        // Keep the remaining sums as factors (bounded expansion).
+        let (c, rest) = split_coefficient(&acc);
+        let mut factors: BTreeMap<Expr, Q> = BTreeMap::new();
+        let mut push = |b: Expr| *factors.entry(b).or_insert_with(Q::zero) += q(1);
+        match rest {
+            Expr::Prod(p) => {
+                for (b, x) in &p.factors {
+                    *factors.entry(b.clone()).or_insert_with(Q::zero) += x.clone();
+                }
+            }
+            e if e.is_one() => {}
+            e => push(e),
+        }
+        for s in kept {
+            *factors.entry(s).or_insert_with(Q::zero) += q(1);
+        }
+        scale(
+            &c,
+            &make_prod(factors.into_iter().filter(|(_, x)| !x.is_zero()).collect()),
+        )
+    }
+}
+
+fn term_count(e: &Expr) -> usize {
+    match e {
+        Expr::Sum(s) => s.terms.len() + usize::from(!s.constant.is_zero()),
+        _ => 1,
+    }
+}
+
+/// Expand `a · b` for two sums (or a sum and a monomial).
+fn distribute(a: &Expr, b: &Expr) -> Expr {
+    let parts = |e: &Expr| -> Vec<(Q, Expr)> {
+        match e {
+            Expr::Sum(s) => {
+                let mut v: Vec<(Q, Expr)> = s.terms.iter().map(|(t, c)| (c.clone(), t.clone())).collect();
+                if !s.constant.is_zero() {
+                    v.push((s.constant.clone(), Expr::one()));
+                }
+                v
+            }
+            _ => {
+                let (c, r) = split_coefficient(e);
+                vec![(c, r)]
+            }
+        }
+    };
+    let pa = parts(a);
+    let pb = parts(b);
+    let mut constant = Q::zero();
+    let mut map = BTreeMap::new();
+    for (ca, ta) in &pa {
+        for (cb, tb) in &pb {
+            let prod = mul_monomials(ta, tb);
+            add_into(&mut constant, &mut map, &prod, &(ca * cb));
+        }
+    }
+    make_sum(constant, map)
+}
+
+/// Product of two non-sum expressions.
+fn mul_monomials(a: &Expr, b: &Expr) -> Expr {
+    let mut pb = ProdBuilder::new();
+    pb.push(a);
+    pb.push(b);
+    pb.finish()
+}
+
+fn make_prod(factors: Vec<(Expr, Q)>) -> Expr {
+    if factors.is_empty() {
+        return Expr::one();
+    }
+    if factors.len() == 1 && factors[0].1.is_one() {
+        return factors.into_iter().next().map(|(b, _)| b).unwrap_or_else(Expr::one);
+    }
+    Expr::Prod(Rc::new(Prod { factors }))
+}
+
+/// `v^k` exactly, for moderate integer `k`; `None` for `0^negative` or huge
+/// exponents.
+fn pow_q(v: &Q, k: i64) -> Option<Q> {
+    if k.abs() > 64 {
+        return None;
+    }
+    if v.is_zero() && k < 0 {
+        return None;
+    }
+    let mut r = q(1);
+    for _ in 0..k.abs() {
+        r *= v;
+    }
+    if k < 0 {
+        r = r.recip();
+    }
+    Some(r)
+}
+
+/// `Π items`.
+pub fn mul_all<I: IntoIterator<Item = Expr>>(items: I) -> Expr {
+    let mut pb = ProdBuilder::new();
+    for e in items {
+        if e.is_zero() {
+            return Expr::zero();
+        }
+        pb.push(&e);
+    }
+    pb.finish()
+}
+
+/// `a · b`.
+pub fn mul(a: &Expr, b: &Expr) -> Expr {
+    mul_all([a.clone(), b.clone()])
+}
+
+/// `a / b`.
+pub fn div(a: &Expr, b: &Expr) -> Expr {
+    mul(a, &pow(b, &Expr::int(-1)))
+}
+
+/// `base ^ exponent`.
+pub fn pow(base: &Expr, exponent: &Expr) -> Expr {
+    let Some(x) = exponent.as_num() else {
+        if base.is_one() {
+            return Expr::one();
+        }
+        return Expr::Pow(Rc::new((base.clone(), exponent.clone())));
+    };
+    pow_rational(base, x)
+}
+
+/// `base ^ x` for a rational exponent.
+pub fn pow_rational(base: &Expr, x: &Q) -> Expr {
+    if x.is_zero() {
+        return Expr::one();
+    }
+    if x.is_one() {
+        return base.clone();
+    }
+    let integer = x.denom().is_one();
+    match base {
+        Expr::Num(v) => {
+            if integer {
+                if let Some(k) = x.numer().to_i64() {
+                    if let Some(p) = pow_q(v, k) {
+                        return Expr::num(p);
+                    }
+                }
+            } else if let Some(r) = exact_root(v, x) {
+                return Expr::num(r);
+            }
+            make_prod(vec![(base.clone(), x.clone())])
+        }
+        Expr::Prod(p) if integer => {
+            let factors = p
+                .factors
+                .iter()
+                .map(|(b, e)| (b.clone(), e * x))
+                .collect::<Vec<_>>();
+            let mut pb = ProdBuilder::new();
+            for (b, e) in factors {
+                pb.push_factor(b, e);
+            }
+            pb.finish()
+        }
+        Expr::Sum(_) => {
+            let (c, rest) = split_coefficient(base);
+            if !matches!(rest, Expr::Sum(_)) && integer {
+                let k = x.numer().to_i64().unwrap_or(i64::MAX);
+                if let Some(ck) = pow_q(&c, k) {
+                    return scale(&ck, &pow_rational(&rest, x));
+                }
+            }
+            if integer {
+                if let Some(k) = x.numer().to_i64() {
+                    if (2..=POWER_EXPANSION_LIMIT).contains(&k) {
+                        let mut acc = base.clone();
+                        for _ in 1..k {
+                            acc = mul(&acc, base);
+                        }
+                        return acc;
+                    }
+                }
+            }
+            make_prod(vec![(base.clone(), x.clone())])
+        }
+        Expr::Prod(_) => Expr::Pow(Rc::new((base.clone(), Expr::num(x.clone())))),
+        _ => make_prod(vec![(base.clone(), x.clone())]),
+    }
+}
+
+/// Exact rational root `v^x` when `v` is a perfect power (e.g. `4^(1/2)`).
+fn exact_root(v: &Q, x: &Q) -> Option<Q> {
+    if v.is_negative() {
+        return None;
+    }
+    let d = x.denom().to_u32()?;
+    if d > 8 {
+        return None;
+    }
+    let root = |n: &BigInt| -> Option<BigInt> {
+        let r = n.nth_root(d);
+        if r.pow(d) == *n {
+            Some(r)
+        } else {
+            None
+        }
+    };
+    let rn = root(v.numer())?;
+    let rd = root(v.denom())?;
+    let base = Q::new(rn, rd);
+    pow_q(&base, x.numer().to_i64()?)
+}
+
+/// `sqrt(e)` = `e^(1/2)`.
+pub fn sqrt(e: &Expr) -> Expr {
+    pow_rational(e, &qr(1, 2))
+}
+
+/// Apply an elementary function, folding the exact cases
+/// (`sin 0 = 0`, `cos 0 = 1`, `exp 0 = 1`, `ln 1 = 0`).
+pub fn func(f: Func, arg: &Expr) -> Expr {
+    match (f, arg.as_num()) {
+        (Func::Sin | Func::Tan, Some(v)) if v.is_zero() => Expr::zero(),
+        (Func::Cos | Func::Exp, Some(v)) if v.is_zero() => Expr::one(),
+        (Func::Ln, Some(v)) if v.is_one() => Expr::zero(),
+        _ => Expr::Func(f, Rc::new(arg.clone())),
+    }
+}
+
+/// `∂e/∂s`.
+pub fn diff(e: &Expr, s: Sym) -> Expr {
+    if !e.contains(s) {
+        return Expr::zero();
+    }
+    match e {
+        Expr::Num(_) => Expr::zero(),
+        Expr::Sym(t) => {
+            if *t == s {
+                Expr::one()
+            } else {
+                Expr::zero()
+            }
+        }
+        Expr::Sum(sum) => add_all(sum.terms.iter().map(|(t, c)| scale(c, &diff(t, s)))),
+        Expr::Prod(p) => {
+            let mut terms = Vec::new();
+            for (i, (b, x)) in p.factors.iter().enumerate() {
+                let db = diff(b, s);
+                if db.is_zero() {
+                    continue;
+                }
+                let mut items = vec![Expr::num(x.clone()), pow_rational(b, &(x - q(1))), db];
+                for (j, (bj, xj)) in p.factors.iter().enumerate() {
+                    if j != i {
+                        items.push(pow_rational(bj, xj));
+                    }
+                }
+                terms.push(mul_all(items));
+            }
+            add_all(terms)
+        }
+        Expr::Pow(be) => {
+            // d(b^e) = b^e · (e' ln b + e b'/b)
+            let (b, x) = (&be.0, &be.1);
+            let inner = add(
+                &mul(&diff(x, s), &func(Func::Ln, b)),
+                &mul_all([x.clone(), diff(b, s), pow_rational(b, &q(-1))]),
+            );
+            mul(e, &inner)
+        }
+        Expr::Func(f, a) => {
+            let da = diff(a, s);
+            let outer = match f {
+                Func::Sin => func(Func::Cos, a),
+                Func::Cos => neg(&func(Func::Sin, a)),
+                Func::Tan => add(&Expr::one(), &pow_rational(e, &q(2))),
+                Func::Exp => e.clone(),
+                Func::Ln => pow_rational(a, &q(-1)),
+            };
+            mul(&outer, &da)
+        }
+    }
+}
+
+/// Replace symbols: `map(s)` returns the replacement or `None` to keep `s`.
+pub fn subs(e: &Expr, map: &dyn Fn(Sym) -> Option<Expr>) -> Expr {
+    match e {
+        Expr::Num(_) => e.clone(),
+        Expr::Sym(s) => map(*s).unwrap_or_else(|| e.clone()),
+        Expr::Sum(sum) => {
+            let mut items: Vec<Expr> = sum.terms.iter().map(|(t, c)| scale(c, &subs(t, map))).collect();
+            items.push(Expr::num(sum.constant.clone()));
+            add_all(items)
+        }
+        Expr::Prod(p) => mul_all(p.factors.iter().map(|(b, x)| pow_rational(&subs(b, map), x))),
+        Expr::Pow(be) => pow(&subs(&be.0, map), &subs(&be.1, map)),
+        Expr::Func(f, a) => func(*f, &subs(a, map)),
+    }
+}
+
+/// The numeric content of an expression: a positive rational `c` such that
+/// `e / c` has integer coefficients with gcd 1 (1 where there is none).
+pub fn content(e: &Expr) -> Q {
+    match e {
+        Expr::Num(v) => v.abs(),
+        Expr::Sum(s) => {
+            let mut g: Option<Q> = None;
+            let all = s.terms.iter().map(|(_, c)| c).chain(std::iter::once(&s.constant));
+            for c in all.filter(|c| !c.is_zero()) {
+                g = Some(match g {
+                    None => c.abs(),
+                    Some(g) => gcd_q(&g, c),
+                });
+            }
+            g.unwrap_or_else(|| q(1))
+        }
+        _ => q(1),
+    }
+}
+
+/// gcd of two rationals: gcd of numerators over lcm of denominators.
+pub fn gcd_q(a: &Q, b: &Q) -> Q {
+    let n = a.numer().gcd(b.numer());
+    let d = a.denom().lcm(b.denom());
+    Q::new(n, d)
+}
+
+/// Total time derivative along the dynamics: `dt(e) = ∂e/∂t + Σ ∂e/∂s · ṡ`,
+/// where `rate(s)` gives `ṡ` for every symbol `e` depends on (`None` for
+/// constants such as parameters). Returns the offending symbol if a rate is
+/// needed but unavailable.
+pub fn time_derivative(e: &Expr, rate: &dyn Fn(Sym) -> Result<Option<Expr>, ()>) -> Result<Expr, Sym> {
+    let mut terms = Vec::new();
+    for s in e.symbols() {
+        let r = match s {
+            Sym::Time => Some(Expr::one()),
+            Sym::Param(_) => None,
+            _ => rate(s).map_err(|_| s)?,
+        };
+        if let Some(r) = r {
+            terms.push(mul(&diff(e, s), &r));
+        }
+    }
+    Ok(add_all(terms))
+}
+
+impl fmt::Display for Sym {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Sym::Var(i) => write!(f, "y{i}"),
+            Sym::Der(i) => write!(f, "der(y{i})"),
+            Sym::Param(k) => write!(f, "p{k}"),
+            Sym::Time => write!(f, "t"),
+            Sym::Dir(i) => write!(f, "z{i}"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn x() -> Expr {
+        Expr::var(0)
+    }
+    fn y() -> Expr {
+        Expr::var(1)
+    }
+
+    #[test]
+    fn like_terms_collect() {
+        let e = add_all([mul(&Expr::int(2), &x()), x(), neg(&mul(&Expr::int(3), &x()))]);
+        assert!(e.is_zero());
+        let half = div(&x(), &Expr::int(2));
+        assert_eq!(add(&half, &half), x());
+    }
+
+    #[test]
+    fn products_merge_and_cancel() {
+        let m = Expr::param(0);
+        let e = mul(&mul(&m, &x()), &div(&Expr::one(), &m));
+        assert_eq!(e, x());
+    }
+
+    #[test]
+    fn expansion_decides_polynomial_identities() {
+        let s = add(&x(), &y());
+        let lhs = pow(&s, &Expr::int(2));
+        let rhs = add_all([
+            pow(&x(), &Expr::int(2)),
+            mul_all([Expr::int(2), x(), y()]),
+            pow(&y(), &Expr::int(2)),
+        ]);
+        assert_eq!(lhs, rhs);
+        assert!(sub(&mul(&add(&x(), &Expr::one()), &sub(&x(), &Expr::one())), &sub(&pow(&x(), &Expr::int(2)), &Expr::one())).is_zero());
+    }
+
+    #[test]
+    fn derivatives() {
+        let e = mul(&func(Func::Sin, &x()), &pow(&x(), &Expr::int(2)));
+        let d = diff(&e, Sym::Var(0));
+        let v = d.eval(&|_| 0.7);
+        let exact = 0.7f64.cos() * 0.49 + 0.7f64.sin() * 1.4;
+        assert!((v - exact).abs() < 1e-15);
+        assert!(diff(&e, Sym::Var(1)).is_zero());
+    }
+
+    #[test]
+    fn exact_roots_and_content() {
+        assert_eq!(sqrt(&Expr::int(4)), Expr::int(2));
+        let e = add(&mul(&Expr::int(4), &x()), &mul(&Expr::int(6), &y()));
+        assert_eq!(content(&e), q(2));
+    }
+}

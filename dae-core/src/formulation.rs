@@ -1,0 +1,465 @@
+//! The eight formulations of a semi-explicit mechanical model, built
+//! symbolically as quasi-linear systems `E(y) y' = f(t, y)`.
+//!
+//! | name | rows | applies to |
+//! |---|---|---|
+//! | `ori2` | dynamics + constraints as written | every model |
+//! | `rcd1` | dynamics + each constraint at level `d_i − 1` | every `d_i ≥ 1` |
+//! | `rcd0` | dynamics + each constraint at level `d_i` | every model |
+//! | `ovd1` | dynamics + levels `0 … d_i − 1` (overdetermined) | every `d_i ≥ 1` |
+//! | `ovd0` | dynamics + levels `0 … d_i` (overdetermined) | every model |
+//! | `ggl1` | `c u' = f − c Σ η_i ∂g_i/∂u`, levels 0 and 1 | mechanical (`d_i = 2`) |
+//! | `psi1` | position rows projected by a selector, levels 0, 1 | mechanical |
+//! | `psi0` | position and velocity rows projected, levels 0, 1, 2 | mechanical |
+//!
+//! `d_i` is the level at which constraint `i` determines the multipliers
+//! (see [`crate::index`]); for a mechanical system with position
+//! constraints every `d_i = 2`.
+//!
+//! **Selectors.** `psi1`/`psi0` apply a selector `S(q)` with `S Gᵀ = 0` to the
+//! kinematic rows (`G = ∂g/∂q`, `q` the positions) and, for `psi0`, to the
+//! dynamic rows (`H = ∂ġ/∂v`). It is built symbolically, without division:
+//! with `G = [G_F | G_P]` split into free and pivot columns (`G_P` square and
+//! structurally nonsingular, pivots chosen from the last positions),
+//! `S = [det(G_P) I | −(adj(G_P) G_F)ᵀ]`, each row divided by its numeric
+//! content. For the pendulum this is exactly the paper's `S = [y, −x]`. The
+//! selector is valid where `det(G_P) ≠ 0` (for the pendulum: `y ≠ 0`, i.e.
+//! away from the horizontal); a solver meeting such a configuration reports a
+//! singular iteration matrix.
+
+use crate::expr::{self, Expr, Sym};
+use crate::index::{max_matching, Analysis};
+use crate::model::Model;
+use crate::system::{RowKind, VarInfo, VarKind, FORMULATION_NAMES};
+use std::collections::HashMap;
+
+/// One row `Σ_j E_ij y_j' = f_i`.
+#[derive(Clone, Debug)]
+pub struct SymRow {
+    /// Differential or constraint of some level.
+    pub kind: RowKind,
+    /// Non-zero entries of the row of `E`: `(column, entry)`.
+    pub e: Vec<(usize, Expr)>,
+    /// Right-hand side.
+    pub f: Expr,
+}
+
+/// A formulation, symbolically.
+#[derive(Clone, Debug)]
+pub struct Formulation {
+    /// One of [`FORMULATION_NAMES`].
+    pub name: &'static str,
+    /// Unknowns (the model's, plus GGL multipliers).
+    pub vars: Vec<VarInfo>,
+    /// Names of unknowns past the model's own.
+    pub extra_names: Vec<String>,
+    /// Rows.
+    pub rows: Vec<SymRow>,
+    /// Differentiation index (`None` when overdetermined).
+    pub d_index: Option<u8>,
+    /// Strangeness index.
+    pub s_index: u8,
+    /// Maximal constraint level.
+    pub c_level: u8,
+    /// `E` independent of `y`.
+    pub constant_leading: bool,
+}
+
+impl Formulation {
+    /// Text of row `i` in the model language, e.g. `m*der(v) = -2*x*lambda`.
+    pub fn row_text(&self, model: &Model, i: usize) -> String {
+        let names = |s: Sym| model.sym_name(s, &self.extra_names);
+        let row = &self.rows[i];
+        let lhs = expr::add_all(row.e.iter().map(|(j, c)| expr::mul(c, &Expr::der(*j))));
+        format!(
+            "{} = {}",
+            crate::print::text(&lhs, &names),
+            crate::print::text(&row.f, &names)
+        )
+    }
+
+    /// LaTeX of row `i`.
+    pub fn row_latex(&self, model: &Model, i: usize) -> String {
+        let names = |s: Sym| model.sym_name(s, &self.extra_names);
+        let row = &self.rows[i];
+        let lhs = expr::add_all(row.e.iter().map(|(j, c)| expr::mul(c, &Expr::der(*j))));
+        format!(
+            "{} = {}",
+            crate::print::latex(&lhs, &names),
+            crate::print::latex(&row.f, &names)
+        )
+    }
+
+    /// `E y' − f` for row `i` as an expression in `Var` and `Der` symbols.
+    pub fn residual(&self, i: usize) -> Expr {
+        let row = &self.rows[i];
+        let lhs = expr::add_all(row.e.iter().map(|(j, c)| expr::mul(c, &Expr::der(*j))));
+        expr::sub(&lhs, &row.f)
+    }
+
+    /// Number of differential rows.
+    pub fn differential_rows(&self) -> usize {
+        self.rows.iter().filter(|r| r.kind == RowKind::Differential).count()
+    }
+}
+
+/// Largest number of Laplace-expansion steps spent on a selector.
+const SELECTOR_BUDGET: usize = 20_000;
+
+/// Why a formulation does not apply to a model, or `Ok`.
+pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String> {
+    let all_ge1 = an.chains.iter().all(|c| c.top() >= 1);
+    match name {
+        "ori2" | "rcd0" | "ovd0" => Ok(()),
+        "rcd1" | "ovd1" if all_ge1 => Ok(()),
+        "rcd1" | "ovd1" => Err(format!("`{name}` needs every constraint to have a hidden velocity level (d-index ≥ 2)")),
+        "ggl1" | "psi1" | "psi0" if !an.is_mechanical() => Err(format!(
+            "`{name}` needs position-level constraints of a mechanical system (each constraint determining its multiplier after two differentiations)"
+        )),
+        "ggl1" => Ok(()),
+        "psi1" | "psi0" => selector_split(model, an).map(|_| ()),
+        other => Err(format!("unknown formulation `{other}`")),
+    }
+}
+
+/// The formulations a model provides: those it lists (each checked for
+/// applicability, errors at the listed name) or all that apply.
+pub fn provided(model: &Model, an: &Analysis) -> Result<Vec<&'static str>, syn::Error> {
+    let mut errors = crate::dsl::Errors::default();
+    let mut out = Vec::new();
+    match &model.requested {
+        Some(list) => {
+            for n in list {
+                if let Some(&name) = FORMULATION_NAMES.iter().find(|f| **f == n.name) {
+                    match applicable(model, an, name) {
+                        Ok(()) => out.push(name),
+                        Err(why) => errors.push(n.span, format!("formulation `{name}` does not apply to this model: {why}")),
+                    }
+                }
+            }
+        }
+        None => out.extend(FORMULATION_NAMES.iter().copied().filter(|n| applicable(model, an, n).is_ok())),
+    }
+    errors.finish(out)
+}
+
+/// Build formulation `name` (must be applicable).
+pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, String> {
+    applicable(model, an, name)?;
+    let &name = FORMULATION_NAMES.iter().find(|f| **f == name).ok_or_else(|| format!("unknown formulation `{name}`"))?;
+    let n = model.vars.len();
+    // Which levels of each chain the formulation keeps.
+    let levels: Vec<Vec<usize>> = an
+        .chains
+        .iter()
+        .map(|c| {
+            let d = c.top();
+            match name {
+                "ori2" => vec![0],
+                "rcd1" => vec![d - 1],
+                "rcd0" => vec![d],
+                "ovd1" => (0..d).collect(),
+                "ovd0" | "psi0" => (0..=d).collect(),
+                _ => vec![0, 1], // ggl1, psi1
+            }
+        })
+        .collect();
+
+    let mut vars: Vec<VarInfo> = model
+        .vars
+        .iter()
+        .enumerate()
+        .map(|(j, v)| {
+            let s = Sym::Var(j as u32);
+            let index = an
+                .chains
+                .iter()
+                .zip(&levels)
+                .filter_map(|(c, ls)| {
+                    let first = c.first_level(s)?;
+                    let h = *ls.iter().max()?;
+                    Some(first.saturating_sub(h))
+                })
+                .max()
+                .unwrap_or(0);
+            VarInfo {
+                name: v.name.clone(),
+                kind: v.kind,
+                index: (1 + index) as u8,
+            }
+        })
+        .collect();
+
+    // Dynamic rows, as written.
+    let mut dyn_rows: Vec<SymRow> = model
+        .dynamics
+        .iter()
+        .map(|d| SymRow {
+            kind: RowKind::Differential,
+            e: vec![(d.var, d.coef.clone())],
+            f: d.rhs.clone(),
+        })
+        .collect();
+
+    let mut extra_names = Vec::new();
+    if name == "ggl1" {
+        let taken = |s: &str| model.vars.iter().any(|v| v.name == s) || model.params.iter().any(|p| p.name == s);
+        for (i, c) in an.chains.iter().enumerate() {
+            let mut base = if an.chains.len() == 1 { "eta".to_string() } else { format!("eta{}", i + 1) };
+            while taken(&base) {
+                base.push('_');
+            }
+            extra_names.push(base.clone());
+            let eta = Expr::var(n + i);
+            for row in dyn_rows.iter_mut() {
+                let (j, coef) = (&row.e[0].0, &row.e[0].1);
+                let g = expr::diff(&c.levels[0], Sym::Var(*j as u32));
+                if !g.is_zero() {
+                    row.f = expr::sub(&row.f, &expr::mul_all([coef.clone(), eta.clone(), g]));
+                }
+            }
+            vars.push(VarInfo {
+                name: base,
+                kind: VarKind::Algebraic,
+                index: 2,
+            });
+        }
+    }
+
+    let rows_dyn = match name {
+        "psi1" | "psi0" => {
+            let split = selector_split(model, an)?;
+            let mut rows = Vec::new();
+            let mut emitted_q = false;
+            let mut emitted_v = false;
+            for (j, row) in dyn_rows.iter().enumerate() {
+                if split.q.contains(&j) {
+                    if !emitted_q {
+                        rows.extend(project(&split.sq, &split.q, &dyn_rows));
+                        emitted_q = true;
+                    }
+                } else if name == "psi0" && split.v.contains(&j) {
+                    if !emitted_v {
+                        rows.extend(project(&split.sv, &split.v, &dyn_rows));
+                        emitted_v = true;
+                    }
+                } else {
+                    rows.push(row.clone());
+                }
+            }
+            rows
+        }
+        _ => dyn_rows,
+    };
+
+    let mut rows = rows_dyn;
+    let max_level = levels.iter().flatten().copied().max().unwrap_or(0);
+    for level in 0..=max_level {
+        for (c, ls) in an.chains.iter().zip(&levels) {
+            if ls.contains(&level) {
+                rows.push(SymRow {
+                    kind: RowKind::Constraint {
+                        level: level as u8,
+                        source: c.source as u16,
+                    },
+                    e: Vec::new(),
+                    f: c.levels[level].clone(),
+                });
+            }
+        }
+    }
+
+    let c_level = an
+        .chains
+        .iter()
+        .zip(&levels)
+        .map(|(c, ls)| c.top() - ls.iter().max().copied().unwrap_or(0))
+        .max()
+        .unwrap_or(0) as u8;
+    let square = rows.len() == vars.len();
+    let constant_leading = rows
+        .iter()
+        .all(|r| r.e.iter().all(|(_, c)| !c.any_sym(&|s| matches!(s, Sym::Var(_) | Sym::Time))));
+    Ok(Formulation {
+        name,
+        vars,
+        extra_names,
+        rows,
+        d_index: square.then_some(c_level + 1),
+        s_index: if square { c_level } else { c_level.max(1) },
+        c_level,
+        constant_leading,
+    })
+}
+
+/// Positions, velocities and their selectors.
+struct SelectorSplit {
+    q: Vec<usize>,
+    v: Vec<usize>,
+    sq: Vec<Vec<Expr>>,
+    sv: Vec<Vec<Expr>>,
+}
+
+fn selector_split(model: &Model, an: &Analysis) -> Result<SelectorSplit, String> {
+    let diff_in = |level: usize, exclude: &[usize]| -> Vec<usize> {
+        (0..model.n_diff)
+            .filter(|j| !exclude.contains(j))
+            .filter(|&j| an.chains.iter().any(|c| c.levels[level].contains(Sym::Var(j as u32))))
+            .collect()
+    };
+    let q = diff_in(0, &[]);
+    let v = diff_in(1, &q);
+    let nc = an.chains.len();
+    if q.len() <= nc || v.len() < nc {
+        return Err(format!(
+            "the projected formulations need more positions than constraints ({} positions, {} velocities, {nc} constraints)",
+            q.len(),
+            v.len()
+        ));
+    }
+    let jac = |level: usize, cols: &[usize]| -> Vec<Vec<Expr>> {
+        an.chains
+            .iter()
+            .map(|c| cols.iter().map(|&j| expr::diff(&c.levels[level], Sym::Var(j as u32))).collect())
+            .collect()
+    };
+    let sq = selector(&jac(0, &q))?;
+    let sv = selector(&jac(1, &v))?;
+    Ok(SelectorSplit { q, v, sq, sv })
+}
+
+/// Apply selector rows to the dynamic rows of `cols`.
+fn project(s: &[Vec<Expr>], cols: &[usize], rows: &[SymRow]) -> Vec<SymRow> {
+    s.iter()
+        .map(|srow| {
+            let mut e = Vec::new();
+            let mut f = Vec::new();
+            for (k, &j) in cols.iter().enumerate() {
+                if srow[k].is_zero() {
+                    continue;
+                }
+                let r = &rows[j];
+                for (col, c) in &r.e {
+                    e.push((*col, expr::mul(&srow[k], c)));
+                }
+                f.push(expr::mul(&srow[k], &r.f));
+            }
+            e.sort_by_key(|(c, _)| *c);
+            SymRow {
+                kind: RowKind::Differential,
+                e,
+                f: expr::add_all(f),
+            }
+        })
+        .collect()
+}
+
+/// A selector `S` (`(n − m) × n`) with `S Gᵀ = 0` for `G` (`m × n`), built
+/// from a pivot block of the last columns.
+fn selector(g: &[Vec<Expr>]) -> Result<Vec<Vec<Expr>>, String> {
+    let m = g.len();
+    let n = g.first().map_or(0, Vec::len);
+    if m > 60 {
+        return Err("too many constraints for a symbolic selector".into());
+    }
+    // Pivot columns: a structural matching that prefers the last columns.
+    let adj: Vec<Vec<usize>> = (0..m).map(|i| (0..n).rev().filter(|&k| !g[i][k].is_zero()).collect()).collect();
+    let mate = max_matching(&adj, n);
+    let pivots: Vec<usize> = (0..n).filter(|&k| mate[k].is_some()).collect();
+    if pivots.len() != m {
+        return Err("the constraint Jacobian is structurally rank deficient".into());
+    }
+    let free: Vec<usize> = (0..n).filter(|k| !pivots.contains(k)).collect();
+    let gp: Vec<Vec<Expr>> = (0..m).map(|i| pivots.iter().map(|&k| g[i][k].clone()).collect()).collect();
+    let mut det = Det::new(&gp);
+    let all_rows: Vec<usize> = (0..m).collect();
+    let all_cols: Vec<usize> = (0..m).collect();
+    let d = det.det(&all_rows, &all_cols)?;
+    if d.is_zero() {
+        return Err("the pivot block of the constraint Jacobian is singular".into());
+    }
+    // adj(G_P)[a][b] = (−1)^(a+b) det(G_P without row b and column a).
+    let mut adjm = vec![vec![Expr::zero(); m]; m];
+    for (a, row) in adjm.iter_mut().enumerate() {
+        for (b, entry) in row.iter_mut().enumerate() {
+            let rows: Vec<usize> = (0..m).filter(|&r| r != b).collect();
+            let cols: Vec<usize> = (0..m).filter(|&c| c != a).collect();
+            let minor = det.det(&rows, &cols)?;
+            *entry = if (a + b) % 2 == 0 { minor } else { expr::neg(&minor) };
+        }
+    }
+    let mut s = Vec::new();
+    for &f in &free {
+        let mut row = vec![Expr::zero(); n];
+        row[f] = d.clone();
+        for (a, &p) in pivots.iter().enumerate() {
+            let v = expr::add_all((0..m).map(|b| expr::mul(&adjm[a][b], &g[b][f])));
+            row[p] = expr::neg(&v);
+        }
+        // Divide by the numeric content of the row.
+        let mut content: Option<expr::Q> = None;
+        for e in row.iter().filter(|e| !e.is_zero()) {
+            let c = expr::content(e);
+            content = Some(match content {
+                None => c,
+                Some(g0) => expr::gcd_q(&g0, &c),
+            });
+        }
+        if let Some(c) = content {
+            let inv = num_traits::Inv::inv(c);
+            row = row.iter().map(|e| expr::scale(&inv, e)).collect();
+        }
+        s.push(row);
+    }
+    Ok(s)
+}
+
+/// Symbolic determinants by Laplace expansion along the first row, skipping
+/// zeros and memoising minors; bounded by [`SELECTOR_BUDGET`].
+struct Det<'a> {
+    a: &'a [Vec<Expr>],
+    memo: HashMap<(Vec<usize>, Vec<usize>), Expr>,
+    steps: usize,
+}
+
+impl<'a> Det<'a> {
+    fn new(a: &'a [Vec<Expr>]) -> Self {
+        Det {
+            a,
+            memo: HashMap::new(),
+            steps: 0,
+        }
+    }
+
+    fn det(&mut self, rows: &[usize], cols: &[usize]) -> Result<Expr, String> {
+        if rows.is_empty() {
+            return Ok(Expr::one());
+        }
+        let key = (rows.to_vec(), cols.to_vec());
+        if let Some(v) = self.memo.get(&key) {
+            return Ok(v.clone());
+        }
+        self.steps += 1;
+        if self.steps > SELECTOR_BUDGET {
+            return Err("the selector's determinant is too large to derive symbolically".into());
+        }
+        let r = rows[0];
+        let mut terms = Vec::new();
+        for (k, &c) in cols.iter().enumerate() {
+            let entry = &self.a[r][c];
+            if entry.is_zero() {
+                continue;
+            }
+            let sub_cols: Vec<usize> = cols.iter().copied().filter(|&x| x != c).collect();
+            let minor = self.det(&rows[1..], &sub_cols)?;
+            if minor.is_zero() {
+                continue;
+            }
+            let t = expr::mul(entry, &minor);
+            terms.push(if k % 2 == 0 { t } else { expr::neg(&t) });
+        }
+        let v = expr::add_all(terms);
+        self.memo.insert(key, v.clone());
+        Ok(v)
+    }
+}

@@ -1,0 +1,467 @@
+//! The checked model: names resolved, equations split into dynamic
+//! equations `c · der(u) = f` and constraints `0 = g`, every node keeping the
+//! span it came from.
+
+use crate::dsl::{Ast, BinOp, Errors, ModelAst, Name};
+use crate::expr::{self, Expr, Func, Sym};
+use crate::system::{VarKind, FORMULATION_NAMES};
+use proc_macro2::Span;
+
+/// A parameter with its default.
+#[derive(Clone, Debug)]
+pub struct ParamDef {
+    /// Name.
+    pub name: String,
+    /// Default value.
+    pub default: f64,
+    /// Declaration span.
+    pub span: Span,
+}
+
+/// An unknown of the model.
+#[derive(Clone, Debug)]
+pub struct VarDef {
+    /// Name.
+    pub name: String,
+    /// Differential or algebraic.
+    pub kind: VarKind,
+    /// Declaration span.
+    pub span: Span,
+}
+
+/// `coef · der(var) = rhs`.
+#[derive(Clone, Debug)]
+pub struct Dynamic {
+    /// The differential unknown this equation gives the derivative of.
+    pub var: usize,
+    /// Scalar coefficient (free of derivatives).
+    pub coef: Expr,
+    /// Right-hand side.
+    pub rhs: Expr,
+    /// Span of the equation.
+    pub span: Span,
+}
+
+/// `0 = expr`.
+#[derive(Clone, Debug)]
+pub struct ConstraintDef {
+    /// The constraint function `g`.
+    pub expr: Expr,
+    /// Span of the equation.
+    pub span: Span,
+}
+
+/// A named invariant.
+#[derive(Clone, Debug)]
+pub struct InvariantDef {
+    /// Name.
+    pub name: String,
+    /// Expression.
+    pub expr: Expr,
+    /// Span of the name.
+    pub span: Span,
+}
+
+/// A checked model.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Model name.
+    pub name: String,
+    /// Span of the name.
+    pub name_span: Span,
+    /// Doc comment.
+    pub doc: String,
+    /// `pub` was written.
+    pub public: bool,
+    /// Parameters in order.
+    pub params: Vec<ParamDef>,
+    /// Unknowns: differential first (declaration order), then algebraic.
+    pub vars: Vec<VarDef>,
+    /// Number of differential unknowns (the first `n_diff` of `vars`).
+    pub n_diff: usize,
+    /// Dynamic equations, one per differential unknown, in unknown order.
+    pub dynamics: Vec<Dynamic>,
+    /// Constraints in order.
+    pub constraints: Vec<ConstraintDef>,
+    /// Invariants in order.
+    pub invariants: Vec<InvariantDef>,
+    /// Requested formulations (`None`: all that apply).
+    pub requested: Option<Vec<Name>>,
+}
+
+/// Names of the elementary functions.
+pub const FUNCTIONS: [&str; 6] = ["sin", "cos", "tan", "exp", "ln", "sqrt"];
+
+impl Model {
+    /// Check a parsed model; every problem is reported, each at its token.
+    pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
+        let mut errors = Errors::default();
+        let mut seen: Vec<(String, Span)> = Vec::new();
+        let mut declare = |n: &Name, errors: &mut Errors| {
+            if let Some((_, _first)) = seen.iter().find(|(s, _)| *s == n.name) {
+                errors.push(n.span, format!("`{}` is declared twice", n.name));
+                return false;
+            }
+            if FUNCTIONS.contains(&n.name.as_str()) || n.name == "der" {
+                errors.push(n.span, format!("`{}` is reserved (a function of the model language)", n.name));
+                return false;
+            }
+            seen.push((n.name.clone(), n.span));
+            true
+        };
+        let mut params = Vec::new();
+        for p in &ast.parameters {
+            if declare(&p.name, &mut errors) {
+                if !p.value.is_finite() {
+                    errors.push(p.name.span, format!("default of `{}` is not finite", p.name.name));
+                }
+                params.push(ParamDef {
+                    name: p.name.name.clone(),
+                    default: p.value,
+                    span: p.name.span,
+                });
+            }
+        }
+        let mut vars = Vec::new();
+        for n in &ast.differential {
+            if declare(n, &mut errors) {
+                vars.push(VarDef {
+                    name: n.name.clone(),
+                    kind: VarKind::Differential,
+                    span: n.span,
+                });
+            }
+        }
+        let n_diff = vars.len();
+        for n in &ast.algebraic {
+            if declare(n, &mut errors) {
+                vars.push(VarDef {
+                    name: n.name.clone(),
+                    kind: VarKind::Algebraic,
+                    span: n.span,
+                });
+            }
+        }
+        if n_diff == 0 {
+            errors.push(
+                ast.name.span,
+                format!("model `{}` is empty: it needs `differential {{ … }}` unknowns and `equations {{ … }}`", ast.name.name),
+            );
+        }
+
+        let scope = Scope { params: &params, vars: &vars };
+        let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
+        let mut constraints = Vec::new();
+        for eq in &ast.equations {
+            let (Some(lhs), Some(rhs)) = (scope.lower(&eq.lhs, &mut errors), scope.lower(&eq.rhs, &mut errors)) else {
+                continue;
+            };
+            let r = expr::sub(&lhs, &rhs);
+            let ders: Vec<usize> = r
+                .symbols()
+                .into_iter()
+                .filter_map(|s| match s {
+                    Sym::Der(i) => Some(i as usize),
+                    _ => None,
+                })
+                .collect();
+            match ders.as_slice() {
+                [] => {
+                    let g = if lhs.is_zero() { rhs } else { expr::sub(&lhs, &rhs) };
+                    if g.any_sym(&|s| matches!(s, Sym::Var(_))) {
+                        constraints.push(ConstraintDef { expr: g, span: eq.span });
+                    } else {
+                        errors.push(eq.span, "this equation involves no unknown");
+                    }
+                }
+                [j] => {
+                    let coef = expr::diff(&r, Sym::Der(*j as u32));
+                    if coef.any_sym(&|s| matches!(s, Sym::Der(_))) {
+                        errors.push(
+                            eq.lhs.span(),
+                            format!(
+                                "`der({})` must appear linearly: write `coef * der({}) = rhs` with a coefficient free of der()",
+                                vars[*j].name, vars[*j].name
+                            ),
+                        );
+                        continue;
+                    }
+                    let f = expr::neg(&expr::subs(&r, &|s| matches!(s, Sym::Der(_)).then(Expr::zero)));
+                    if coef.is_zero() {
+                        errors.push(eq.span, format!("the coefficient of `der({})` vanishes", vars[*j].name));
+                        continue;
+                    }
+                    if dynamics[*j].is_some() {
+                        errors.push(
+                            eq.span,
+                            format!("a second equation for `der({})`: each differential unknown has exactly one", vars[*j].name),
+                        );
+                        continue;
+                    }
+                    dynamics[*j] = Some(Dynamic {
+                        var: *j,
+                        coef,
+                        rhs: f,
+                        span: eq.span,
+                    });
+                }
+                _ => errors.push(
+                    eq.lhs.span(),
+                    format!(
+                        "a dynamic equation gives the derivative of one unknown; this one has der() of {}",
+                        ders.iter().map(|&j| format!("`{}`", vars[j].name)).collect::<Vec<_>>().join(", ")
+                    ),
+                ),
+            }
+        }
+        let mut dyns = Vec::new();
+        for (j, d) in dynamics.into_iter().enumerate() {
+            match d {
+                Some(d) => dyns.push(d),
+                None => errors.push(
+                    vars[j].span,
+                    format!("too few equations: no equation gives `der({})`", vars[j].name),
+                ),
+            }
+        }
+        let n_alg = vars.len() - n_diff;
+        if constraints.len() > n_alg {
+            for c in &constraints[n_alg..] {
+                errors.push(
+                    c.span,
+                    format!(
+                        "too many equations: {} constraints for {} algebraic unknowns (a semi-explicit model has one constraint per algebraic unknown)",
+                        constraints.len(),
+                        n_alg
+                    ),
+                );
+            }
+        } else if constraints.len() < n_alg {
+            for v in &vars[n_diff + constraints.len()..] {
+                errors.push(
+                    v.span,
+                    format!(
+                        "too few equations: {} algebraic unknowns but {} constraints; add `0 = …` for `{}`",
+                        n_alg,
+                        constraints.len(),
+                        v.name
+                    ),
+                );
+            }
+        }
+        let mut invariants = Vec::new();
+        for inv in &ast.invariants {
+            if let Some(e) = scope.lower(&inv.expr, &mut errors) {
+                if e.any_sym(&|s| matches!(s, Sym::Der(_))) {
+                    errors.push(inv.expr.span(), "invariants may not contain der()");
+                    continue;
+                }
+                invariants.push(InvariantDef {
+                    name: inv.name.name.clone(),
+                    expr: e,
+                    span: inv.name.span,
+                });
+            }
+        }
+        if let Some(list) = &ast.formulations {
+            let mut listed: Vec<&str> = Vec::new();
+            for f in list {
+                if !FORMULATION_NAMES.contains(&f.name.as_str()) {
+                    errors.push(
+                        f.span,
+                        format!("unknown formulation `{}` (known: {})", f.name, FORMULATION_NAMES.join(", ")),
+                    );
+                } else if listed.contains(&f.name.as_str()) {
+                    errors.push(f.span, format!("formulation `{}` is listed twice", f.name));
+                } else {
+                    listed.push(&f.name);
+                }
+            }
+            if list.is_empty() {
+                errors.push(ast.body_span, "`formulations { }` is empty: list at least one, or leave the block out for all");
+            }
+        }
+        errors.finish(Model {
+            name: ast.name.name.clone(),
+            name_span: ast.name.span,
+            doc: ast.doc.clone(),
+            public: ast.public,
+            params,
+            vars,
+            n_diff,
+            dynamics: dyns,
+            constraints,
+            invariants,
+            requested: ast.formulations.clone(),
+        })
+    }
+
+    /// Name of a symbol in the model language; `extra` names unknowns past
+    /// the model's own (GGL multipliers).
+    pub fn sym_name(&self, s: Sym, extra: &[String]) -> String {
+        let var = |i: u32| -> String {
+            let i = i as usize;
+            self.vars
+                .get(i)
+                .map(|v| v.name.clone())
+                .or_else(|| extra.get(i - self.vars.len()).cloned())
+                .unwrap_or_else(|| format!("y{i}"))
+        };
+        match s {
+            Sym::Var(i) => var(i),
+            Sym::Der(i) => format!("der({})", var(i)),
+            Sym::Param(k) => self.params.get(k as usize).map(|p| p.name.clone()).unwrap_or_else(|| format!("p{k}")),
+            Sym::Time => "t".into(),
+            Sym::Dir(i) => format!("z{i}"),
+        }
+    }
+
+    /// Text of an expression in the model language.
+    pub fn text(&self, e: &Expr) -> String {
+        crate::print::text(e, &|s| self.sym_name(s, &[]))
+    }
+
+    /// The unknowns' rates `der(u) = f/c` for the total time derivative.
+    pub fn rate(&self, s: Sym) -> Result<Option<Expr>, ()> {
+        match s {
+            Sym::Var(i) if (i as usize) < self.n_diff => {
+                let d = &self.dynamics[i as usize];
+                Ok(Some(expr::div(&d.rhs, &d.coef)))
+            }
+            Sym::Param(_) => Ok(None),
+            Sym::Time => Ok(Some(Expr::one())),
+            _ => Err(()),
+        }
+    }
+
+    /// Number of algebraic unknowns.
+    pub fn n_alg(&self) -> usize {
+        self.vars.len() - self.n_diff
+    }
+
+    /// Parse and check model text (a `.dae` file).
+    pub fn from_str(src: &str) -> Result<Model, syn::Error> {
+        Model::check(&crate::dsl::parse_str(src)?)
+    }
+}
+
+struct Scope<'a> {
+    params: &'a [ParamDef],
+    vars: &'a [VarDef],
+}
+
+impl Scope<'_> {
+    fn lookup(&self, name: &str) -> Option<Sym> {
+        if let Some(i) = self.vars.iter().position(|v| v.name == name) {
+            return Some(Sym::Var(i as u32));
+        }
+        if let Some(k) = self.params.iter().position(|p| p.name == name) {
+            return Some(Sym::Param(k as u32));
+        }
+        (name == "t").then_some(Sym::Time)
+    }
+
+    fn lower(&self, ast: &Ast, errors: &mut Errors) -> Option<Expr> {
+        match ast {
+            Ast::Num(v, _) => Some(Expr::num(v.clone())),
+            Ast::Ident(name, span) => match self.lookup(name) {
+                Some(s) => Some(Expr::sym(s)),
+                None => {
+                    let hint = if FUNCTIONS.contains(&name.as_str()) || name == "der" {
+                        format!(" (`{name}` is a function: write `{name}(…)`)")
+                    } else {
+                        String::new()
+                    };
+                    errors.push(*span, format!("unknown name `{name}`: not a parameter or an unknown of this model{hint}"));
+                    None
+                }
+            },
+            Ast::Call(name, span, args) => {
+                if args.len() != 1 {
+                    errors.push(*span, format!("`{name}` takes one argument, found {}", args.len()));
+                    return None;
+                }
+                if name == "der" {
+                    return match &args[0] {
+                        Ast::Ident(v, vspan) => match self.vars.iter().position(|d| &d.name == v) {
+                            Some(i) if self.vars[i].kind == VarKind::Differential => Some(Expr::der(i)),
+                            Some(_) => {
+                                errors.push(
+                                    *vspan,
+                                    format!("`der({v})`: `{v}` is algebraic; only differential unknowns have derivatives"),
+                                );
+                                None
+                            }
+                            None => {
+                                errors.push(*vspan, format!("`der({v})`: `{v}` is not an unknown of this model"));
+                                None
+                            }
+                        },
+                        other => {
+                            errors.push(other.span(), "`der(…)` takes the name of a differential unknown");
+                            None
+                        }
+                    };
+                }
+                let arg = self.lower(&args[0], errors)?;
+                let f = match name.as_str() {
+                    "sin" => Func::Sin,
+                    "cos" => Func::Cos,
+                    "tan" => Func::Tan,
+                    "exp" => Func::Exp,
+                    "ln" => Func::Ln,
+                    "sqrt" => return Some(expr::sqrt(&arg)),
+                    _ => {
+                        errors.push(*span, format!("unknown function `{name}` (known: {}, der)", FUNCTIONS.join(", ")));
+                        return None;
+                    }
+                };
+                if arg.any_sym(&|s| matches!(s, Sym::Der(_))) {
+                    errors.push(args[0].span(), format!("der() must appear linearly, not inside `{name}(…)`"));
+                    return None;
+                }
+                Some(expr::func(f, &arg))
+            }
+            Ast::Neg(inner, _) => Some(expr::neg(&self.lower(inner, errors)?)),
+            Ast::Bin(op, l, r, span) => {
+                let a = self.lower(l, errors);
+                let b = self.lower(r, errors);
+                let (a, b) = (a?, b?);
+                let has_der = |e: &Expr| e.any_sym(&|s| matches!(s, Sym::Der(_)));
+                Some(match op {
+                    BinOp::Add => expr::add(&a, &b),
+                    BinOp::Sub => expr::sub(&a, &b),
+                    BinOp::Mul => {
+                        if has_der(&a) && has_der(&b) {
+                            errors.push(*span, "product of two der() terms: der() must appear linearly");
+                            return None;
+                        }
+                        expr::mul(&a, &b)
+                    }
+                    BinOp::Div => {
+                        if has_der(&b) {
+                            errors.push(r.span(), "division by a der() term: der() must appear linearly");
+                            return None;
+                        }
+                        if b.is_zero() {
+                            errors.push(r.span(), "division by zero");
+                            return None;
+                        }
+                        expr::div(&a, &b)
+                    }
+                    BinOp::Pow => {
+                        if has_der(&a) || has_der(&b) {
+                            errors.push(*span, "power of a der() term: der() must appear linearly");
+                            return None;
+                        }
+                        if a.is_zero() && b.as_num().is_some_and(|v| num_traits::Signed::is_negative(v)) {
+                            errors.push(*span, "zero to a negative power");
+                            return None;
+                        }
+                        expr::pow(&a, &b)
+                    }
+                })
+            }
+        }
+    }
+}
