@@ -1,1 +1,44 @@
-fn main() {}
+//! The `dae` command: derive formulations, run a scene, sweep the
+//! speed/accuracy trade.
+
+use clap::{Parser, Subcommand};
+use dae::cli::{self, derive::Format, Failure};
+use std::io::Write;
+
+#[derive(Parser)]
+#[command(name = "dae", version, about = "Constrained dynamics: every formulation, measured")]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Hidden constraints, formulations and structural numbers of a model.
+    Derive {
+        /// A `.dae` file, or a built-in model name.
+        #[arg(default_value = "pendulum")]
+        model: String,
+        /// Output format.
+        #[arg(long, value_enum, default_value = "text")]
+        format: Format,
+    },
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Derive { model, format }) => cli::derive::run(&model, format),
+        None => cli::derive::run("pendulum", Format::Text),
+    };
+    match result {
+        Ok(out) => {
+            let mut stdout = std::io::stdout().lock();
+            let _ = stdout.write_all(out.as_bytes());
+        }
+        Err(Failure { code, message }) => {
+            eprintln!("{message}");
+            std::process::exit(code);
+        }
+    }
+}

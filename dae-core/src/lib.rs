@@ -17,6 +17,7 @@ pub mod index;
 pub mod interp;
 pub mod model;
 pub mod print;
+pub mod report;
 pub mod system;
 pub mod tape;
 

@@ -6,6 +6,7 @@ use crate::dsl::{Ast, BinOp, Errors, ModelAst, Name};
 use crate::expr::{self, Expr, Func, Sym};
 use crate::system::{VarKind, FORMULATION_NAMES};
 use proc_macro2::Span;
+use std::str::FromStr;
 
 /// A parameter with its default.
 #[derive(Clone, Debug)]
@@ -337,6 +338,29 @@ impl Model {
     /// Number of algebraic unknowns.
     pub fn n_alg(&self) -> usize {
         self.vars.len() - self.n_diff
+    }
+
+    /// Parse an expression in this model's names (e.g. a hand-derived
+    /// constraint to compare with a derived one).
+    pub fn parse_expr(&self, src: &str) -> Result<Expr, syn::Error> {
+        let tokens: Vec<proc_macro2::TokenTree> = proc_macro2::TokenStream::from_str(src)
+            .map_err(|e| syn::Error::new(e.span(), format!("cannot read expression: {e}")))?
+            .into_iter()
+            .collect();
+        let mut errors = Errors::default();
+        let ast = crate::dsl::parse_expr(&tokens, Span::call_site(), &mut errors);
+        let scope = Scope {
+            params: &self.params,
+            vars: &self.vars,
+        };
+        let e = ast.and_then(|a| scope.lower(&a, &mut errors));
+        match e {
+            Some(e) => errors.finish(e),
+            None => {
+                errors.push(Span::call_site(), "invalid expression");
+                errors.finish(Expr::zero())
+            }
+        }
     }
 
     /// Parse and check model text (a `.dae` file).

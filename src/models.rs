@@ -1,0 +1,71 @@
+//! Built-in models and loading models by name or path.
+
+use dae_core::derive::{render_error, Derived};
+use dae_core::interp::InterpretedModel;
+use dae_core::system::Model;
+use std::path::Path;
+
+/// Model-language source of the built-in pendulum (also `scenes/pendulum.dae`).
+pub const PENDULUM_SOURCE: &str = include_str!("../scenes/pendulum.dae");
+
+/// Names of the built-in models.
+pub const BUILTIN_MODELS: [&str; 1] = ["pendulum"];
+
+/// Why a model could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// The file could not be read.
+    #[error("cannot read model file {path}: {source}")]
+    Io {
+        /// The path tried.
+        path: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The model text has errors (rendered with `file:line:column`).
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Where a model comes from.
+#[derive(Clone, Debug)]
+pub struct ModelSource {
+    /// Name shown in messages (`pendulum` or the path).
+    pub label: String,
+    /// The model text.
+    pub text: String,
+    /// `Some` for a built-in model.
+    pub builtin: Option<&'static str>,
+}
+
+/// Resolve a built-in name (`pendulum`) or read a `.dae` file.
+pub fn source(spec: &str) -> Result<ModelSource, ModelError> {
+    if let Some(&name) = BUILTIN_MODELS.iter().find(|n| **n == spec) {
+        return Ok(ModelSource {
+            label: name.to_string(),
+            text: PENDULUM_SOURCE.to_string(),
+            builtin: Some(name),
+        });
+    }
+    let text = std::fs::read_to_string(Path::new(spec)).map_err(|source| ModelError::Io {
+        path: spec.to_string(),
+        source,
+    })?;
+    Ok(ModelSource {
+        label: spec.to_string(),
+        text,
+        builtin: None,
+    })
+}
+
+/// Parse, check and derive a model source.
+pub fn derive(src: &ModelSource) -> Result<Derived, ModelError> {
+    Derived::from_str(&src.text).map_err(|e| ModelError::Invalid(render_error(&e, &src.label)))
+}
+
+/// A runnable model: the compiled built-in or an interpreted file.
+pub fn load(spec: &str) -> Result<Box<dyn Model + Send>, ModelError> {
+    let src = source(spec)?;
+    let d = derive(&src)?;
+    Ok(Box::new(InterpretedModel::new(&d)))
+}
