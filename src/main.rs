@@ -23,12 +23,21 @@ enum Command {
         #[arg(long, value_enum, default_value = "text")]
         format: Format,
     },
+    /// Run one scene with one solver, formulation and tolerance.
+    Run(cli::run::RunArgs),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Derive { model, format }) => cli::derive::run(&model, format),
+        Some(Command::Run(args)) => match cli::run::run(&args) {
+            Ok((out, code)) => {
+                print!("{out}");
+                std::process::exit(code);
+            }
+            Err(f) => Err(f),
+        },
         None => cli::derive::run("pendulum", Format::Text),
     };
     match result {

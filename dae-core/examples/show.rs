@@ -19,7 +19,10 @@ fn main() {
                 println!("level {} source {}: 0 = {}", c.level, c.source, c.expr);
             }
             for f in &d.formulations {
-                println!("{} d={:?} s={} c={}", f.name, f.d_index, f.s_index, f.c_level);
+                println!(
+                    "{} d={:?} s={} c={}",
+                    f.name, f.d_index, f.s_index, f.c_level
+                );
                 for i in 0..f.rows.len() {
                     println!("    {}", f.row_text(&d.model, i));
                 }

@@ -99,11 +99,10 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
             let s = Sym::Var(k as u32);
             fj_cells.push((i, k, expr::diff(&row.f, s)));
             if !f.constant_leading {
-                let ez = expr::add_all(
-                    row.e
-                        .iter()
-                        .map(|(j, c)| expr::mul(&expr::diff(c, s), &Expr::sym(Sym::Dir(*j as u32)))),
-                );
+                let ez =
+                    expr::add_all(row.e.iter().map(|(j, c)| {
+                        expr::mul(&expr::diff(c, s), &Expr::sym(Sym::Dir(*j as u32)))
+                    }));
                 ej_cells.push((i, k, ez));
             }
         }

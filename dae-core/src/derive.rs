@@ -26,6 +26,7 @@ impl Derived {
     }
 
     /// Derive from model text (a `.dae` file).
+    #[allow(clippy::should_implement_trait)] // returns `syn::Error` with spans, unlike `str::parse`
     pub fn from_str(src: &str) -> Result<Derived, syn::Error> {
         let ast = crate::dsl::parse_str(src)?;
         Self::from_ast(&ast)
@@ -38,7 +39,8 @@ impl Derived {
         let names = formulation::provided(&model, &analysis)?;
         let mut formulations = Vec::new();
         for n in names {
-            let f = formulation::build(&model, &analysis, n).map_err(|why| syn::Error::new(model.name_span, why))?;
+            let f = formulation::build(&model, &analysis, n)
+                .map_err(|why| syn::Error::new(model.name_span, why))?;
             formulations.push(f);
         }
         Ok(Derived {
@@ -78,7 +80,11 @@ impl Derived {
                 .collect(),
             constraints: self.constraint_infos(),
             invariants: m.invariants.iter().map(|i| i.name.clone()).collect(),
-            formulations: self.formulations.iter().map(|f| f.name.to_string()).collect(),
+            formulations: self
+                .formulations
+                .iter()
+                .map(|f| f.name.to_string())
+                .collect(),
         }
     }
 }

@@ -170,7 +170,8 @@ impl Errors {
 /// Parse model text read at run time (a `.dae` file). Lexer errors are
 /// reported with their position too.
 pub fn parse_str(src: &str) -> Result<ModelAst, syn::Error> {
-    let tokens = TokenStream::from_str(src).map_err(|e| syn::Error::new(e.span(), format!("cannot read model: {e}")))?;
+    let tokens = TokenStream::from_str(src)
+        .map_err(|e| syn::Error::new(e.span(), format!("cannot read model: {e}")))?;
     parse(tokens)
 }
 
@@ -183,10 +184,14 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
     // Doc comments arrive as `# [doc = "..."]`.
     while i < toks.len() {
         match (&toks[i], toks.get(i + 1)) {
-            (TokenTree::Punct(p), Some(TokenTree::Group(g))) if p.as_char() == '#' && g.delimiter() == Delimiter::Bracket => {
+            (TokenTree::Punct(p), Some(TokenTree::Group(g)))
+                if p.as_char() == '#' && g.delimiter() == Delimiter::Bracket =>
+            {
                 let inner: Vec<TokenTree> = g.stream().into_iter().collect();
                 match inner.as_slice() {
-                    [TokenTree::Ident(id), TokenTree::Punct(eq), TokenTree::Literal(lit)] if id == "doc" && eq.as_char() == '=' => {
+                    [TokenTree::Ident(id), TokenTree::Punct(eq), TokenTree::Literal(lit)]
+                        if id == "doc" && eq.as_char() == '=' =>
+                    {
                         doc.push(unquote(&lit.to_string()));
                     }
                     _ => errors.push(g.span(), "only doc comments (`/// …`) may precede a model"),
@@ -208,14 +213,34 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
             name: id.to_string(),
             span: id.span(),
         },
-        Some(t) => return Err(syn::Error::new(t.span(), "expected the model name, e.g. `pub Pendulum { … }`")),
-        None => return Err(syn::Error::new(Span::call_site(), "empty model: expected `pub Name { … }`")),
+        Some(t) => {
+            return Err(syn::Error::new(
+                t.span(),
+                "expected the model name, e.g. `pub Pendulum { … }`",
+            ))
+        }
+        None => {
+            return Err(syn::Error::new(
+                Span::call_site(),
+                "empty model: expected `pub Name { … }`",
+            ))
+        }
     };
     i += 1;
     let body = match toks.get(i) {
         Some(TokenTree::Group(g)) if g.delimiter() == Delimiter::Brace => g.clone(),
-        Some(t) => return Err(syn::Error::new(t.span(), "expected `{` after the model name")),
-        None => return Err(syn::Error::new(name.span, "expected `{ … }` with the model's sections after its name")),
+        Some(t) => {
+            return Err(syn::Error::new(
+                t.span(),
+                "expected `{` after the model name",
+            ))
+        }
+        None => {
+            return Err(syn::Error::new(
+                name.span,
+                "expected `{ … }` with the model's sections after its name",
+            ))
+        }
     };
     if let Some(t) = toks.get(i + 1) {
         errors.push(t.span(), "unexpected tokens after the model body");
@@ -244,7 +269,10 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
             break;
         };
         let kw_name = kw.to_string();
-        let Some(TokenTree::Group(g)) = sections.get(j + 1).filter(|t| matches!(t, TokenTree::Group(g) if g.delimiter() == Delimiter::Brace)) else {
+        let Some(TokenTree::Group(g)) = sections
+            .get(j + 1)
+            .filter(|t| matches!(t, TokenTree::Group(g) if g.delimiter() == Delimiter::Brace))
+        else {
             errors.push(kw.span(), format!("expected `{{ … }}` after `{kw_name}`"));
             break;
         };
@@ -272,7 +300,9 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
 
 fn unquote(lit: &str) -> String {
     // A doc literal is a plain Rust string literal.
-    syn::parse_str::<syn::LitStr>(lit).map(|l| l.value()).unwrap_or_else(|_| lit.trim_matches('"').to_string())
+    syn::parse_str::<syn::LitStr>(lit)
+        .map(|l| l.value())
+        .unwrap_or_else(|_| lit.trim_matches('"').to_string())
 }
 
 /// Split tokens at a separator punct (`,` or `;`), dropping empty pieces
@@ -302,7 +332,10 @@ fn parse_names(tokens: &[TokenTree], errors: &mut Errors) -> Vec<Name> {
                 name: id.to_string(),
                 span: id.span(),
             }),
-            [] => errors.push(sep.unwrap_or_else(Span::call_site), "expected a name before `,`"),
+            [] => errors.push(
+                sep.unwrap_or_else(Span::call_site),
+                "expected a name before `,`",
+            ),
             [first, ..] => errors.push(first.span(), "expected a single name"),
         }
     }
@@ -313,9 +346,14 @@ fn parse_parameters(tokens: &[TokenTree], errors: &mut Errors) -> Vec<ParamDecl>
     let mut out = Vec::new();
     for (piece, sep) in split(tokens, ',') {
         let (name, rest) = match piece {
-            [TokenTree::Ident(id), TokenTree::Punct(eq), rest @ ..] if eq.as_char() == '=' => (id, rest),
+            [TokenTree::Ident(id), TokenTree::Punct(eq), rest @ ..] if eq.as_char() == '=' => {
+                (id, rest)
+            }
             [] => {
-                errors.push(sep.unwrap_or_else(Span::call_site), "expected `name = value` before `,`");
+                errors.push(
+                    sep.unwrap_or_else(Span::call_site),
+                    "expected `name = value` before `,`",
+                );
                 continue;
             }
             [first, ..] => {
@@ -338,16 +376,25 @@ fn parse_parameters(tokens: &[TokenTree], errors: &mut Errors) -> Vec<ParamDecl>
                     }
                 }
                 None => {
-                    errors.push(lit.span(), format!("default of `{name}` must be a number, found `{lit}`"));
+                    errors.push(
+                        lit.span(),
+                        format!("default of `{name}` must be a number, found `{lit}`"),
+                    );
                     continue;
                 }
             },
             [] => {
-                errors.push(name.span(), format!("parameter `{name}` needs a default value"));
+                errors.push(
+                    name.span(),
+                    format!("parameter `{name}` needs a default value"),
+                );
                 continue;
             }
             [t, ..] => {
-                errors.push(t.span(), format!("default of `{name}` must be a numeric literal, found `{t}`"));
+                errors.push(
+                    t.span(),
+                    format!("default of `{name}` must be a numeric literal, found `{t}`"),
+                );
                 continue;
             }
         };
@@ -369,7 +416,10 @@ fn parse_equations(tokens: &[TokenTree], errors: &mut Errors) -> Vec<Equation> {
             continue;
         }
         if sep.is_none() {
-            errors.push(piece[piece.len() - 1].span(), "expected `;` after the equation");
+            errors.push(
+                piece[piece.len() - 1].span(),
+                "expected `;` after the equation",
+            );
         }
         let eqs: Vec<usize> = piece
             .iter()
@@ -378,8 +428,14 @@ fn parse_equations(tokens: &[TokenTree], errors: &mut Errors) -> Vec<Equation> {
             .map(|(k, _)| k)
             .collect();
         if eqs.len() != 1 {
-            let span = eqs.get(1).map(|&k| piece[k].span()).unwrap_or(piece[0].span());
-            errors.push(span, "an equation has exactly one `=`: `coef * der(u) = rhs` or `0 = constraint`");
+            let span = eqs
+                .get(1)
+                .map(|&k| piece[k].span())
+                .unwrap_or(piece[0].span());
+            errors.push(
+                span,
+                "an equation has exactly one `=`: `coef * der(u) = rhs` or `0 = constraint`",
+            );
             continue;
         }
         let k = eqs[0];
@@ -437,7 +493,10 @@ pub fn number(lit: &str) -> Option<Q> {
         Some(k) => (&mantissa[..k], &mantissa[k + 1..]),
         None => (mantissa, ""),
     };
-    if int.is_empty() || !int.chars().all(|c| c.is_ascii_digit()) || !frac.chars().all(|c| c.is_ascii_digit()) {
+    if int.is_empty()
+        || !int.chars().all(|c| c.is_ascii_digit())
+        || !frac.chars().all(|c| c.is_ascii_digit())
+    {
         return None;
     }
     let digits = BigInt::from_str(&format!("{int}{frac}")).ok()?;
@@ -461,7 +520,10 @@ pub fn parse_expr(tokens: &[TokenTree], at: Span, errors: &mut Errors) -> Option
         errors.push(at, "expected an expression");
         return None;
     }
-    let mut p = ExprParser { toks: tokens, pos: 0 };
+    let mut p = ExprParser {
+        toks: tokens,
+        pos: 0,
+    };
     match p.expr(0) {
         Ok(e) => {
             if let Some(t) = p.toks.get(p.pos) {
@@ -536,7 +598,11 @@ impl ExprParser<'_> {
                 let negative = p.as_char() == '-';
                 self.pos += 1;
                 let inner = self.expr_or_unary(bp)?;
-                return Ok(if negative { Ast::Neg(Box::new(inner), span) } else { inner });
+                return Ok(if negative {
+                    Ast::Neg(Box::new(inner), span)
+                } else {
+                    inner
+                });
             }
         }
         self.expr(bp)
@@ -544,16 +610,23 @@ impl ExprParser<'_> {
 
     fn prefix(&mut self) -> Result<Ast, syn::Error> {
         let Some(tok) = self.toks.get(self.pos) else {
-            let span = self.toks.last().map(|t| t.span()).unwrap_or_else(Span::call_site);
+            let span = self
+                .toks
+                .last()
+                .map(|t| t.span())
+                .unwrap_or_else(Span::call_site);
             return Err(syn::Error::new(span, "expression ends unexpectedly"));
         };
         self.pos += 1;
         match tok {
             TokenTree::Literal(lit) => {
                 let s = lit.to_string();
-                number(&s)
-                    .map(|v| Ast::Num(v, lit.span()))
-                    .ok_or_else(|| syn::Error::new(lit.span(), format!("`{s}` is not a number the model language understands")))
+                number(&s).map(|v| Ast::Num(v, lit.span())).ok_or_else(|| {
+                    syn::Error::new(
+                        lit.span(),
+                        format!("`{s}` is not a number the model language understands"),
+                    )
+                })
             }
             TokenTree::Ident(id) => {
                 let name = id.to_string();
@@ -570,7 +643,10 @@ impl ExprParser<'_> {
                         }
                         errs.finish(())?;
                         if args.is_empty() {
-                            return Err(syn::Error::new(g.span(), format!("`{name}(…)` needs an argument")));
+                            return Err(syn::Error::new(
+                                g.span(),
+                                format!("`{name}(…)` needs an argument"),
+                            ));
                         }
                         return Ok(Ast::Call(name, id.span(), args));
                     }
@@ -582,13 +658,22 @@ impl ExprParser<'_> {
                 let mut errs = Errors::default();
                 let e = parse_expr(&inner, g.span(), &mut errs);
                 errs.finish(())?;
-                e.ok_or_else(|| syn::Error::new(g.span(), "expected an expression inside parentheses"))
+                e.ok_or_else(|| {
+                    syn::Error::new(g.span(), "expected an expression inside parentheses")
+                })
             }
             TokenTree::Punct(p) if p.as_char() == '-' || p.as_char() == '+' => {
                 let inner = self.expr(BP_UNARY)?;
-                Ok(if p.as_char() == '-' { Ast::Neg(Box::new(inner), p.span()) } else { inner })
+                Ok(if p.as_char() == '-' {
+                    Ast::Neg(Box::new(inner), p.span())
+                } else {
+                    inner
+                })
             }
-            other => Err(syn::Error::new(other.span(), format!("unexpected `{other}` in expression"))),
+            other => Err(syn::Error::new(
+                other.span(),
+                format!("unexpected `{other}` in expression"),
+            )),
         }
     }
 }
@@ -609,13 +694,20 @@ mod tests {
     #[test]
     fn precedence() {
         let mut errs = Errors::default();
-        let toks: Vec<TokenTree> = TokenStream::from_str("-x^2 * 3 + 2^-1").unwrap().into_iter().collect();
+        let toks: Vec<TokenTree> = TokenStream::from_str("-x^2 * 3 + 2^-1")
+            .unwrap()
+            .into_iter()
+            .collect();
         let e = parse_expr(&toks, Span::call_site(), &mut errs).unwrap();
         // (-(x^2) * 3) + (2^(-1))
         match e {
             Ast::Bin(BinOp::Add, l, r, _) => {
-                assert!(matches!(*l, Ast::Bin(BinOp::Mul, ref a, _, _) if matches!(**a, Ast::Neg(ref b, _) if matches!(**b, Ast::Bin(BinOp::Pow, ..)))));
-                assert!(matches!(*r, Ast::Bin(BinOp::Pow, _, ref b, _) if matches!(**b, Ast::Neg(..))));
+                assert!(
+                    matches!(*l, Ast::Bin(BinOp::Mul, ref a, _, _) if matches!(**a, Ast::Neg(ref b, _) if matches!(**b, Ast::Bin(BinOp::Pow, ..))))
+                );
+                assert!(
+                    matches!(*r, Ast::Bin(BinOp::Pow, _, ref b, _) if matches!(**b, Ast::Neg(..)))
+                );
             }
             other => panic!("wrong tree {other:?}"),
         }

@@ -316,7 +316,11 @@ fn make_sum(constant: Q, map: BTreeMap<Expr, Q>) -> Expr {
         return Expr::num(constant);
     }
     if constant.is_zero() && terms.len() == 1 && terms[0].1.is_one() {
-        return terms.into_iter().next().map(|(t, _)| t).unwrap_or_else(Expr::zero);
+        return terms
+            .into_iter()
+            .next()
+            .map(|(t, _)| t)
+            .unwrap_or_else(Expr::zero);
     }
     Expr::Sum(Rc::new(Sum { terms, constant }))
 }
@@ -505,7 +509,11 @@ fn distribute(a: &Expr, b: &Expr) -> Expr {
     let parts = |e: &Expr| -> Vec<(Q, Expr)> {
         match e {
             Expr::Sum(s) => {
-                let mut v: Vec<(Q, Expr)> = s.terms.iter().map(|(t, c)| (c.clone(), t.clone())).collect();
+                let mut v: Vec<(Q, Expr)> = s
+                    .terms
+                    .iter()
+                    .map(|(t, c)| (c.clone(), t.clone()))
+                    .collect();
                 if !s.constant.is_zero() {
                     v.push((s.constant.clone(), Expr::one()));
                 }
@@ -543,7 +551,11 @@ fn make_prod(factors: Vec<(Expr, Q)>) -> Expr {
         return Expr::one();
     }
     if factors.len() == 1 && factors[0].1.is_one() {
-        return factors.into_iter().next().map(|(b, _)| b).unwrap_or_else(Expr::one);
+        return factors
+            .into_iter()
+            .next()
+            .map(|(b, _)| b)
+            .unwrap_or_else(Expr::one);
     }
     Expr::Prod(Rc::new(Prod { factors }))
 }
@@ -760,11 +772,19 @@ pub fn subs(e: &Expr, map: &dyn Fn(Sym) -> Option<Expr>) -> Expr {
         Expr::Num(_) => e.clone(),
         Expr::Sym(s) => map(*s).unwrap_or_else(|| e.clone()),
         Expr::Sum(sum) => {
-            let mut items: Vec<Expr> = sum.terms.iter().map(|(t, c)| scale(c, &subs(t, map))).collect();
+            let mut items: Vec<Expr> = sum
+                .terms
+                .iter()
+                .map(|(t, c)| scale(c, &subs(t, map)))
+                .collect();
             items.push(Expr::num(sum.constant.clone()));
             add_all(items)
         }
-        Expr::Prod(p) => mul_all(p.factors.iter().map(|(b, x)| pow_rational(&subs(b, map), x))),
+        Expr::Prod(p) => mul_all(
+            p.factors
+                .iter()
+                .map(|(b, x)| pow_rational(&subs(b, map), x)),
+        ),
         Expr::Pow(be) => pow(&subs(&be.0, map), &subs(&be.1, map)),
         Expr::Func(f, a) => func(*f, &subs(a, map)),
     }
@@ -777,7 +797,11 @@ pub fn content(e: &Expr) -> Q {
         Expr::Num(v) => v.abs(),
         Expr::Sum(s) => {
             let mut g: Option<Q> = None;
-            let all = s.terms.iter().map(|(_, c)| c).chain(std::iter::once(&s.constant));
+            let all = s
+                .terms
+                .iter()
+                .map(|(_, c)| c)
+                .chain(std::iter::once(&s.constant));
             for c in all.filter(|c| !c.is_zero()) {
                 g = Some(match g {
                     None => c.abs(),
@@ -801,13 +825,16 @@ pub fn gcd_q(a: &Q, b: &Q) -> Q {
 /// where `rate(s)` gives `ṡ` for every symbol `e` depends on (`None` for
 /// constants such as parameters). Returns the offending symbol if a rate is
 /// needed but unavailable.
-pub fn time_derivative(e: &Expr, rate: &dyn Fn(Sym) -> Result<Option<Expr>, ()>) -> Result<Expr, Sym> {
+pub fn time_derivative(
+    e: &Expr,
+    rate: &dyn Fn(Sym) -> Result<Option<Expr>, Sym>,
+) -> Result<Expr, Sym> {
     let mut terms = Vec::new();
     for s in e.symbols() {
         let r = match s {
             Sym::Time => Some(Expr::one()),
             Sym::Param(_) => None,
-            _ => rate(s).map_err(|_| s)?,
+            _ => rate(s)?,
         };
         if let Some(r) = r {
             terms.push(mul(&diff(e, s), &r));
@@ -841,7 +868,11 @@ mod tests {
 
     #[test]
     fn like_terms_collect() {
-        let e = add_all([mul(&Expr::int(2), &x()), x(), neg(&mul(&Expr::int(3), &x()))]);
+        let e = add_all([
+            mul(&Expr::int(2), &x()),
+            x(),
+            neg(&mul(&Expr::int(3), &x())),
+        ]);
         assert!(e.is_zero());
         let half = div(&x(), &Expr::int(2));
         assert_eq!(add(&half, &half), x());
@@ -864,7 +895,11 @@ mod tests {
             pow(&y(), &Expr::int(2)),
         ]);
         assert_eq!(lhs, rhs);
-        assert!(sub(&mul(&add(&x(), &Expr::one()), &sub(&x(), &Expr::one())), &sub(&pow(&x(), &Expr::int(2)), &Expr::one())).is_zero());
+        assert!(sub(
+            &mul(&add(&x(), &Expr::one()), &sub(&x(), &Expr::one())),
+            &sub(&pow(&x(), &Expr::int(2)), &Expr::one())
+        )
+        .is_zero());
     }
 
     #[test]

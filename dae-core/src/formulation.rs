@@ -99,7 +99,10 @@ impl Formulation {
 
     /// Number of differential rows.
     pub fn differential_rows(&self) -> usize {
-        self.rows.iter().filter(|r| r.kind == RowKind::Differential).count()
+        self.rows
+            .iter()
+            .filter(|r| r.kind == RowKind::Differential)
+            .count()
     }
 }
 
@@ -133,12 +136,20 @@ pub fn provided(model: &Model, an: &Analysis) -> Result<Vec<&'static str>, syn::
                 if let Some(&name) = FORMULATION_NAMES.iter().find(|f| **f == n.name) {
                     match applicable(model, an, name) {
                         Ok(()) => out.push(name),
-                        Err(why) => errors.push(n.span, format!("formulation `{name}` does not apply to this model: {why}")),
+                        Err(why) => errors.push(
+                            n.span,
+                            format!("formulation `{name}` does not apply to this model: {why}"),
+                        ),
                     }
                 }
             }
         }
-        None => out.extend(FORMULATION_NAMES.iter().copied().filter(|n| applicable(model, an, n).is_ok())),
+        None => out.extend(
+            FORMULATION_NAMES
+                .iter()
+                .copied()
+                .filter(|n| applicable(model, an, n).is_ok()),
+        ),
     }
     errors.finish(out)
 }
@@ -146,7 +157,10 @@ pub fn provided(model: &Model, an: &Analysis) -> Result<Vec<&'static str>, syn::
 /// Build formulation `name` (must be applicable).
 pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, String> {
     applicable(model, an, name)?;
-    let &name = FORMULATION_NAMES.iter().find(|f| **f == name).ok_or_else(|| format!("unknown formulation `{name}`"))?;
+    let &name = FORMULATION_NAMES
+        .iter()
+        .find(|f| **f == name)
+        .ok_or_else(|| format!("unknown formulation `{name}`"))?;
     let n = model.vars.len();
     // Which levels of each chain the formulation keeps.
     let levels: Vec<Vec<usize>> = an
@@ -203,9 +217,15 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
 
     let mut extra_names = Vec::new();
     if name == "ggl1" {
-        let taken = |s: &str| model.vars.iter().any(|v| v.name == s) || model.params.iter().any(|p| p.name == s);
+        let taken = |s: &str| {
+            model.vars.iter().any(|v| v.name == s) || model.params.iter().any(|p| p.name == s)
+        };
         for (i, c) in an.chains.iter().enumerate() {
-            let mut base = if an.chains.len() == 1 { "eta".to_string() } else { format!("eta{}", i + 1) };
+            let mut base = if an.chains.len() == 1 {
+                "eta".to_string()
+            } else {
+                format!("eta{}", i + 1)
+            };
             while taken(&base) {
                 base.push('_');
             }
@@ -277,9 +297,10 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         .max()
         .unwrap_or(0) as u8;
     let square = rows.len() == vars.len();
-    let constant_leading = rows
-        .iter()
-        .all(|r| r.e.iter().all(|(_, c)| !c.any_sym(&|s| matches!(s, Sym::Var(_) | Sym::Time))));
+    let constant_leading = rows.iter().all(|r| {
+        r.e.iter()
+            .all(|(_, c)| !c.any_sym(&|s| matches!(s, Sym::Var(_) | Sym::Time)))
+    });
     Ok(Formulation {
         name,
         vars,
@@ -304,7 +325,11 @@ fn selector_split(model: &Model, an: &Analysis) -> Result<SelectorSplit, String>
     let diff_in = |level: usize, exclude: &[usize]| -> Vec<usize> {
         (0..model.n_diff)
             .filter(|j| !exclude.contains(j))
-            .filter(|&j| an.chains.iter().any(|c| c.levels[level].contains(Sym::Var(j as u32))))
+            .filter(|&j| {
+                an.chains
+                    .iter()
+                    .any(|c| c.levels[level].contains(Sym::Var(j as u32)))
+            })
             .collect()
     };
     let q = diff_in(0, &[]);
@@ -320,7 +345,11 @@ fn selector_split(model: &Model, an: &Analysis) -> Result<SelectorSplit, String>
     let jac = |level: usize, cols: &[usize]| -> Vec<Vec<Expr>> {
         an.chains
             .iter()
-            .map(|c| cols.iter().map(|&j| expr::diff(&c.levels[level], Sym::Var(j as u32))).collect())
+            .map(|c| {
+                cols.iter()
+                    .map(|&j| expr::diff(&c.levels[level], Sym::Var(j as u32)))
+                    .collect()
+            })
             .collect()
     };
     let sq = selector(&jac(0, &q))?;
@@ -363,14 +392,18 @@ fn selector(g: &[Vec<Expr>]) -> Result<Vec<Vec<Expr>>, String> {
         return Err("too many constraints for a symbolic selector".into());
     }
     // Pivot columns: a structural matching that prefers the last columns.
-    let adj: Vec<Vec<usize>> = (0..m).map(|i| (0..n).rev().filter(|&k| !g[i][k].is_zero()).collect()).collect();
+    let adj: Vec<Vec<usize>> = (0..m)
+        .map(|i| (0..n).rev().filter(|&k| !g[i][k].is_zero()).collect())
+        .collect();
     let mate = max_matching(&adj, n);
     let pivots: Vec<usize> = (0..n).filter(|&k| mate[k].is_some()).collect();
     if pivots.len() != m {
         return Err("the constraint Jacobian is structurally rank deficient".into());
     }
     let free: Vec<usize> = (0..n).filter(|k| !pivots.contains(k)).collect();
-    let gp: Vec<Vec<Expr>> = (0..m).map(|i| pivots.iter().map(|&k| g[i][k].clone()).collect()).collect();
+    let gp: Vec<Vec<Expr>> = (0..m)
+        .map(|i| pivots.iter().map(|&k| g[i][k].clone()).collect())
+        .collect();
     let mut det = Det::new(&gp);
     let all_rows: Vec<usize> = (0..m).collect();
     let all_cols: Vec<usize> = (0..m).collect();
@@ -385,7 +418,11 @@ fn selector(g: &[Vec<Expr>]) -> Result<Vec<Vec<Expr>>, String> {
             let rows: Vec<usize> = (0..m).filter(|&r| r != b).collect();
             let cols: Vec<usize> = (0..m).filter(|&c| c != a).collect();
             let minor = det.det(&rows, &cols)?;
-            *entry = if (a + b) % 2 == 0 { minor } else { expr::neg(&minor) };
+            *entry = if (a + b) % 2 == 0 {
+                minor
+            } else {
+                expr::neg(&minor)
+            };
         }
     }
     let mut s = Vec::new();

@@ -110,7 +110,10 @@ pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
                     levels.push(d);
                 }
                 Err(s) => {
-                    errors.push(c.span, format!("cannot differentiate through `{}`", model.sym_name(s, &[])));
+                    errors.push(
+                        c.span,
+                        format!("cannot differentiate through `{}`", model.sym_name(s, &[])),
+                    );
                     ok = false;
                     break;
                 }
@@ -132,7 +135,9 @@ pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
         .iter()
         .map(|c| {
             let top = &c.levels[c.top()];
-            (0..n_alg).filter(|&a| top.contains(Sym::Var((model.n_diff + a) as u32))).collect()
+            (0..n_alg)
+                .filter(|&a| top.contains(Sym::Var((model.n_diff + a) as u32)))
+                .collect()
         })
         .collect();
     let assign = max_matching(&adj, n_alg);
@@ -165,7 +170,12 @@ pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
 /// Maximum bipartite matching (augmenting paths). `adj[i]` lists the right
 /// vertices of left vertex `i`; returns for each right vertex its left mate.
 pub fn max_matching(adj: &[Vec<usize>], n_right: usize) -> Vec<Option<usize>> {
-    fn augment(i: usize, adj: &[Vec<usize>], seen: &mut [bool], mate: &mut [Option<usize>]) -> bool {
+    fn augment(
+        i: usize,
+        adj: &[Vec<usize>],
+        seen: &mut [bool],
+        mate: &mut [Option<usize>],
+    ) -> bool {
         for &r in &adj[i] {
             if seen[r] {
                 continue;

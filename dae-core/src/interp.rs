@@ -5,7 +5,8 @@
 use crate::compile::{compile, Compiled, Sparse};
 use crate::derive::Derived;
 use crate::system::{
-    check_parameter, BoxedSystem, DaeSystem, FormulationError, FormulationInfo, Model, ModelInfo, ParameterError,
+    check_parameter, BoxedSystem, DaeSystem, FormulationError, FormulationInfo, Model, ModelInfo,
+    ParameterError,
 };
 use crate::tape::{Inputs, Tape};
 use nalgebra::DMatrix;
@@ -26,28 +27,39 @@ impl InterpretedModel {
         InterpretedModel {
             info: d.model_info(),
             params: d.model.params.iter().map(|p| p.default).collect(),
-            formulations: d.formulations.iter().map(|f| Arc::new(compile(d, f))).collect(),
+            formulations: d
+                .formulations
+                .iter()
+                .map(|f| Arc::new(compile(d, f)))
+                .collect(),
         }
     }
 
     /// Parse, check, derive and compile model text.
+    #[allow(clippy::should_implement_trait)] // returns `syn::Error` with spans, unlike `str::parse`
     pub fn from_str(src: &str) -> Result<Self, syn::Error> {
         Ok(Self::new(&Derived::from_str(src)?))
     }
 
     /// The interpreted system for `name` (concrete type).
     pub fn system(&self, name: &str) -> Result<InterpretedSystem, FormulationError> {
-        let c = self.formulations.iter().find(|c| c.info.name == name).ok_or_else(|| {
-            if crate::system::FORMULATION_NAMES.contains(&name) {
-                FormulationError::NotProvided {
-                    model: self.info.name.clone(),
-                    name: name.to_string(),
-                    available: self.info.formulations.join(", "),
+        let c = self
+            .formulations
+            .iter()
+            .find(|c| c.info.name == name)
+            .ok_or_else(|| {
+                if crate::system::FORMULATION_NAMES.contains(&name) {
+                    FormulationError::NotProvided {
+                        model: self.info.name.clone(),
+                        name: name.to_string(),
+                        available: self.info.formulations.join(", "),
+                    }
+                } else {
+                    FormulationError::Unknown {
+                        name: name.to_string(),
+                    }
                 }
-            } else {
-                FormulationError::Unknown { name: name.to_string() }
-            }
-        })?;
+            })?;
         Ok(InterpretedSystem::new(c.clone(), self.params.clone()))
     }
 }
@@ -57,14 +69,29 @@ impl Model for InterpretedModel {
         &self.info
     }
     fn parameter(&self, name: &str) -> Option<f64> {
-        self.info.parameters.iter().position(|p| p.name == name).map(|k| self.params[k])
+        self.info
+            .parameters
+            .iter()
+            .position(|p| p.name == name)
+            .map(|k| self.params[k])
     }
     fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), ParameterError> {
-        let k = self.info.parameters.iter().position(|p| p.name == name).ok_or_else(|| ParameterError::Unknown {
-            model: self.info.name.clone(),
-            name: name.to_string(),
-            known: self.info.parameters.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", "),
-        })?;
+        let k = self
+            .info
+            .parameters
+            .iter()
+            .position(|p| p.name == name)
+            .ok_or_else(|| ParameterError::Unknown {
+                model: self.info.name.clone(),
+                name: name.to_string(),
+                known: self
+                    .info
+                    .parameters
+                    .iter()
+                    .map(|p| p.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })?;
         check_parameter(name, value)?;
         self.params[k] = value;
         Ok(())

@@ -104,7 +104,13 @@ impl Model {
                 return false;
             }
             if FUNCTIONS.contains(&n.name.as_str()) || n.name == "der" {
-                errors.push(n.span, format!("`{}` is reserved (a function of the model language)", n.name));
+                errors.push(
+                    n.span,
+                    format!(
+                        "`{}` is reserved (a function of the model language)",
+                        n.name
+                    ),
+                );
                 return false;
             }
             seen.push((n.name.clone(), n.span));
@@ -114,7 +120,10 @@ impl Model {
         for p in &ast.parameters {
             if declare(&p.name, &mut errors) {
                 if !p.value.is_finite() {
-                    errors.push(p.name.span, format!("default of `{}` is not finite", p.name.name));
+                    errors.push(
+                        p.name.span,
+                        format!("default of `{}` is not finite", p.name.name),
+                    );
                 }
                 params.push(ParamDef {
                     name: p.name.name.clone(),
@@ -150,11 +159,17 @@ impl Model {
             );
         }
 
-        let scope = Scope { params: &params, vars: &vars };
+        let scope = Scope {
+            params: &params,
+            vars: &vars,
+        };
         let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
         let mut constraints = Vec::new();
         for eq in &ast.equations {
-            let (Some(lhs), Some(rhs)) = (scope.lower(&eq.lhs, &mut errors), scope.lower(&eq.rhs, &mut errors)) else {
+            let (Some(lhs), Some(rhs)) = (
+                scope.lower(&eq.lhs, &mut errors),
+                scope.lower(&eq.rhs, &mut errors),
+            ) else {
                 continue;
             };
             let r = expr::sub(&lhs, &rhs);
@@ -221,7 +236,10 @@ impl Model {
                 Some(d) => dyns.push(d),
                 None => errors.push(
                     vars[j].span,
-                    format!("too few equations: no equation gives `der({})`", vars[j].name),
+                    format!(
+                        "too few equations: no equation gives `der({})`",
+                        vars[j].name
+                    ),
                 ),
             }
         }
@@ -270,7 +288,11 @@ impl Model {
                 if !FORMULATION_NAMES.contains(&f.name.as_str()) {
                     errors.push(
                         f.span,
-                        format!("unknown formulation `{}` (known: {})", f.name, FORMULATION_NAMES.join(", ")),
+                        format!(
+                            "unknown formulation `{}` (known: {})",
+                            f.name,
+                            FORMULATION_NAMES.join(", ")
+                        ),
                     );
                 } else if listed.contains(&f.name.as_str()) {
                     errors.push(f.span, format!("formulation `{}` is listed twice", f.name));
@@ -311,7 +333,11 @@ impl Model {
         match s {
             Sym::Var(i) => var(i),
             Sym::Der(i) => format!("der({})", var(i)),
-            Sym::Param(k) => self.params.get(k as usize).map(|p| p.name.clone()).unwrap_or_else(|| format!("p{k}")),
+            Sym::Param(k) => self
+                .params
+                .get(k as usize)
+                .map(|p| p.name.clone())
+                .unwrap_or_else(|| format!("p{k}")),
             Sym::Time => "t".into(),
             Sym::Dir(i) => format!("z{i}"),
         }
@@ -323,7 +349,8 @@ impl Model {
     }
 
     /// The unknowns' rates `der(u) = f/c` for the total time derivative.
-    pub fn rate(&self, s: Sym) -> Result<Option<Expr>, ()> {
+    /// `Err(s)` when `s` has no rate (an algebraic unknown).
+    pub fn rate(&self, s: Sym) -> Result<Option<Expr>, Sym> {
         match s {
             Sym::Var(i) if (i as usize) < self.n_diff => {
                 let d = &self.dynamics[i as usize];
@@ -331,7 +358,7 @@ impl Model {
             }
             Sym::Param(_) => Ok(None),
             Sym::Time => Ok(Some(Expr::one())),
-            _ => Err(()),
+            _ => Err(s),
         }
     }
 
@@ -364,6 +391,7 @@ impl Model {
     }
 
     /// Parse and check model text (a `.dae` file).
+    #[allow(clippy::should_implement_trait)] // returns `syn::Error` with spans, unlike `str::parse`
     pub fn from_str(src: &str) -> Result<Model, syn::Error> {
         Model::check(&crate::dsl::parse_str(src)?)
     }
@@ -402,13 +430,18 @@ impl Scope<'_> {
             },
             Ast::Call(name, span, args) => {
                 if args.len() != 1 {
-                    errors.push(*span, format!("`{name}` takes one argument, found {}", args.len()));
+                    errors.push(
+                        *span,
+                        format!("`{name}` takes one argument, found {}", args.len()),
+                    );
                     return None;
                 }
                 if name == "der" {
                     return match &args[0] {
                         Ast::Ident(v, vspan) => match self.vars.iter().position(|d| &d.name == v) {
-                            Some(i) if self.vars[i].kind == VarKind::Differential => Some(Expr::der(i)),
+                            Some(i) if self.vars[i].kind == VarKind::Differential => {
+                                Some(Expr::der(i))
+                            }
                             Some(_) => {
                                 errors.push(
                                     *vspan,
@@ -417,12 +450,18 @@ impl Scope<'_> {
                                 None
                             }
                             None => {
-                                errors.push(*vspan, format!("`der({v})`: `{v}` is not an unknown of this model"));
+                                errors.push(
+                                    *vspan,
+                                    format!("`der({v})`: `{v}` is not an unknown of this model"),
+                                );
                                 None
                             }
                         },
                         other => {
-                            errors.push(other.span(), "`der(…)` takes the name of a differential unknown");
+                            errors.push(
+                                other.span(),
+                                "`der(…)` takes the name of a differential unknown",
+                            );
                             None
                         }
                     };
@@ -436,12 +475,21 @@ impl Scope<'_> {
                     "ln" => Func::Ln,
                     "sqrt" => return Some(expr::sqrt(&arg)),
                     _ => {
-                        errors.push(*span, format!("unknown function `{name}` (known: {}, der)", FUNCTIONS.join(", ")));
+                        errors.push(
+                            *span,
+                            format!(
+                                "unknown function `{name}` (known: {}, der)",
+                                FUNCTIONS.join(", ")
+                            ),
+                        );
                         return None;
                     }
                 };
                 if arg.any_sym(&|s| matches!(s, Sym::Der(_))) {
-                    errors.push(args[0].span(), format!("der() must appear linearly, not inside `{name}(…)`"));
+                    errors.push(
+                        args[0].span(),
+                        format!("der() must appear linearly, not inside `{name}(…)`"),
+                    );
                     return None;
                 }
                 Some(expr::func(f, &arg))
@@ -457,14 +505,20 @@ impl Scope<'_> {
                     BinOp::Sub => expr::sub(&a, &b),
                     BinOp::Mul => {
                         if has_der(&a) && has_der(&b) {
-                            errors.push(*span, "product of two der() terms: der() must appear linearly");
+                            errors.push(
+                                *span,
+                                "product of two der() terms: der() must appear linearly",
+                            );
                             return None;
                         }
                         expr::mul(&a, &b)
                     }
                     BinOp::Div => {
                         if has_der(&b) {
-                            errors.push(r.span(), "division by a der() term: der() must appear linearly");
+                            errors.push(
+                                r.span(),
+                                "division by a der() term: der() must appear linearly",
+                            );
                             return None;
                         }
                         if b.is_zero() {
@@ -478,7 +532,7 @@ impl Scope<'_> {
                             errors.push(*span, "power of a der() term: der() must appear linearly");
                             return None;
                         }
-                        if a.is_zero() && b.as_num().is_some_and(|v| num_traits::Signed::is_negative(v)) {
+                        if a.is_zero() && b.as_num().is_some_and(num_traits::Signed::is_negative) {
                             errors.push(*span, "zero to a negative power");
                             return None;
                         }

@@ -4,7 +4,7 @@
 //! derived constraints printed by `dae derive` can be pasted back into a
 //! model.
 
-use crate::expr::{q, qr, Expr, Q, Sym};
+use crate::expr::{q, qr, Expr, Sym, Q};
 use num_traits::{One, Signed, Zero};
 
 /// Gives every symbol its printed name.
@@ -28,12 +28,20 @@ enum Style {
 
 /// Model-language text of `e`.
 pub fn text(e: &Expr, names: &dyn Names) -> String {
-    Printer { names, style: Style::Text }.expr(e)
+    Printer {
+        names,
+        style: Style::Text,
+    }
+    .expr(e)
 }
 
 /// LaTeX of `e` (math mode, without delimiters).
 pub fn latex(e: &Expr, names: &dyn Names) -> String {
-    Printer { names, style: Style::Latex }.expr(e)
+    Printer {
+        names,
+        style: Style::Latex,
+    }
+    .expr(e)
 }
 
 /// LaTeX for a model-language name: Greek letters become commands,
@@ -43,8 +51,9 @@ pub fn latex_name(name: &str) -> String {
         return format!("\\dot{{{}}}", latex_name(inner));
     }
     const GREEK: [&str; 24] = [
-        "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa", "lambda", "mu", "nu",
-        "xi", "pi", "rho", "sigma", "tau", "upsilon", "phi", "chi", "psi", "omega", "Omega",
+        "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa",
+        "lambda", "mu", "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon", "phi", "chi", "psi",
+        "omega", "Omega",
     ];
     let split = name.trim_end_matches(|c: char| c.is_ascii_digit()).len();
     let (stem, digits) = name.split_at(split);
@@ -93,8 +102,18 @@ impl Printer<'_> {
             Expr::Sum(s) => {
                 let mut out = String::new();
                 // Positive terms first (stable), so rows read `y*v - x*w`.
-                let mut parts: Vec<(Q, &Expr)> = s.terms.iter().filter(|(_, c)| c.is_positive()).map(|(t, c)| (c.clone(), t)).collect();
-                parts.extend(s.terms.iter().filter(|(_, c)| c.is_negative()).map(|(t, c)| (c.clone(), t)));
+                let mut parts: Vec<(Q, &Expr)> = s
+                    .terms
+                    .iter()
+                    .filter(|(_, c)| c.is_positive())
+                    .map(|(t, c)| (c.clone(), t))
+                    .collect();
+                parts.extend(
+                    s.terms
+                        .iter()
+                        .filter(|(_, c)| c.is_negative())
+                        .map(|(t, c)| (c.clone(), t)),
+                );
                 let one = Expr::one();
                 if !s.constant.is_zero() {
                     parts.push((s.constant.clone(), &one));
@@ -151,7 +170,11 @@ impl Printer<'_> {
             Style::Text => "*",
             Style::Latex => " ",
         };
-        let numerator = if num.is_empty() { "1".to_string() } else { num.join(sep) };
+        let numerator = if num.is_empty() {
+            "1".to_string()
+        } else {
+            num.join(sep)
+        };
         if den.is_empty() {
             return numerator;
         }
@@ -202,7 +225,9 @@ impl Printer<'_> {
                 Style::Text => format!("{}({})", f.name(), self.expr(a)),
                 Style::Latex => format!("\\{}\\left({}\\right)", f.name(), self.expr(a)),
             },
-            Expr::Prod(p) if p.factors.len() == 1 && p.factors[0].1 == qr(1, 2) => self.power(&p.factors[0].0, &qr(1, 2)),
+            Expr::Prod(p) if p.factors.len() == 1 && p.factors[0].1 == qr(1, 2) => {
+                self.power(&p.factors[0].0, &qr(1, 2))
+            }
             Expr::Pow(be) => match self.style {
                 Style::Text => format!("{}^({})", self.atom(&be.0), self.expr(&be.1)),
                 Style::Latex => format!("{}^{{{}}}", self.atom(&be.0), self.expr(&be.1)),

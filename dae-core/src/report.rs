@@ -100,7 +100,12 @@ impl Report {
                     kind: v.kind,
                 })
                 .collect(),
-            parameters: Parameters(m.params.iter().map(|p| (p.name.clone(), p.default)).collect()),
+            parameters: Parameters(
+                m.params
+                    .iter()
+                    .map(|p| (p.name.clone(), p.default))
+                    .collect(),
+            ),
             constraints: d.constraint_infos(),
             invariants: m
                 .invariants
@@ -153,13 +158,26 @@ pub fn text(d: &Derived) -> String {
         }
     }
     let names = |kind: VarKind| {
-        r.variables.iter().filter(|v| v.kind == kind).map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ")
+        r.variables
+            .iter()
+            .filter(|v| v.kind == kind)
+            .map(|v| v.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
     };
     let _ = writeln!(s, "  differential: {}", names(VarKind::Differential));
     let _ = writeln!(s, "  algebraic:    {}", names(VarKind::Algebraic));
-    let params: Vec<String> = r.parameters.0.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+    let params: Vec<String> = r
+        .parameters
+        .0
+        .iter()
+        .map(|(k, v)| format!("{k} = {v}"))
+        .collect();
     let _ = writeln!(s, "  parameters:   {}", params.join(", "));
-    let _ = writeln!(s, "\nconstraints (level k = k-th total time derivative along the dynamics)");
+    let _ = writeln!(
+        s,
+        "\nconstraints (level k = k-th total time derivative along the dynamics)"
+    );
     for c in &r.constraints {
         let _ = writeln!(s, "  [{}] level {}: 0 = {}", c.source, c.level, c.expr);
     }
@@ -184,7 +202,11 @@ pub fn text(d: &Derived) -> String {
         );
     }
     for f in &r.formulations {
-        let _ = writeln!(s, "\n{} ({} unknowns, {} equations)", f.name, f.unknowns, f.equations);
+        let _ = writeln!(
+            s,
+            "\n{} ({} unknowns, {} equations)",
+            f.name, f.unknowns, f.equations
+        );
         for row in &f.rows {
             let _ = writeln!(s, "  {row}");
         }

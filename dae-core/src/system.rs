@@ -337,7 +337,9 @@ pub enum ParameterError {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum FormulationError {
     /// The name is not one of the eight formulations.
-    #[error("unknown formulation `{name}` (known: ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0)")]
+    #[error(
+        "unknown formulation `{name}` (known: ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0)"
+    )]
     Unknown {
         /// Name asked for.
         name: String,

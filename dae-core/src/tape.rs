@@ -58,7 +58,10 @@ fn key(op: &Op) -> Key {
     match op {
         Op::Const(c) => Key::Const(c.to_bits()),
         Op::Input(s) => Key::Input(*s),
-        Op::Add(c, t) => Key::Add(c.to_bits(), t.iter().map(|(a, b)| (a.to_bits(), *b)).collect()),
+        Op::Add(c, t) => Key::Add(
+            c.to_bits(),
+            t.iter().map(|(a, b)| (a.to_bits(), *b)).collect(),
+        ),
         Op::Mul(v) => Key::Mul(v.clone()),
         Op::Div(a, b) => Key::Div(*a, *b),
         Op::Powi(a, k) => Key::Powi(*a, *k),
@@ -112,7 +115,11 @@ impl TapeBuilder {
             Expr::Num(v) => self.push(Op::Const(q_to_f64(v))),
             Expr::Sym(s) => self.push(Op::Input(*s)),
             Expr::Sum(s) => {
-                let terms: Vec<(f64, NodeId)> = s.terms.iter().map(|(t, c)| (q_to_f64(c), self.node(t))).collect();
+                let terms: Vec<(f64, NodeId)> = s
+                    .terms
+                    .iter()
+                    .map(|(t, c)| (q_to_f64(c), self.node(t)))
+                    .collect();
                 self.push(Op::Add(q_to_f64(&s.constant), terms))
             }
             Expr::Prod(p) => {
@@ -216,7 +223,9 @@ impl Tape {
             let v = match op {
                 Op::Const(c) => *c,
                 Op::Input(s) => inputs.get(*s),
-                Op::Add(c, terms) => terms.iter().fold(*c, |acc, (k, x)| acc + k * scratch[*x as usize]),
+                Op::Add(c, terms) => terms
+                    .iter()
+                    .fold(*c, |acc, (k, x)| acc + k * scratch[*x as usize]),
                 Op::Mul(xs) => xs.iter().fold(1.0, |acc, x| acc * scratch[*x as usize]),
                 Op::Div(a, b) => scratch[*a as usize] / scratch[*b as usize],
                 Op::Powi(a, k) => scratch[*a as usize].powi(*k),

@@ -1,6 +1,7 @@
 //! The `dae` command line: `derive`, `run`, `sweep`.
 
 pub mod derive;
+pub mod run;
 
 /// A failed command: the message and the exit code.
 #[derive(Debug)]
