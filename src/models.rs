@@ -64,7 +64,7 @@ pub fn derive(src: &ModelSource) -> Result<Derived, ModelError> {
 }
 
 /// A runnable model: the compiled built-in or an interpreted file.
-pub fn load(spec: &str) -> Result<Box<dyn Model + Send>, ModelError> {
+pub fn load(spec: &str) -> Result<Box<dyn Model + Send + Sync>, ModelError> {
     let src = source(spec)?;
     let d = derive(&src)?;
     Ok(Box::new(InterpretedModel::new(&d)))

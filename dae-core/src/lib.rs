@@ -8,6 +8,7 @@
 //! Jacobians) → [`interp`] or the `dae!` macro → [`system::DaeSystem`].
 #![warn(missing_docs)]
 
+pub mod check;
 pub mod compile;
 pub mod derive;
 pub mod dsl;

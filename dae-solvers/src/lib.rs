@@ -19,6 +19,7 @@ pub mod solution;
 pub mod stats;
 
 pub use error::SolveError;
+pub use init::{consistent, initial_derivative, InitMode, InitOptions};
 pub use options::{Options, Tolerances};
 pub use solution::Solution;
 pub use stats::Stats;

@@ -41,7 +41,7 @@ pub struct RunArgs {
 
 /// Load a scene's model with the scene's parameters applied and names
 /// checked.
-pub fn load_model(scene: &Scene) -> Result<Box<dyn Model + Send>, Failure> {
+pub fn load_model(scene: &Scene) -> Result<Box<dyn Model + Send + Sync>, Failure> {
     let spec = match &scene.model {
         crate::scene::ModelSource::Builtin(name) => name.clone(),
         crate::scene::ModelSource::File(path) => path.display().to_string(),
