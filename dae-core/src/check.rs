@@ -132,7 +132,7 @@ fn compare(
         for r in 0..rows {
             let fd = (fp[r] - fm[r]) / (2.0 * h);
             let rel = (fd - j[(r, c)]).abs() / 1f64.max(fd.abs()).max(j[(r, c)].abs());
-            if !(rel <= tol) {
+            if rel > tol || rel.is_nan() {
                 return Err(Box::new(Mismatch {
                     which,
                     row: r,
