@@ -165,11 +165,15 @@ impl Model {
         };
         let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
         let mut constraints = Vec::new();
+        // An equation that failed to lower already has its error; counting
+        // equations afterwards would only add a cascade of "too few".
+        let mut lowered_all = true;
         for eq in &ast.equations {
             let (Some(lhs), Some(rhs)) = (
                 scope.lower(&eq.lhs, &mut errors),
                 scope.lower(&eq.rhs, &mut errors),
             ) else {
+                lowered_all = false;
                 continue;
             };
             let r = expr::sub(&lhs, &rhs);
@@ -234,6 +238,7 @@ impl Model {
         for (j, d) in dynamics.into_iter().enumerate() {
             match d {
                 Some(d) => dyns.push(d),
+                None if !lowered_all => {}
                 None => errors.push(
                     vars[j].span,
                     format!(
@@ -244,7 +249,9 @@ impl Model {
             }
         }
         let n_alg = vars.len() - n_diff;
-        if constraints.len() > n_alg {
+        if !lowered_all {
+            // Counts are meaningless with equations missing.
+        } else if constraints.len() > n_alg {
             for c in &constraints[n_alg..] {
                 errors.push(
                     c.span,

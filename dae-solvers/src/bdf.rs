@@ -1,21 +1,1564 @@
-//! BDF (to be written).
-use crate::{Options, Problem, Solution, SolveError, Solver};
-use dae_core::system::FormulationInfo;
+//! Variable-order, variable-step BDF in fixed-leading-coefficient form, after
+//! DASSL and DASPK (Brenan, Campbell & Petzold, *Numerical Solution of
+//! Initial-Value Problems in Differential-Algebraic Equations*, SIAM 1996,
+//! chapter 5 — "BCP" below).
+//!
+//! # The problem
+//!
+//! A square quasi-linear DAE
+//!
+//! ```text
+//!     F(t, y, y') = E(y) y' − f(t, y) = 0,        y ∈ ℝᴺ,
+//! ```
+//!
+//! integrated from consistent initial values `y(t₀) = y₀` supplied by the
+//! caller; the initial derivative `y'₀` is computed here (see
+//! [Initial derivative](#initial-derivative)).
+//!
+//! # The method (BCP ch. 5, basic formulas)
+//!
+//! At step `n+1` of size `h = t_{n+1} − t_n` and order `k` the solution is
+//! represented by the *modified divided differences*
+//!
+//! ```text
+//!     φ_1(n) = y_n,   φ_{i+1}(n) = ψ_1(n)⋯ψ_i(n) · y[t_n, …, t_{n−i}],
+//!     ψ_i(n+1) = t_{n+1} − t_{n+1−i},
+//! ```
+//!
+//! rescaled for the new step to `φ*_i(n) = β_i(n+1) φ_i(n)` with
+//! `β_i(n+1) = Π_{j<i} ψ_j(n+1)/ψ_j(n)`.
+//!
+//! *Predictor*: the polynomial through the last `k+1` solution values,
+//!
+//! ```text
+//!     y⁽⁰⁾ = Σ_{i=1}^{k+1} φ*_i(n),      y'⁽⁰⁾ = Σ_{i=2}^{k+1} γ_i(n+1) φ*_i(n),
+//!     γ_1 = 0,  γ_i = γ_{i−1} + α_{i−1}/h,   α_i = h/ψ_i(n+1).
+//! ```
+//!
+//! *Corrector* (fixed leading coefficient): the polynomial that interpolates
+//! the predictor at the `k` points `t_{n+1} − jh`, `j = 1..k` (equally
+//! spaced, whatever the past steps were) and satisfies the DAE at `t_{n+1}`:
+//!
+//! ```text
+//!     y' = y'⁽⁰⁾ + c_J (y − y⁽⁰⁾),     c_J = −α_s/h,   α_s = −Σ_{j=1}^{k} 1/j,
+//!     F(t_{n+1}, y, y'⁽⁰⁾ + c_J (y − y⁽⁰⁾)) = 0.
+//! ```
+//!
+//! Because `c_J` depends on `h` and `k` only, the iteration matrix
+//!
+//! ```text
+//!     G = ∂F/∂y + c_J ∂F/∂y' = ∂(E(y) y')/∂y − ∂f/∂y + c_J E(y)
+//! ```
+//!
+//! can be reused over many steps of different size (BCP ch. 5, nonlinear
+//! system solution). A modified
+//! Newton iteration solves the corrector; when `c_J` has changed since `G`
+//! was factored, each Newton update is damped by `2/(1 + c_J/c_J^old)`.
+//! Its convergence rate `ρ` is estimated from successive updates, and the
+//! iteration is accepted when `ρ/(1−ρ) · ‖δ‖ ≤ 0.33`, abandoned when
+//! `ρ > 0.9` or after four iterations. `G` is
+//! re-evaluated and re-factored when `c_J/c_J^old ∉ [0.6, 5/3]` or when the
+//! iteration fails with an old matrix.
+//!
+//! *Error estimate* (BCP ch. 5): with `e = y_{n+1} − y⁽⁰⁾` the accumulated
+//! Newton corrections, the local error of the step is estimated as
+//! `C_k ‖e‖` with `C_k = max(|α_{k+1} + α_s − α⁰|, α_{k+1})`,
+//! `α⁰ = −Σ_{i=1}^{k} α_i`; the step is accepted when it is at most one in
+//! the weighted RMS norm `‖v‖ = (Σ (v_i w_i)²/N)^{1/2}` over the `N`
+//! components in the test, `w_i = 1/(atol_i + rtol_i |y_{n,i}|)`.
+//!
+//! *Order and step selection* (BCP ch. 5, stepsize and order selection):
+//! the leading error terms at orders `k−2 … k+1` are estimated from `e` and
+//! the differences `φ*` (`TERK`, `TERKM1`, …). The order is lowered when the lower-order terms
+//! decrease less regularly, raised after `k+1` steps of constant size when
+//! the `(k+2)`-nd difference is small, and the next step is
+//! `h·r`, `r = (2·EST + 10⁻⁴)^{−1/(k+1)}`, changed only when `r ≥ 2`
+//! (then `r = 2`) or `r ≤ 1` (then clamped to `[0.5, 0.9]`). The start is
+//! DASSL's: order one, a step `h₀ ≤ 0.5/‖y'₀‖`, then order +1 and step ×2
+//! at every step until the first failure or lowering (`IPHASE`).
+//! Failures: error test — first `r = 0.9 (2·EST)^{−1/(k+1)}` clamped to
+//! `[0.25, 0.9]`, second `r = 1/4`, later order one and `r = 1/4`; Newton
+//! failure — `r = 1/4` up to ten times; singular `G` — `r = 1/4` up to three
+//! times.
+//!
+//! *Dense output* (DASSL's DDATRP): between steps the solution is the
+//! polynomial of degree `k` through the last `k+1` solution values,
+//! `y(t) = Σ_{i=1}^{k+1} c_i(t) φ_i(n+1)`.
+//!
+//! # Options
+//!
+//! - [`Options::max_order`] bounds the order; [`Options::fixed_order`] `= k`
+//!   (adaptive steps) raises the order to `k` as fast as the start allows and
+//!   never lowers it by order selection — only DASSL's emergency fall-back to
+//!   order one after three error-test failures on one step, followed by a
+//!   rise of one order per step.
+//! - [`Options::h0`] replaces the initial step, [`Options::h_max`] bounds
+//!   every step, [`Options::max_steps`] counts accepted and rejected steps.
+//! - The step size falling below `4 ε max(|t|, ε (t_end − t₀))` is
+//!   [`SolveError::StepSizeTooSmall`]. The last steps are adjusted so that
+//!   the integration ends exactly at `t_end` without a tiny final step: a
+//!   step is stretched by up to 10 % to reach `t_end`, or what remains of
+//!   two steps is split evenly.
+//! - Output at [`Options::output_times`] is interpolated (the steps do not
+//!   stop there).
+//!
+//! # Index-2 formulations (DASPK)
+//!
+//! With [`Options::index2_in_error_test`] `= false`, unknowns whose
+//! [`VarInfo::index`](dae_core::system::VarInfo) is two or more (Lagrange
+//! multipliers of index-2 formulations) get weight zero in the error test and
+//! in the Newton convergence norm, which then averages over the remaining
+//! components only. For an index-2 multiplier the difference between
+//! corrector and predictor is not an estimate of a local error that shrinks
+//! like `h^{k+1}` (BCP ch. 3 on BDF for index-2 systems, ch. 5 on
+//! higher-index systems in DASSL); kept in the test it drives the step
+//! size to zero (DASPK's `INFO(16)`; the paper's DASSL/DASPK runs show it).
+//!
+//! # Initial derivative
+//!
+//! `y'₀` is the minimum-norm least-squares solution of `E(y₀) y' = f(t₀, y₀)`
+//! (computed by SVD, so the derivatives of purely algebraic unknowns are
+//! zero), completed in the null space of `E(y₀)` by the time derivatives of
+//! the model's constraint chain, `G_y(t₀,y₀) y' + ∂g/∂t = 0` — again in the
+//! least-squares minimum-norm sense and without changing `E y'`. For the
+//! projected formulations this recovers the derivatives that `E` leaves
+//! undetermined, so the first predictor is right. The initial values are then
+//! checked: a row whose residual exceeds what a perturbation of every unknown
+//! by its tolerance could cause gives
+//! [`SolveError::InconsistentInitialValues`].
+//!
+//! # Fixed step size (convergence studies)
+//!
+//! With [`Options::fixed_step`] the grid is `t₀ + jh` with
+//! `h = (t_end − t₀)/⌈(t_end − t₀)/fixed_step⌉`, the order is
+//! [`Options::fixed_order`] (else [`Options::max_order`]) and there is no
+//! error test. A `k`-step method needs `k` starting values: `y(t₀ + jh)`,
+//! `j = 1 … k−1`, are computed by this solver in adaptive mode with the
+//! caller's tolerances (choose them well below the discretisation error to
+//! observe the order) and interpolated onto the grid; from then on every
+//! step is the classical constant-step BDF-`k` formula. Starting with lower
+//! orders at the given step would cap the observed order at two. The work
+//! counters include the start-up run; [`Options::record_steps`] lists the
+//! grid points. The corrector may take up to 20 Newton iterations (no
+//! smaller step can rescue it) and a failure is final.
+//!
+//! # Resources
+//!
+//! All buffers — history, iteration matrix and its in-place LU
+//! factorisation, output rows — are allocated before the step loop; the loop
+//! itself does not allocate, except to record every step when
+//! [`Options::record_steps`] asks for it.
 
-/// Variable-order BDF.
+use crate::options::Tolerances;
+use crate::{Options, Problem, Solution, SolveError, Solver, Stats};
+use dae_core::system::{DaeSystem, FormulationInfo};
+use nalgebra::{DMatrix, DVector, SVD};
+
+/// Variable-order (1–5), variable-step BDF in fixed-leading-coefficient form
+/// (DASSL/DASPK). See the [module documentation](self).
 pub struct Bdf;
 
 impl Solver for Bdf {
     fn name(&self) -> &'static str {
         "bdf"
     }
+
     fn accepts(&self, info: &FormulationInfo) -> Result<(), String> {
         if info.is_overdetermined() {
             return Err("overdetermined: solver needs a square system".into());
         }
         Ok(())
     }
-    fn solve(&self, _problem: &Problem<'_>, _options: &Options) -> Result<Solution, SolveError> {
-        Err(SolveError::invalid("bdf is not implemented yet"))
+
+    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+        solve(problem, options)
+    }
+}
+
+/// Highest order of the method.
+const MAX_ORDER: usize = 5;
+/// Columns of the history array `φ` (orders up to 5 use `φ_1 … φ_{k+2}`).
+const NCOL: usize = MAX_ORDER + 2;
+/// Newton iterations per attempt (DASSL's `MAXIT`).
+const MAX_NEWTON_ITERATIONS: usize = 4;
+/// Newton iterations per step in fixed-step mode, where a failure cannot be
+/// cured by a smaller step: the modified Newton iteration converges only
+/// linearly, and convergence studies ask for tight tolerances.
+const MAX_NEWTON_ITERATIONS_FIXED_STEP: usize = 20;
+/// Convergence test `ρ/(1−ρ)·‖δ‖ ≤ NEWTON_TOL` (DASSL's 0.33).
+const NEWTON_TOL: f64 = 0.33;
+/// Largest acceptable Newton contraction rate.
+const MAX_RATE: f64 = 0.9;
+/// Re-evaluate the iteration matrix when `c_J/c_J^old` leaves
+/// `[(1−XRATE)/(1+XRATE), (1+XRATE)/(1−XRATE)]`.
+const XRATE: f64 = 0.25;
+/// Newton failures (with a current matrix) tolerated on one step.
+const MAX_CONVERGENCE_FAILURES: usize = 10;
+/// Singular iteration matrices tolerated on one step.
+const MAX_SINGULAR_FAILURES: usize = 3;
+/// Non-finite residuals tolerated on one step.
+const MAX_NONFINITE_FAILURES: usize = 10;
+/// Unit round-off.
+const EPS: f64 = f64::EPSILON;
+
+/// Integrate `problem` with the BDF method.
+fn solve(problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    let sys = problem.system;
+    let info = sys.info();
+    let n = info.unknowns();
+    if info.equations() != n {
+        return Err(SolveError::invalid(format!(
+            "bdf needs a square system, `{}` has {} equations for {} unknowns",
+            info.name,
+            info.equations(),
+            n
+        )));
+    }
+    if n == 0 {
+        return Err(SolveError::invalid("the system has no unknowns"));
+    }
+    let (t0, t_end) = (problem.t0, problem.t_end);
+    options.validate(n, t0, t_end)?;
+    if problem.y0.len() != n {
+        return Err(SolveError::invalid(format!(
+            "y0 has {} components, the system has {n} unknowns",
+            problem.y0.len()
+        )));
+    }
+    if problem.y0.iter().any(|v| !v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            t: t0,
+            what: "initial values",
+        });
+    }
+
+    // Components in the error test and the Newton norm.
+    let in_test: Vec<bool> = info
+        .variables
+        .iter()
+        .map(|v| options.index2_in_error_test || v.index < 2)
+        .collect();
+    let in_test = if in_test.iter().any(|&b| b) {
+        in_test
+    } else {
+        vec![true; n]
+    };
+
+    let mut stats = Stats::default();
+    let yp0 = initial_derivative(sys, t0, problem.y0, &mut stats)?;
+    check_consistency(sys, &options.tol, t0, problem.y0, &yp0, &mut stats)?;
+
+    let mut out = Output::new(&options.output_times, t0, t_end, n);
+    out.emit_start(t0, problem.y0);
+    let mut steps = Vec::new();
+
+    let run = Run {
+        sys,
+        options,
+        in_test: &in_test,
+        t0,
+        t_end,
+        y0: problem.y0,
+        yp0: &yp0,
+    };
+    match options.fixed_step {
+        Some(h) => run.fixed(h, &mut out, &mut steps, &mut stats)?,
+        None => run.adaptive(&mut out, &mut steps, &mut stats)?,
+    }
+    Ok(Solution {
+        t: out.times,
+        y: out.values,
+        steps,
+        stats,
+    })
+}
+
+/// Everything a run needs besides its outputs.
+struct Run<'a> {
+    sys: &'a dyn DaeSystem,
+    options: &'a Options,
+    in_test: &'a [bool],
+    t0: f64,
+    t_end: f64,
+    y0: &'a [f64],
+    yp0: &'a [f64],
+}
+
+impl Run<'_> {
+    /// Error-controlled integration over `[t0, t_end]`.
+    fn adaptive(
+        &self,
+        out: &mut Output,
+        steps: &mut Vec<(f64, Vec<f64>)>,
+        stats: &mut Stats,
+    ) -> Result<(), SolveError> {
+        let opts = self.options;
+        let span = self.t_end - self.t0;
+        let (maxord, fixed_order) = match opts.fixed_order {
+            Some(k) => (k, true),
+            None => (opts.max_order, false),
+        };
+        let cfg = Config {
+            maxord,
+            fixed_order,
+            fixed_step: false,
+            hmax: opts.h_max.unwrap_or(span),
+            max_steps: opts.max_steps,
+            t_end: self.t_end,
+            span,
+        };
+        let mut integ = Integrator::new(self.sys, &opts.tol, self.in_test, cfg);
+        let h0 = match opts.h0 {
+            // Clipped before φ_2 = h y'₀ is formed, which could overflow.
+            Some(h) => h.min(cfg.hmax).min(span),
+            None => integ.initial_step(self.y0, self.yp0),
+        };
+        integ.start(self.t0, self.y0, self.yp0, h0);
+        let result = integ.run(out, steps, opts.record_steps);
+        add_stats(stats, &integ.stats);
+        result
+    }
+
+    /// Constant step size, order `k`, no error control; the `k−1` starting
+    /// values come from an adaptive run at the caller's tolerances.
+    fn fixed(
+        &self,
+        h_request: f64,
+        out: &mut Output,
+        steps: &mut Vec<(f64, Vec<f64>)>,
+        stats: &mut Stats,
+    ) -> Result<(), SolveError> {
+        let opts = self.options;
+        let n = self.y0.len();
+        let span = self.t_end - self.t0;
+        let k = opts.fixed_order.unwrap_or(opts.max_order);
+        let ratio = span / h_request;
+        if !ratio.is_finite() || ratio > opts.max_steps as f64 {
+            return Err(SolveError::StepLimit {
+                t: self.t0,
+                max_steps: opts.max_steps,
+            });
+        }
+        let nsteps = if (ratio - ratio.round()).abs() <= 1e-9 * ratio.max(1.0) {
+            ratio.round()
+        } else {
+            ratio.ceil()
+        }
+        .max(1.0) as usize;
+        let h = span / nsteps as f64;
+        let grid = |j: usize| {
+            if j == nsteps {
+                self.t_end
+            } else {
+                self.t0 + j as f64 * h
+            }
+        };
+
+        // Starting values y(t0 + j h), j = 0 … m.
+        let m = (k - 1).min(nsteps);
+        let mut start = Output::grid(n, (1..=m).map(grid));
+        if m > 0 {
+            let cfg = Config {
+                maxord: MAX_ORDER,
+                fixed_order: false,
+                fixed_step: false,
+                hmax: span,
+                max_steps: opts.max_steps,
+                t_end: grid(m),
+                span,
+            };
+            let mut integ = Integrator::new(self.sys, &opts.tol, self.in_test, cfg);
+            let h0 = integ.initial_step(self.y0, self.yp0).min(h);
+            integ.start(self.t0, self.y0, self.yp0, h0);
+            let result = integ.run_with(|it| {
+                start.emit(it);
+                out.emit(it);
+            });
+            add_stats(stats, &integ.stats);
+            result?;
+            if opts.record_steps {
+                for (t, y) in start.times.iter().zip(&start.values) {
+                    steps.push((*t, y.clone()));
+                }
+            }
+            if m == nsteps {
+                return Ok(());
+            }
+        }
+
+        let cfg = Config {
+            maxord: k,
+            fixed_order: true,
+            fixed_step: true,
+            hmax: h,
+            max_steps: opts.max_steps.saturating_sub(stats.steps + stats.rejected),
+            t_end: self.t_end,
+            span,
+        };
+        let mut integ = Integrator::new(self.sys, &opts.tol, self.in_test, cfg);
+        if k == 1 {
+            integ.start(self.t0, self.y0, self.yp0, h);
+        } else {
+            // Values at t0, …, t0 + (k−1) h, oldest first.
+            let mut history: Vec<&[f64]> = Vec::with_capacity(k);
+            history.push(self.y0);
+            history.extend(start.values.iter().map(|v| v.as_slice()));
+            integ.start_from_history(grid(k - 1), &history, h);
+        }
+        let result = integ.run(out, steps, opts.record_steps);
+        add_stats(stats, &integ.stats);
+        result
+    }
+}
+
+/// Sum work counters.
+fn add_stats(total: &mut Stats, part: &Stats) {
+    total.steps += part.steps;
+    total.rejected += part.rejected;
+    total.residual_evals += part.residual_evals;
+    total.jacobian_evals += part.jacobian_evals;
+    total.factorizations += part.factorizations;
+    total.newton_iterations += part.newton_iterations;
+}
+
+/// Solution values at requested times, filled by dense output.
+struct Output {
+    times: Vec<f64>,
+    values: Vec<Vec<f64>>,
+    next: usize,
+}
+
+impl Output {
+    /// The requested times inside `[t0, t_end)`, ascending, then `t_end`.
+    fn new(requested: &[f64], t0: f64, t_end: f64, n: usize) -> Self {
+        let mut times: Vec<f64> = requested
+            .iter()
+            .copied()
+            .filter(|&t| t >= t0 && t < t_end)
+            .collect();
+        times.sort_by(f64::total_cmp);
+        times.push(t_end);
+        Self::grid(n, times)
+    }
+
+    /// Output at the given (ascending) times.
+    fn grid(n: usize, times: impl IntoIterator<Item = f64>) -> Self {
+        let times: Vec<f64> = times.into_iter().collect();
+        let values = vec![vec![0.0; n]; times.len()];
+        Output {
+            times,
+            values,
+            next: 0,
+        }
+    }
+
+    /// Report `y0` at every requested time equal to `t0`.
+    fn emit_start(&mut self, t0: f64, y0: &[f64]) {
+        while self.next < self.times.len() && self.times[self.next] <= t0 {
+            self.values[self.next].copy_from_slice(y0);
+            self.next += 1;
+        }
+    }
+
+    /// Interpolate at every pending time up to the integrator's `t`.
+    fn emit(&mut self, integ: &Integrator<'_>) {
+        while self.next < self.times.len() && self.times[self.next] <= integ.t {
+            integ.interpolate(self.times[self.next], &mut self.values[self.next]);
+            self.next += 1;
+        }
+    }
+}
+
+/// Settings of one integrator.
+#[derive(Clone, Copy, Debug)]
+struct Config {
+    /// Largest order.
+    maxord: usize,
+    /// Never lower the order; raise it to `maxord` as soon as possible.
+    fixed_order: bool,
+    /// Constant step, no error test.
+    fixed_step: bool,
+    /// Largest step.
+    hmax: f64,
+    /// Step attempts allowed (accepted + rejected).
+    max_steps: usize,
+    /// Where to stop (never stepped over).
+    t_end: f64,
+    /// Length of the whole horizon (scale of the smallest step).
+    span: f64,
+}
+
+/// Whether the iteration matrix is current.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum JacState {
+    /// Must be evaluated and factored before the next Newton iteration.
+    Needed,
+    /// Evaluated during the current step attempt.
+    Fresh,
+    /// Evaluated on an earlier step (DASSL's `JCALC = 1`).
+    Stale,
+}
+
+/// Why a corrector iteration failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum NewtonFail {
+    /// Contraction rate above 0.9 or too many iterations.
+    Divergence,
+    /// Exactly zero pivot in the iteration matrix.
+    Singular,
+    /// NaN or infinity in the named quantity.
+    NonFinite(&'static str),
+}
+
+/// Why a step attempt was rejected.
+#[derive(Clone, Copy, Debug)]
+enum Failure {
+    /// The corrector did not converge.
+    Newton(NewtonFail),
+    /// The local error estimate exceeded the tolerance.
+    ErrorTest(ErrorTest),
+}
+
+/// Result of DASSL's error test (block 4), kept for order selection.
+#[derive(Clone, Copy, Debug)]
+struct ErrorTest {
+    /// `C_k ‖e‖`: the step is accepted when at most 1.
+    err: f64,
+    /// Error estimate at the order proposed for the next step.
+    est: f64,
+    /// Proposed order (`k` or `k−1`).
+    knew: usize,
+    /// `(k+1)·σ_{k+1}‖e‖`: leading error term at order `k`.
+    terk: f64,
+    /// Same at order `k−1`.
+    terkm1: f64,
+    /// `σ_k ‖e + φ*_{k+1}‖`: error estimate at order `k−1`.
+    erkm1: f64,
+}
+
+/// State and workspace of the DASSL step.
+struct Integrator<'a> {
+    sys: &'a dyn DaeSystem,
+    tol: &'a Tolerances,
+    cfg: Config,
+    n: usize,
+    constant_leading: bool,
+    /// `true` for components in the error test and the Newton norm.
+    in_test: &'a [bool],
+    /// `1 / (number of components in the test)`.
+    inv_count: f64,
+
+    /// Current time `t_n` (after a step: `t_{n+1}`).
+    t: f64,
+    /// Step size of the next attempt.
+    h: f64,
+    /// Step size of the last accepted step.
+    hold: f64,
+    /// Order of the next attempt.
+    k: usize,
+    /// Order of the last accepted step (0 before the first).
+    kold: usize,
+    /// Number of steps taken with the current `h` and `k` (capped).
+    ns: usize,
+    /// Initial phase: raise order and double `h` after every step.
+    ramp: bool,
+    /// The current step reaches `t_end`: snap `t` to it.
+    last: bool,
+
+    psi: [f64; NCOL],
+    alpha: [f64; NCOL],
+    beta: [f64; NCOL],
+    gamma: [f64; NCOL],
+    sigma: [f64; NCOL],
+    /// Leading coefficient `c_J = −α_s/h`.
+    cj: f64,
+    /// `c_J` with which the iteration matrix was formed.
+    cjold: f64,
+    /// Error constant `C_k`.
+    ck: f64,
+    /// Newton rate factor `ρ/(1−ρ)` (100 when unknown).
+    s: f64,
+    jac: JacState,
+    /// Newton iterations of the last attempt.
+    last_iterations: usize,
+
+    /// History `φ_1 … φ_{NCOL}`, column `j` at `phi[j n .. (j+1) n]`.
+    phi: Vec<f64>,
+    y: Vec<f64>,
+    yp: Vec<f64>,
+    delta: Vec<f64>,
+    /// Accumulated corrections `y − y⁽⁰⁾`.
+    e: Vec<f64>,
+    /// Error weights (zero for components out of the test).
+    wt: Vec<f64>,
+    /// Iteration matrix, factored in place.
+    lu: DenseLu,
+    /// `E(y)`.
+    lead: DMatrix<f64>,
+    /// `∂(E(y) y')/∂y`.
+    lead_jac: DMatrix<f64>,
+
+    stats: Stats,
+    /// Step attempts so far (accepted + rejected).
+    attempts: usize,
+}
+
+impl<'a> Integrator<'a> {
+    /// Allocate every buffer of the step loop.
+    fn new(sys: &'a dyn DaeSystem, tol: &'a Tolerances, in_test: &'a [bool], cfg: Config) -> Self {
+        let n = in_test.len();
+        let count = in_test.iter().filter(|&&b| b).count().max(1);
+        Integrator {
+            sys,
+            tol,
+            cfg,
+            n,
+            constant_leading: sys.info().constant_leading,
+            in_test,
+            inv_count: 1.0 / count as f64,
+            t: 0.0,
+            h: 0.0,
+            hold: 0.0,
+            k: 1,
+            kold: 0,
+            ns: 0,
+            ramp: true,
+            last: false,
+            psi: [0.0; NCOL],
+            alpha: [0.0; NCOL],
+            beta: [0.0; NCOL],
+            gamma: [0.0; NCOL],
+            sigma: [0.0; NCOL],
+            cj: 0.0,
+            cjold: 0.0,
+            ck: 0.0,
+            s: 100.0,
+            jac: JacState::Needed,
+            last_iterations: 0,
+            phi: vec![0.0; n * NCOL],
+            y: vec![0.0; n],
+            yp: vec![0.0; n],
+            delta: vec![0.0; n],
+            e: vec![0.0; n],
+            wt: vec![0.0; n],
+            lu: DenseLu::new(n),
+            lead: DMatrix::zeros(n, n),
+            lead_jac: DMatrix::zeros(n, n),
+            stats: Stats::default(),
+            attempts: 0,
+        }
+    }
+
+    /// DASSL's initial step: `0.001·(t_end − t₀)`, reduced so that
+    /// `h ‖y'₀‖ ≤ 0.5`, and at most `h_max`.
+    fn initial_step(&mut self, y0: &[f64], yp0: &[f64]) -> f64 {
+        set_weights(self.tol, self.in_test, y0, &mut self.wt);
+        let mut h = 0.001 * self.cfg.span;
+        let ypnorm = self.norm(yp0);
+        if ypnorm > 0.5 / h {
+            h = 0.5 / ypnorm;
+        }
+        h.min(self.cfg.hmax)
+    }
+
+    /// Start at `(t0, y0, y'0)` with order one and step `h`:
+    /// `φ_1 = y₀`, `φ_2 = h y'₀`, `ψ_1 = h`.
+    fn start(&mut self, t0: f64, y0: &[f64], yp0: &[f64], h: f64) {
+        let n = self.n;
+        self.t = t0;
+        self.h = h;
+        self.k = 1;
+        self.kold = 0;
+        self.hold = 0.0;
+        self.ns = 0;
+        self.ramp = !self.cfg.fixed_step;
+        self.psi[0] = h;
+        self.cj = 1.0 / h;
+        self.cjold = self.cj;
+        self.s = 100.0;
+        self.jac = JacState::Needed;
+        self.phi.fill(0.0);
+        self.phi[..n].copy_from_slice(y0);
+        for (p, v) in self.phi[n..2 * n].iter_mut().zip(yp0) {
+            *p = h * v;
+        }
+    }
+
+    /// Start a constant-step run of order `k = values.len()` at `t` from the
+    /// values at `t − (k−1)h, …, t` (oldest first): with equal spacing the
+    /// modified divided differences are backward differences,
+    /// `φ_{i+1} = ∇ⁱ y`. `φ_{k+1} = 0`: the first predictor has degree
+    /// `k−1`, which leaves the corrector — the classical BDF-`k` — unchanged.
+    fn start_from_history(&mut self, t: f64, values: &[&[f64]], h: f64) {
+        let n = self.n;
+        let k = values.len();
+        self.t = t;
+        self.h = h;
+        self.hold = h;
+        self.k = k;
+        self.kold = k;
+        self.ns = 0;
+        self.ramp = false;
+        for (i, p) in self.psi.iter_mut().enumerate() {
+            *p = (i + 1) as f64 * h;
+        }
+        self.cj = 1.0 / h;
+        self.cjold = self.cj;
+        self.s = 100.0;
+        self.jac = JacState::Needed;
+        self.phi.fill(0.0);
+        // Difference table: after pass i, work[j] holds ∇ⁱ y at the j-th
+        // point; store ∇ⁱ y at the newest point in φ_{i+1}.
+        let mut work: Vec<Vec<f64>> = values.iter().map(|v| v.to_vec()).collect();
+        for i in 0..k {
+            self.phi[i * n..(i + 1) * n].copy_from_slice(&work[k - 1]);
+            for j in (i + 1..k).rev() {
+                let (lo, hi) = work.split_at_mut(j);
+                for (a, b) in hi[0].iter_mut().zip(&lo[j - 1]) {
+                    *a -= b;
+                }
+            }
+        }
+    }
+
+    /// Step until `t_end`, reporting into `out` (and `steps`).
+    fn run(
+        &mut self,
+        out: &mut Output,
+        steps: &mut Vec<(f64, Vec<f64>)>,
+        record: bool,
+    ) -> Result<(), SolveError> {
+        self.run_with(|it| {
+            out.emit(it);
+            if record {
+                steps.push((it.t, it.phi[..it.n].to_vec()));
+            }
+        })
+    }
+
+    /// Step until `t_end`, calling `after_step` after every accepted step.
+    fn run_with(&mut self, mut after_step: impl FnMut(&Self)) -> Result<(), SolveError> {
+        while self.t < self.cfg.t_end {
+            self.step()?;
+            after_step(self);
+        }
+        Ok(())
+    }
+
+    /// Weighted RMS norm over the components in the test (DASSL's DDANRM,
+    /// scaled against overflow). NaN in → NaN out.
+    fn norm(&self, v: &[f64]) -> f64 {
+        let mut vmax = 0.0_f64;
+        for (a, w) in v.iter().zip(&self.wt) {
+            let x = (a * w).abs();
+            if x.is_nan() {
+                return f64::NAN;
+            }
+            vmax = vmax.max(x);
+        }
+        if vmax == 0.0 || !vmax.is_finite() {
+            return vmax;
+        }
+        let sum: f64 = v
+            .iter()
+            .zip(&self.wt)
+            .map(|(a, w)| {
+                let x = a * w / vmax;
+                x * x
+            })
+            .sum();
+        vmax * (sum * self.inv_count).sqrt()
+    }
+
+    /// Smallest step allowed at `t`: `4 ε max(|t|, ε (t_end − t₀))`.
+    fn hmin(&self) -> f64 {
+        4.0 * EPS * self.t.abs().max(EPS * self.cfg.span)
+    }
+
+    /// Take one step (retrying with smaller steps or lower order as needed).
+    fn step(&mut self) -> Result<(), SolveError> {
+        set_weights(self.tol, self.in_test, &self.phi[..self.n], &mut self.wt);
+
+        // Step size limits and the end of the horizon.
+        let remaining = self.cfg.t_end - self.t;
+        let h_before = self.h;
+        if !self.cfg.fixed_step {
+            self.h = self.h.min(self.cfg.hmax);
+        }
+        // Reach t_end without a step that is tiny next to its predecessors:
+        // stretch the last step by up to 10 %, or split what remains of two
+        // steps into two equal ones.
+        self.last = if self.cfg.fixed_step {
+            remaining <= 1.5 * self.h
+        } else {
+            self.h >= remaining
+                || (remaining <= 1.1 * self.h && remaining <= self.cfg.hmax)
+                || remaining - self.h <= 4.0 * EPS * self.cfg.t_end.abs()
+        };
+        if self.last {
+            self.h = remaining;
+        } else if !self.cfg.fixed_step && remaining < 2.0 * self.h {
+            self.h = 0.5 * remaining;
+        }
+        if self.kold == 0 && self.h != h_before {
+            self.rescale_first_step(h_before);
+        }
+        if !self.last && self.h < self.hmin() {
+            return Err(SolveError::StepSizeTooSmall {
+                t: self.t,
+                h: self.h,
+            });
+        }
+
+        let (mut nef, mut ncf, mut nsf, mut nnf) = (0usize, 0usize, 0usize, 0usize);
+        loop {
+            if self.attempts >= self.cfg.max_steps {
+                return Err(SolveError::StepLimit {
+                    t: self.t,
+                    max_steps: self.cfg.max_steps,
+                });
+            }
+            self.attempts += 1;
+            let t_old = self.t;
+            self.set_coefficients();
+            self.t = if self.last {
+                self.cfg.t_end
+            } else {
+                t_old + self.h
+            };
+
+            let failure = match self.corrector() {
+                Ok(()) if self.cfg.fixed_step => {
+                    self.accept(None);
+                    return Ok(());
+                }
+                Ok(()) => {
+                    let test = self.error_test();
+                    if test.err <= 1.0 {
+                        self.accept(Some(test));
+                        return Ok(());
+                    }
+                    Failure::ErrorTest(test)
+                }
+                Err(fail) => Failure::Newton(fail),
+            };
+
+            // Block 6: the step failed.
+            self.stats.rejected += 1;
+            self.restore(t_old);
+            self.ramp = false;
+            self.last = false;
+            let h_failed = self.h;
+            let hmin = self.hmin();
+            match failure {
+                Failure::Newton(fail) => {
+                    if self.cfg.fixed_step {
+                        return Err(self.newton_error(fail, h_failed));
+                    }
+                    self.h *= 0.25;
+                    let limit_hit = match fail {
+                        NewtonFail::Singular => {
+                            nsf += 1;
+                            nsf >= MAX_SINGULAR_FAILURES
+                        }
+                        NewtonFail::NonFinite(_) => {
+                            nnf += 1;
+                            nnf >= MAX_NONFINITE_FAILURES
+                        }
+                        NewtonFail::Divergence => {
+                            ncf += 1;
+                            ncf >= MAX_CONVERGENCE_FAILURES
+                        }
+                    };
+                    if limit_hit || self.h < hmin {
+                        return Err(self.newton_error(fail, h_failed));
+                    }
+                }
+                Failure::ErrorTest(test) => {
+                    nef += 1;
+                    if nef == 1 {
+                        self.k = test.knew;
+                        let r = 0.9 * (2.0 * test.est + 1e-4).powf(-1.0 / (self.k + 1) as f64);
+                        self.h *= r.clamp(0.25, 0.9);
+                    } else {
+                        // From the third failure on, order one, as DASSL:
+                        // at higher orders an algebraic component left off
+                        // its constraint by the Newton tolerance is an error
+                        // estimate that does not shrink with h. With a fixed
+                        // order it is raised again after the step.
+                        self.k = if nef == 2 { test.knew } else { 1 };
+                        self.h *= 0.25;
+                    }
+                    if self.h < hmin {
+                        return Err(SolveError::StepSizeTooSmall {
+                            t: self.t,
+                            h: self.h,
+                        });
+                    }
+                }
+            }
+            if self.kold == 0 {
+                self.rescale_first_step(h_failed);
+            }
+        }
+    }
+
+    /// Before the first step `φ_2 = h y'₀` and `ψ_1 = h` follow `h`.
+    fn rescale_first_step(&mut self, h_prev: f64) {
+        let n = self.n;
+        let r = self.h / h_prev;
+        self.psi[0] = self.h;
+        for p in &mut self.phi[n..2 * n] {
+            *p *= r;
+        }
+    }
+
+    /// The typed error for a Newton failure at the current time with step
+    /// size `h`.
+    fn newton_error(&self, fail: NewtonFail, h: f64) -> SolveError {
+        match fail {
+            NewtonFail::Singular => SolveError::SingularMatrix { t: self.t, h },
+            NewtonFail::NonFinite(what) => SolveError::NonFinite { t: self.t, what },
+            NewtonFail::Divergence => SolveError::NewtonFailure {
+                t: self.t,
+                h,
+                iterations: self.last_iterations,
+            },
+        }
+    }
+
+    /// Block 1: coefficients `ψ, α, β, γ, σ` of the new step, `c_J`, `C_k`,
+    /// and `φ → φ*`. They are recomputed unless `h` and `k` have been
+    /// constant for `k+1` steps.
+    fn set_coefficients(&mut self) {
+        let k = self.k;
+        let h = self.h;
+        if h != self.hold || k != self.kold {
+            self.ns = 0;
+        }
+        self.ns = (self.ns + 1).min(self.kold + 2);
+        if k + 1 >= self.ns {
+            self.beta[0] = 1.0;
+            self.alpha[0] = 1.0;
+            self.gamma[0] = 0.0;
+            self.sigma[0] = 1.0;
+            let mut temp1 = h;
+            for i in 1..=k {
+                let temp2 = self.psi[i - 1];
+                self.psi[i - 1] = temp1;
+                self.beta[i] = self.beta[i - 1] * self.psi[i - 1] / temp2;
+                temp1 = temp2 + h;
+                self.alpha[i] = h / temp1;
+                self.sigma[i] = i as f64 * self.sigma[i - 1] * self.alpha[i];
+                self.gamma[i] = self.gamma[i - 1] + self.alpha[i - 1] / h;
+            }
+            self.psi[k] = temp1;
+        }
+        let mut alphas = 0.0;
+        let mut alpha0 = 0.0;
+        for i in 0..k {
+            alphas -= 1.0 / (i + 1) as f64;
+            alpha0 -= self.alpha[i];
+        }
+        let cjlast = self.cj;
+        self.cj = -alphas / h;
+        self.ck = (self.alpha[k] + alphas - alpha0).abs().max(self.alpha[k]);
+
+        // A new iteration matrix when c_J has moved too far.
+        let ratio = self.cj / self.cjold;
+        let lo = (1.0 - XRATE) / (1.0 + XRATE);
+        if !(lo..=1.0 / lo).contains(&ratio) {
+            self.jac = JacState::Needed;
+        }
+        if self.cj != cjlast {
+            self.s = 100.0;
+        }
+
+        // φ → φ*.
+        let n = self.n;
+        if self.ns <= k {
+            for j in self.ns..=k {
+                let b = self.beta[j];
+                for p in &mut self.phi[j * n..(j + 1) * n] {
+                    *p *= b;
+                }
+            }
+        }
+    }
+
+    /// Undo block 1 after a failed attempt.
+    fn restore(&mut self, t_old: f64) {
+        let n = self.n;
+        let k = self.k;
+        self.t = t_old;
+        if self.ns <= k {
+            for j in self.ns..=k {
+                let b = 1.0 / self.beta[j];
+                for p in &mut self.phi[j * n..(j + 1) * n] {
+                    *p *= b;
+                }
+            }
+        }
+        for i in 0..k {
+            self.psi[i] = self.psi[i + 1] - self.h;
+        }
+    }
+
+    /// Block 2: predictor `y⁽⁰⁾ = Σ φ*_i`, `y'⁽⁰⁾ = Σ γ_i φ*_i`.
+    fn predict(&mut self) {
+        let n = self.n;
+        self.y.copy_from_slice(&self.phi[..n]);
+        self.yp.fill(0.0);
+        for j in 1..=self.k {
+            let g = self.gamma[j];
+            let col = &self.phi[j * n..(j + 1) * n];
+            for ((y, yp), p) in self.y.iter_mut().zip(self.yp.iter_mut()).zip(col) {
+                *y += p;
+                *yp += g * p;
+            }
+        }
+    }
+
+    /// `δ = F(t, y, y')`.
+    fn residual(&mut self) -> Result<(), NewtonFail> {
+        self.sys
+            .residual(self.t, &self.y, &self.yp, &mut self.delta);
+        self.stats.residual_evals += 1;
+        if self.delta.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(NewtonFail::NonFinite("residual"))
+        }
+    }
+
+    /// Evaluate `G = ∂(E(y) y')/∂y − ∂f/∂y + c_J E(y)` at the predictor and
+    /// factor it in place.
+    fn form_iteration_matrix(&mut self) -> Result<(), NewtonFail> {
+        let sys = self.sys;
+        sys.rhs_jacobian(self.t, &self.y, &mut self.lu.a);
+        sys.leading(&self.y, &mut self.lead);
+        if !self.constant_leading {
+            sys.leading_jacobian(&self.y, &self.yp, &mut self.lead_jac);
+        }
+        self.stats.jacobian_evals += 1;
+        let cj = self.cj;
+        let a = self.lu.a.as_mut_slice();
+        for (g, e) in a.iter_mut().zip(self.lead.as_slice()) {
+            *g = cj * e - *g;
+        }
+        if !self.constant_leading {
+            for (g, l) in a.iter_mut().zip(self.lead_jac.as_slice()) {
+                *g += l;
+            }
+        }
+        if !a.iter().all(|v| v.is_finite()) {
+            return Err(NewtonFail::NonFinite("iteration matrix"));
+        }
+        self.cjold = cj;
+        self.s = 100.0;
+        self.jac = JacState::Fresh;
+        self.stats.factorizations += 1;
+        if self.lu.factor() {
+            Ok(())
+        } else {
+            Err(NewtonFail::Singular)
+        }
+    }
+
+    /// Block 3: solve the corrector, re-evaluating the iteration matrix once
+    /// if an old one fails.
+    fn corrector(&mut self) -> Result<(), NewtonFail> {
+        loop {
+            let stale = self.jac == JacState::Stale;
+            match self.newton() {
+                Ok(()) => {
+                    self.jac = JacState::Stale;
+                    return Ok(());
+                }
+                Err(NewtonFail::Singular) => {
+                    self.jac = JacState::Needed;
+                    return Err(NewtonFail::Singular);
+                }
+                Err(_) if stale => self.jac = JacState::Needed,
+                Err(fail) => {
+                    if self.jac == JacState::Fresh {
+                        self.jac = JacState::Stale;
+                    }
+                    return Err(fail);
+                }
+            }
+        }
+    }
+
+    /// Modified Newton iteration on the corrector from the predictor.
+    fn newton(&mut self) -> Result<(), NewtonFail> {
+        self.predict();
+        let pnorm = self.norm(&self.y);
+        self.e.fill(0.0);
+        self.last_iterations = 0;
+        self.residual()?;
+        if self.jac == JacState::Needed {
+            self.form_iteration_matrix()?;
+        }
+        let damping = if self.cj != self.cjold {
+            2.0 / (1.0 + self.cj / self.cjold)
+        } else {
+            1.0
+        };
+        let mut oldnrm = 0.0;
+        let mut m = 0;
+        loop {
+            if damping != 1.0 {
+                for d in &mut self.delta {
+                    *d *= damping;
+                }
+            }
+            self.lu.solve(&mut self.delta);
+            self.stats.newton_iterations += 1;
+            self.last_iterations += 1;
+            let cj = self.cj;
+            for (((y, yp), e), d) in self
+                .y
+                .iter_mut()
+                .zip(self.yp.iter_mut())
+                .zip(self.e.iter_mut())
+                .zip(&self.delta)
+            {
+                *y -= d;
+                *e -= d;
+                *yp -= cj * d;
+            }
+            // An overflowing update is a diverging iteration, not a fault of
+            // the problem: the step is retried smaller.
+            let delnrm = self.norm(&self.delta);
+            if !delnrm.is_finite() {
+                return Err(NewtonFail::Divergence);
+            }
+            if delnrm <= 100.0 * EPS * pnorm {
+                return Ok(());
+            }
+            if m == 0 {
+                oldnrm = delnrm;
+            } else {
+                let rate = (delnrm / oldnrm).powf(1.0 / m as f64);
+                if rate > MAX_RATE {
+                    return Err(NewtonFail::Divergence);
+                }
+                self.s = rate / (1.0 - rate);
+            }
+            if self.s * delnrm <= NEWTON_TOL {
+                return Ok(());
+            }
+            m += 1;
+            let maxit = if self.cfg.fixed_step {
+                MAX_NEWTON_ITERATIONS_FIXED_STEP
+            } else {
+                MAX_NEWTON_ITERATIONS
+            };
+            if m >= maxit {
+                return Err(NewtonFail::Divergence);
+            }
+            // Non-finite at an iterate (not at the predictor): divergence.
+            self.residual().map_err(|_| NewtonFail::Divergence)?;
+        }
+    }
+
+    /// Block 4: local error estimate and the error terms of orders
+    /// `k−2 … k` (BCP ch. 5).
+    fn error_test(&mut self) -> ErrorTest {
+        let n = self.n;
+        let k = self.k;
+        let enorm = self.norm(&self.e);
+        let erk = self.sigma[k] * enorm;
+        let terk = (k + 1) as f64 * erk;
+        let mut test = ErrorTest {
+            err: self.ck * enorm,
+            est: erk,
+            knew: k,
+            terk,
+            terkm1: 0.0,
+            erkm1: 0.0,
+        };
+        if k > 1 {
+            for ((d, p), e) in self
+                .delta
+                .iter_mut()
+                .zip(&self.phi[k * n..(k + 1) * n])
+                .zip(&self.e)
+            {
+                *d = p + e;
+            }
+            let erkm1 = self.sigma[k - 1] * self.norm(&self.delta);
+            let terkm1 = k as f64 * erkm1;
+            let lower = if k > 2 {
+                for (d, p) in self.delta.iter_mut().zip(&self.phi[(k - 1) * n..k * n]) {
+                    *d += p;
+                }
+                let erkm2 = self.sigma[k - 2] * self.norm(&self.delta);
+                let terkm2 = (k - 1) as f64 * erkm2;
+                terkm1.max(terkm2) <= terk
+            } else {
+                terkm1 <= 0.5 * terk
+            };
+            test.erkm1 = erkm1;
+            test.terkm1 = terkm1;
+            if lower && !self.cfg.fixed_order {
+                test.knew = k - 1;
+                test.est = erkm1;
+            }
+        }
+        if test.err.is_nan() {
+            test.err = f64::INFINITY;
+        }
+        test
+    }
+
+    /// Block 5: accept the step, choose order and step size of the next one
+    /// (not in fixed-step mode), and update the differences `φ`.
+    fn accept(&mut self, test: Option<ErrorTest>) {
+        let n = self.n;
+        let k = self.k;
+        let kdiff = k as isize - self.kold as isize;
+        self.kold = k;
+        self.hold = self.h;
+        self.stats.steps += 1;
+
+        let mut hnew = self.h;
+        if let Some(test) = test {
+            let maxord = self.cfg.maxord;
+            if test.knew + 1 == k || k == maxord {
+                self.ramp = false;
+            }
+            if self.ramp {
+                self.k = k + 1;
+                hnew = 2.0 * self.h;
+            } else {
+                let mut newk = k;
+                let mut est = test.est;
+                if self.cfg.fixed_order {
+                    newk = (k + 1).min(maxord);
+                } else if test.knew + 1 == k {
+                    newk = k - 1;
+                    est = test.erkm1;
+                } else if k < maxord && k + 1 < self.ns && kdiff != 1 {
+                    for ((d, e), p) in self
+                        .delta
+                        .iter_mut()
+                        .zip(&self.e)
+                        .zip(&self.phi[(k + 1) * n..(k + 2) * n])
+                    {
+                        *d = e - p;
+                    }
+                    let erkp1 = self.norm(&self.delta) / (k + 2) as f64;
+                    let terkp1 = (k + 2) as f64 * erkp1;
+                    if k == 1 {
+                        if terkp1 < 0.5 * test.terk {
+                            newk = k + 1;
+                            est = erkp1;
+                        }
+                    } else if test.terkm1 <= test.terk.min(terkp1) {
+                        newk = k - 1;
+                        est = test.erkm1;
+                    } else if terkp1 < test.terk {
+                        newk = k + 1;
+                        est = erkp1;
+                    }
+                }
+                self.k = newk;
+                let r = (2.0 * est + 1e-4).powf(-1.0 / (newk + 1) as f64);
+                if r >= 2.0 {
+                    hnew = 2.0 * self.h;
+                } else if r <= 1.0 {
+                    hnew = self.h * r.clamp(0.5, 0.9);
+                }
+            }
+        }
+        self.h = hnew;
+
+        // φ_{k+2} = e (for the order-raise test), φ_{k+1} += e, then
+        // φ_i += φ_{i+1} for i = k … 1: the differences at t_{n+1}.
+        if k < self.cfg.maxord {
+            self.phi[(k + 1) * n..(k + 2) * n].copy_from_slice(&self.e);
+        }
+        for (p, e) in self.phi[k * n..(k + 1) * n].iter_mut().zip(&self.e) {
+            *p += e;
+        }
+        for j in (0..k).rev() {
+            let (lo, hi) = self.phi.split_at_mut((j + 1) * n);
+            for (a, b) in lo[j * n..].iter_mut().zip(&hi[..n]) {
+                *a += b;
+            }
+        }
+    }
+
+    /// Dense output (DDATRP): the interpolating polynomial of the last step,
+    /// `y(t) = Σ_{i=1}^{k+1} c_i φ_i`, `c_1 = 1`,
+    /// `c_{i+1} = c_i (t − t_{n+1} + ψ_{i−1})/ψ_i` (`ψ_0 = 0`).
+    fn interpolate(&self, tout: f64, out: &mut [f64]) {
+        let n = self.n;
+        out.copy_from_slice(&self.phi[..n]);
+        let dt = tout - self.t;
+        let mut c = 1.0;
+        let mut gamma = dt / self.psi[0];
+        for j in 1..=self.kold {
+            c *= gamma;
+            gamma = (dt + self.psi[j - 1]) / self.psi[j];
+            for (o, p) in out.iter_mut().zip(&self.phi[j * n..(j + 1) * n]) {
+                *o += c * p;
+            }
+        }
+    }
+}
+
+/// Error weights `w_i = 1/(atol_i + rtol_i |y_i|)`, zero for components out
+/// of the test.
+fn set_weights(tol: &Tolerances, in_test: &[bool], y: &[f64], wt: &mut [f64]) {
+    tol.weights(y, wt);
+    for (w, &inc) in wt.iter_mut().zip(in_test) {
+        if !inc {
+            *w = 0.0;
+        }
+    }
+}
+
+/// Dense LU factorisation with partial pivoting, in place on preallocated
+/// column-major storage (LINPACK's DGEFA/DGESL layout: negated multipliers
+/// below the diagonal, interchanges applied column by column).
+struct DenseLu {
+    n: usize,
+    a: DMatrix<f64>,
+    piv: Vec<usize>,
+}
+
+impl DenseLu {
+    fn new(n: usize) -> Self {
+        DenseLu {
+            n,
+            a: DMatrix::zeros(n, n),
+            piv: vec![0; n],
+        }
+    }
+
+    /// Factor `a` in place; `false` when a pivot is exactly zero.
+    fn factor(&mut self) -> bool {
+        let n = self.n;
+        let a = self.a.as_mut_slice();
+        for k in 0..n {
+            let ck = k * n;
+            let mut p = k;
+            let mut amax = a[ck + k].abs();
+            for i in k + 1..n {
+                let v = a[ck + i].abs();
+                if v > amax {
+                    amax = v;
+                    p = i;
+                }
+            }
+            self.piv[k] = p;
+            if amax == 0.0 {
+                return false;
+            }
+            a.swap(ck + p, ck + k);
+            let t = -1.0 / a[ck + k];
+            for v in &mut a[ck + k + 1..ck + n] {
+                *v *= t;
+            }
+            let (left, right) = a.split_at_mut(ck + n);
+            let lcol = &left[ck..ck + n];
+            for col in right.chunks_exact_mut(n) {
+                col.swap(p, k);
+                let t = col[k];
+                if t != 0.0 {
+                    for (c, l) in col[k + 1..].iter_mut().zip(&lcol[k + 1..]) {
+                        *c += t * l;
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// Solve `A x = b` in place with the factors.
+    fn solve(&self, b: &mut [f64]) {
+        let n = self.n;
+        let a = self.a.as_slice();
+        for k in 0..n {
+            let p = self.piv[k];
+            b.swap(p, k);
+            let t = b[k];
+            if t != 0.0 {
+                for (bi, l) in b[k + 1..].iter_mut().zip(&a[k * n + k + 1..(k + 1) * n]) {
+                    *bi += t * l;
+                }
+            }
+        }
+        for k in (0..n).rev() {
+            b[k] /= a[k * n + k];
+            let t = -b[k];
+            for (bi, u) in b[..k].iter_mut().zip(&a[k * n..k * n + k]) {
+                *bi += t * u;
+            }
+        }
+    }
+}
+
+/// Minimum-norm least-squares solution of `A x = b` by SVD (singular values
+/// at most `max(m, n) ε σ_max` count as zero), and the right singular vectors
+/// of the neglected singular values as columns — for `m ≥ n` an orthonormal
+/// basis of the numerical null space of `A`. `None` if the SVD fails.
+fn min_norm_solve(a: &DMatrix<f64>, b: &[f64]) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    let (m, n) = a.shape();
+    let svd = SVD::try_new(a.clone(), true, true, EPS, 1000)?;
+    let u = svd.u.as_ref()?;
+    let vt = svd.v_t.as_ref()?;
+    let s = &svd.singular_values;
+    let smax = s.iter().fold(0.0_f64, |acc, &v| acc.max(v));
+    let thresh = m.max(n) as f64 * EPS * smax;
+    let mut x = vec![0.0; n];
+    let mut null = Vec::new();
+    for (i, &si) in s.iter().enumerate() {
+        if si > thresh {
+            let c = u.column(i).dot(&DVector::from_column_slice(b)) / si;
+            for (xj, v) in x.iter_mut().zip(vt.row(i).iter()) {
+                *xj += c * v;
+            }
+        } else {
+            null.push(vt.row(i).transpose());
+        }
+    }
+    let null = if null.is_empty() {
+        DMatrix::zeros(n, 0)
+    } else {
+        DMatrix::from_columns(&null)
+    };
+    Some((x, null))
+}
+
+/// `y'₀`: minimum-norm solution of `E(y₀) y' = f(t₀, y₀)`, completed in the
+/// null space of `E(y₀)` by the differentiated constraint chain
+/// `G_y y' = −∂g/∂t` (see the module documentation).
+fn initial_derivative(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    y0: &[f64],
+    stats: &mut Stats,
+) -> Result<Vec<f64>, SolveError> {
+    let n = y0.len();
+    let mut lead = DMatrix::zeros(n, n);
+    sys.leading(y0, &mut lead);
+    let mut f = vec![0.0; n];
+    sys.rhs(t0, y0, &mut f);
+    stats.residual_evals += 1;
+    if !lead.iter().all(|v| v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            t: t0,
+            what: "leading matrix",
+        });
+    }
+    if !f.iter().all(|v| v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            t: t0,
+            what: "right-hand side",
+        });
+    }
+    let svd_failed = || SolveError::invalid("initial derivative: SVD of E(y0) did not converge");
+    let (mut yp, null) = min_norm_solve(&lead, &f).ok_or_else(svd_failed)?;
+
+    let kc = sys.info().constraints.len();
+    if kc > 0 && null.ncols() > 0 {
+        let mut gy = DMatrix::zeros(kc, n);
+        sys.constraints_jacobian(t0, y0, &mut gy);
+        // ∂g/∂t by central differences (exactly zero when g is autonomous).
+        let dt = EPS.cbrt() * t0.abs().max(1.0);
+        let mut gp = vec![0.0; kc];
+        let mut gm = vec![0.0; kc];
+        sys.constraints(t0 + dt, y0, &mut gp);
+        sys.constraints(t0 - dt, y0, &mut gm);
+        let gyv = &gy * DVector::from_column_slice(&yp);
+        let rhs: Vec<f64> = (0..kc)
+            .map(|i| -((gp[i] - gm[i]) / (2.0 * dt) + gyv[i]))
+            .collect();
+        let a = &gy * &null;
+        if a.iter().all(|v| v.is_finite()) && rhs.iter().all(|v| v.is_finite()) {
+            if let Some((c, _)) = min_norm_solve(&a, &rhs) {
+                let dyp = &null * DVector::from_vec(c);
+                for (y, d) in yp.iter_mut().zip(dyp.iter()) {
+                    *y += d;
+                }
+            }
+        }
+    }
+    Ok(yp)
+}
+
+/// Reject initial values that violate a row by more than a perturbation of
+/// every unknown by its tolerance could explain:
+/// `|F_i| > Σ_j |∂F_i/∂y_j| (atol_j + rtol_j |y_j|)`, beyond round-off.
+fn check_consistency(
+    sys: &dyn DaeSystem,
+    tol: &Tolerances,
+    t0: f64,
+    y0: &[f64],
+    yp0: &[f64],
+    stats: &mut Stats,
+) -> Result<(), SolveError> {
+    let n = y0.len();
+    let info = sys.info();
+    let mut r = vec![0.0; n];
+    sys.residual(t0, y0, yp0, &mut r);
+    let mut f = vec![0.0; n];
+    sys.rhs(t0, y0, &mut f);
+    stats.residual_evals += 2;
+    if !r.iter().all(|v| v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            t: t0,
+            what: "residual",
+        });
+    }
+    let mut jac = DMatrix::zeros(n, n);
+    sys.rhs_jacobian(t0, y0, &mut jac);
+    jac.neg_mut();
+    if !info.constant_leading {
+        let mut lj = DMatrix::zeros(n, n);
+        sys.leading_jacobian(y0, yp0, &mut lj);
+        jac += lj;
+    }
+    let mut lead = DMatrix::zeros(n, n);
+    sys.leading(y0, &mut lead);
+    stats.jacobian_evals += 1;
+    let scale: Vec<f64> = (0..n)
+        .map(|j| tol.atol(j) + tol.rtol(j) * y0[j].abs())
+        .collect();
+    let mut worst: Option<(usize, f64)> = None;
+    for i in 0..n {
+        let ri = r[i].abs();
+        let ey: f64 = (0..n).map(|j| (lead[(i, j)] * yp0[j]).abs()).sum();
+        if ri <= 100.0 * EPS * (f[i].abs() + ey) {
+            continue;
+        }
+        let allowed: f64 = (0..n).map(|j| (jac[(i, j)] * scale[j]).abs()).sum();
+        let ratio = if allowed > 0.0 {
+            ri / allowed
+        } else {
+            f64::INFINITY
+        };
+        let worse = match worst {
+            Some((_, w)) => ratio > w,
+            None => true,
+        };
+        if ratio > 1.0 && worse {
+            worst = Some((i, ratio));
+        }
+    }
+    match worst {
+        Some((i, _)) => Err(SolveError::InconsistentInitialValues {
+            equation: info
+                .rows
+                .get(i)
+                .map(|row| row.text.clone())
+                .unwrap_or_else(|| format!("row {i}")),
+            residual: r[i],
+        }),
+        None => Ok(()),
     }
 }

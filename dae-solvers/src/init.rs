@@ -1,1 +1,1170 @@
-//! Consistent initial values (to be written).
+//! Consistent initial values.
+//!
+//! A formulation `E(y) y' = f(t, y)` can only be started from a point that
+//! satisfies every constraint of the model's chain — the original
+//! constraints *and* their hidden derivatives — and whose algebraic unknowns
+//! (Lagrange multipliers) are the ones these constraints determine. The user
+//! gives the differential values (positions, velocities); [`consistent`]
+//! completes and, if asked, repairs them.
+//!
+//! # The constraint chain
+//!
+//! Every [`DaeSystem`] evaluates the model's chain `g_k(t, y)`, `k = 0..K`
+//! (`info().constraints`), where member `k` is constraint `source_k`
+//! differentiated `level_k` times along the dynamics, together with its
+//! Jacobian `G = ∂g/∂y` (K×N). For a mechanical system with positions `q`,
+//! velocities `v` and multipliers `λ`:
+//!
+//! ```text
+//!     level 0:  g(q)                          = 0    positions
+//!     level 1:  G(q) v                        = 0    velocities
+//!     level 2:  G(q) M⁻¹(f − G(q)ᵀλ) + g_qq(v,v) = 0    accelerations, contains λ
+//! ```
+//!
+//! The rows are split by their structure (which unknowns they contain, see
+//! below):
+//!
+//! * **algebraic rows** — for each source, the member of the highest level
+//!   present, provided it contains an algebraic unknown. These determine the
+//!   multipliers.
+//! * **differential rows** — all other members. They involve differential
+//!   unknowns only and are conditions on the user's values.
+//!
+//! # Step 1: differential rows (check or project)
+//!
+//! A row is satisfied when `|g_k(y)| ≤ tol · s_k(y)` with the scale
+//! `s_k = 1 + Σ_j |∂g_k/∂y_j| |y_j|` (the size of the terms of `g_k`: the
+//! test is relative for large terms and absolute near zero).
+//!
+//! If every differential row is satisfied, the differential values are kept
+//! bit for bit. Otherwise [`InitMode::Strict`] returns
+//! [`SolveError::InconsistentInitialValues`] with the violated row of the
+//! lowest level (the cause: velocities cannot be judged at wrong positions)
+//! that has the largest `|g_k| / s_k`, and its residual at the given values;
+//! [`InitMode::Project`] (the default) moves the values onto the constraint
+//! manifold with the least change, level by level. With `y⁰` the given
+//! values, `R_ℓ` the differential rows of level `≤ ℓ` and `C_ℓ` the
+//! differential unknowns that first appear at level `ℓ` (positions at level
+//! 0, velocities at level 1), stage `ℓ` solves
+//!
+//! ```text
+//!     min ½‖y_C − y⁰_C‖₂²   subject to   g_k(y) = 0,  k ∈ R_ℓ,
+//! ```
+//!
+//! changing only `y_C`. Its optimality conditions are
+//! `(y_C − y⁰_C) + Jᵀμ = 0, g_R(y) = 0` with `J = ∂g_R/∂y_C`; each iteration
+//! solves their linearisation
+//!
+//! ```text
+//!     [ H  Jᵀ ] [ Δ  ]     [ y_C − y⁰_C ]
+//!     [ J  0  ] [ μ⁺ ] = − [ g_R(y)     ],     H = I + Σ_k μ_k ∇²g_k,
+//! ```
+//!
+//! by a pseudo-inverse (SVD, so redundant or zero rows are harmless), with
+//! the multipliers `μ` estimated by least squares from the current point and
+//! `∇²(μᵀg)` by differences of the analytic Jacobian. With `H = I` this is
+//! the Gauss–Newton step `Δ = −J⁺g − (I − J⁺J)(y_C − y⁰_C)` (taken on the
+//! first iteration and whenever `J` has full column rank); the curvature
+//! term keeps it convergent when the given point is farther from the
+//! manifold than the manifold's radius of curvature. A converged point has
+//! `g = 0` and `y_C − y⁰_C ∈ range(Jᵀ)`: the closest point. For the pendulum,
+//! level 0 moves `(x, y)` radially onto the circle and level 1 replaces
+//! `(v, w)` by its orthogonal projection onto the tangent; positions are not
+//! touched by the velocity stage, and earlier levels stay satisfied because
+//! their rows are part of every later stage. When the new unknowns alone
+//! cannot satisfy a level (a model whose hidden constraint introduces no new
+//! unknown), the stage is repeated over all differential unknowns of `R_ℓ`
+//! jointly (noted in [`InitReport::notes`]). Each changed unknown is listed
+//! in [`InitReport::changes`].
+//!
+//! # Step 2: algebraic rows (Newton)
+//!
+//! The algebraic rows are solved for the algebraic unknowns `z` they contain,
+//! with the given values as first guess: `z ← z − J_z⁺ g` (Newton for a square
+//! block, minimum change from the guess otherwise), iterated until the
+//! correction is at round-off level. A block without full row rank (no
+//! unique multipliers: a singular configuration or redundant constraints) is
+//! a [`SolveError::InvalidInput`] naming the constraint. Algebraic unknowns
+//! that appear in no member of the chain — the GGL multipliers `η`, whose
+//! exact value is `0` — are set to zero.
+//!
+//! # Structure
+//!
+//! Which unknowns a row contains is read off the Jacobian, evaluated at the
+//! given point and at two slightly perturbed points, so that an accidental
+//! zero (`∂(x² + y²)/∂x = 0` at `x = 0`) is not taken for a structural one.
+//!
+//! # Initial derivative
+//!
+//! [`initial_derivative`] returns `y'(t0)` for methods that need it (BDF):
+//! the least-squares solution of the (possibly rectangular, rank-deficient)
+//! system `E(y0) y' = f(t0, y0)`, whose free directions (`ker E`: the
+//! algebraic unknowns) are fixed by the differentiated chain
+//! `G y' + ∂g/∂t = 0`, and otherwise chosen of minimum norm.
+
+use crate::error::SolveError;
+use dae_core::system::{DaeSystem, VarKind};
+use nalgebra::{linalg::SVD, DMatrix};
+use serde::Serialize;
+
+/// Relative threshold below which a singular value counts as zero.
+const RCOND: f64 = 1e-12;
+/// Iteration limit handed to the SVD (it never needs more than a few dozen
+/// sweeps on finite input; the limit turns a pathology into an error).
+const SVD_MAX_ITER: usize = 10_000;
+/// Number of perturbed points used to detect the chain's structure.
+const STRUCTURE_PROBES: usize = 2;
+/// Step halvings tried when a correction leads to non-finite values.
+const MAX_HALVINGS: usize = 40;
+
+/// What to do with given values that violate a (hidden) constraint.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InitMode {
+    /// Move them onto the constraint manifold with the least change and
+    /// report what changed (the default).
+    #[default]
+    Project,
+    /// Refuse them: [`SolveError::InconsistentInitialValues`] with the worst
+    /// violated equation and its residual.
+    Strict,
+}
+
+/// Options of [`consistent`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct InitOptions {
+    /// Project or refuse inconsistent differential values.
+    pub mode: InitMode,
+    /// A constraint member `g_k` counts as satisfied when
+    /// `|g_k| ≤ tol · (1 + Σ_j |∂g_k/∂y_j| |y_j|)`.
+    pub tol: f64,
+    /// Iteration limit of each Gauss–Newton / Newton solve.
+    pub max_iterations: usize,
+}
+
+impl Default for InitOptions {
+    fn default() -> Self {
+        InitOptions {
+            mode: InitMode::Project,
+            tol: 1e-10,
+            max_iterations: 100,
+        }
+    }
+}
+
+impl InitOptions {
+    /// The defaults with [`InitMode::Strict`].
+    pub fn strict() -> Self {
+        InitOptions {
+            mode: InitMode::Strict,
+            ..InitOptions::default()
+        }
+    }
+
+    /// `tol` finite and positive, `max_iterations ≥ 1`.
+    pub fn validate(&self) -> Result<(), SolveError> {
+        if !self.tol.is_finite() || self.tol <= 0.0 {
+            return Err(SolveError::invalid(format!(
+                "init tol = {} must be finite and positive",
+                self.tol
+            )));
+        }
+        if self.max_iterations == 0 {
+            return Err(SolveError::invalid(
+                "init max_iterations must be at least 1",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One unknown whose value was changed (or computed).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct VarChange {
+    /// Name of the unknown.
+    pub name: String,
+    /// Its position in `y`.
+    pub index: usize,
+    /// Value given.
+    pub before: f64,
+    /// Value returned.
+    pub after: f64,
+}
+
+/// Residual of one member of the constraint chain.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConstraintResidual {
+    /// Level (number of time derivatives).
+    pub level: u8,
+    /// 0-based index of the original constraint.
+    pub source: u16,
+    /// `0 = …` in the model language.
+    pub equation: String,
+    /// `g_k` at the given values (for algebraic rows: with the given
+    /// multipliers).
+    pub before: f64,
+    /// `g_k` at the returned values.
+    pub after: f64,
+}
+
+/// Largest residual of the members of one level.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LevelResidual {
+    /// Level (number of time derivatives).
+    pub level: u8,
+    /// `max |g_k|` at the given values.
+    pub before: f64,
+    /// `max |g_k|` at the returned values.
+    pub after: f64,
+}
+
+/// What [`consistent`] did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InitReport {
+    /// Mode in force.
+    pub mode: InitMode,
+    /// `true` when differential values were moved onto the constraints.
+    pub projected: bool,
+    /// Differential unknowns changed by the projection.
+    pub changes: Vec<VarChange>,
+    /// Algebraic unknowns computed from the constraints (`before` is the
+    /// given guess).
+    pub algebraic: Vec<VarChange>,
+    /// Algebraic unknowns that appear in no constraint and were set to 0
+    /// (the GGL multipliers).
+    pub zeroed: Vec<String>,
+    /// Every member of the chain, before and after.
+    pub constraints: Vec<ConstraintResidual>,
+    /// Per level: the largest residual before and after.
+    pub levels: Vec<LevelResidual>,
+    /// Gauss–Newton iterations of the projection (0 when nothing was
+    /// projected).
+    pub projection_iterations: usize,
+    /// Newton iterations for the algebraic unknowns.
+    pub newton_iterations: usize,
+    /// Remarks (fallbacks taken, iteration limits met within tolerance).
+    pub notes: Vec<String>,
+}
+
+/// Consistent initial values and what it took to get them.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Consistent {
+    /// The consistent `y0` (length N).
+    pub y: Vec<f64>,
+    /// What was checked, changed and computed.
+    pub report: InitReport,
+}
+
+/// `0 = expr` for a chain member.
+fn equation_text(expr: &str) -> String {
+    let e = expr.trim();
+    if e.starts_with("0 =") || e.starts_with("0=") {
+        e.to_string()
+    } else {
+        format!("0 = {e}")
+    }
+}
+
+/// Check `t0` and `y0` against the system: length, finiteness.
+fn validate_point(sys: &dyn DaeSystem, t0: f64, y0: &[f64]) -> Result<(), SolveError> {
+    let info = sys.info();
+    if !t0.is_finite() {
+        return Err(SolveError::invalid(format!("t0 = {t0} must be finite")));
+    }
+    if y0.len() != info.unknowns() {
+        return Err(SolveError::invalid(format!(
+            "y0 has {} values, formulation `{}` of `{}` has {} unknowns",
+            y0.len(),
+            info.name,
+            info.model,
+            info.unknowns()
+        )));
+    }
+    for (i, (&v, var)) in y0.iter().zip(&info.variables).enumerate() {
+        if !v.is_finite() {
+            return Err(SolveError::invalid(format!(
+                "initial value of `{}` (y0[{i}]) is {v}; initial values must be finite",
+                var.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Evaluation buffers for the constraint chain.
+struct Chain<'a> {
+    sys: &'a dyn DaeSystem,
+    t: f64,
+    g: Vec<f64>,
+    jac: DMatrix<f64>,
+}
+
+impl<'a> Chain<'a> {
+    fn new(sys: &'a dyn DaeSystem, t: f64) -> Self {
+        let info = sys.info();
+        let (k, n) = (info.constraints.len(), info.unknowns());
+        Chain {
+            sys,
+            t,
+            g: vec![0.0; k],
+            jac: DMatrix::zeros(k, n),
+        }
+    }
+
+    /// Evaluate `g` and `G` at `y`; `false` if anything is not finite.
+    fn eval(&mut self, y: &[f64]) -> bool {
+        self.sys.constraints(self.t, y, &mut self.g);
+        self.sys.constraints_jacobian(self.t, y, &mut self.jac);
+        self.g.iter().all(|v| v.is_finite()) && self.jac.iter().all(|v| v.is_finite())
+    }
+
+    /// Same as [`Chain::eval`], as a typed error.
+    fn eval_or_err(&mut self, y: &[f64], what: &'static str) -> Result<(), SolveError> {
+        if self.eval(y) {
+            Ok(())
+        } else {
+            Err(SolveError::NonFinite { t: self.t, what })
+        }
+    }
+
+    /// `s_k = 1 + Σ_j |G_kj| |y_j|` at the last evaluation.
+    fn scale(&self, k: usize, y: &[f64]) -> f64 {
+        1.0 + self
+            .jac
+            .row(k)
+            .iter()
+            .zip(y)
+            .map(|(a, b)| (a * b).abs())
+            .sum::<f64>()
+    }
+
+    /// `|g_k| / s_k` at the last evaluation.
+    fn ratio(&self, k: usize, y: &[f64]) -> f64 {
+        self.g[k].abs() / self.scale(k, y)
+    }
+
+    fn satisfied(&self, k: usize, y: &[f64], tol: f64) -> bool {
+        self.ratio(k, y) <= tol
+    }
+
+    /// The row of `rows` with the largest scaled residual.
+    fn worst(&self, rows: &[usize], y: &[f64]) -> Option<usize> {
+        rows.iter().copied().max_by(|&a, &b| {
+            self.ratio(a, y)
+                .partial_cmp(&self.ratio(b, y))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+    }
+}
+
+/// Which unknowns each member of the chain contains: `pattern[k][j]` when
+/// `∂g_k/∂y_j ≠ 0` at `y` or at one of a few perturbed points (perturbed
+/// points where the model is not finite are skipped). Leaves `chain`
+/// evaluated at `y`.
+fn structure(chain: &mut Chain<'_>, y: &[f64]) -> Result<Vec<Vec<bool>>, SolveError> {
+    chain.eval_or_err(y, "constraint chain at the initial values")?;
+    let (k, n) = chain.jac.shape();
+    let mut pattern: Vec<Vec<bool>> = (0..k)
+        .map(|r| (0..n).map(|c| chain.jac[(r, c)] != 0.0).collect())
+        .collect();
+    let mut probe = y.to_vec();
+    for p in 0..STRUCTURE_PROBES {
+        for (j, (pj, &yj)) in probe.iter_mut().zip(y).enumerate() {
+            // Deterministic, irregular factors in ±[0.5, 1.5) · 1e-3.
+            let h = ((j * 7919 + p * 104_729 + 17) % 1000) as f64 / 1000.0 + 0.5;
+            let sign = if (j + p) % 2 == 0 { 1.0 } else { -1.0 };
+            *pj = yj + sign * h * 1e-3 * (1.0 + yj.abs());
+        }
+        if chain.eval(&probe) {
+            for (r, row) in pattern.iter_mut().enumerate() {
+                for (c, e) in row.iter_mut().enumerate() {
+                    *e |= chain.jac[(r, c)] != 0.0;
+                }
+            }
+        }
+    }
+    chain.eval_or_err(y, "constraint chain at the initial values")?;
+    Ok(pattern)
+}
+
+/// One linearised least-change step.
+struct Step {
+    /// `Δ = −J⁺g − (I − J⁺J) d`.
+    delta: Vec<f64>,
+    /// Numerical rank of `J`.
+    rank: usize,
+    /// Row of `J` carrying most of the left null vector when
+    /// `rank < rows`.
+    deficient_row: Option<usize>,
+}
+
+/// `Δ = −J⁺ g − (I − J⁺J) d` for `J` (r×c) by the SVD: the solution of
+/// `min ‖d + Δ‖ s.t. J Δ = −g` (least squares in `J Δ = −g` when that has
+/// no solution). `None` when the SVD does not converge (not seen on finite
+/// input).
+fn min_change_step(j: &DMatrix<f64>, g: &[f64], d: &[f64]) -> Option<Step> {
+    let (r, c) = j.shape();
+    if r == 0 {
+        return Some(Step {
+            delta: d.iter().map(|v| -v).collect(),
+            rank: 0,
+            deficient_row: None,
+        });
+    }
+    if c == 0 {
+        let worst = (0..r).max_by(|&a, &b| {
+            g[a].abs()
+                .partial_cmp(&g[b].abs())
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
+        return Some(Step {
+            delta: Vec::new(),
+            rank: 0,
+            deficient_row: worst,
+        });
+    }
+    // Pad with zero columns to at least r columns, so that U is r×r and
+    // carries the left null space.
+    let cols = c.max(r);
+    let mut a = DMatrix::zeros(r, cols);
+    a.view_mut((0, 0), (r, c)).copy_from(j);
+    let svd = SVD::try_new(a, true, true, f64::EPSILON * 5.0, SVD_MAX_ITER)?;
+    let u = svd.u.as_ref()?;
+    let vt = svd.v_t.as_ref()?;
+    let s = &svd.singular_values; // descending, length r
+    let smax = s.iter().fold(0.0_f64, |m, &v| m.max(v));
+    let threshold = smax * RCOND;
+    let rank = if smax > 0.0 {
+        s.iter().filter(|&&v| v > threshold).count()
+    } else {
+        0
+    };
+    let mut delta: Vec<f64> = d.iter().map(|v| -v).collect();
+    for i in 0..rank {
+        let ug: f64 = (0..r).map(|k| u[(k, i)] * g[k]).sum();
+        let vd: f64 = (0..c).map(|k| vt[(i, k)] * d[k]).sum();
+        let coef = vd - ug / s[i];
+        for (k, dk) in delta.iter_mut().enumerate() {
+            *dk += coef * vt[(i, k)];
+        }
+    }
+    let deficient_row = if rank < r {
+        let col = s.len() - 1;
+        (0..r).max_by(|&a, &b| {
+            u[(a, col)]
+                .abs()
+                .partial_cmp(&u[(b, col)].abs())
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+    } else {
+        None
+    };
+    Some(Step {
+        delta,
+        rank,
+        deficient_row,
+    })
+}
+
+/// Result of one (Gauss–)Newton solve.
+enum Solve {
+    /// All rows satisfied; the correction reached round-off level (or the
+    /// iteration limit with the rows satisfied: `at_limit`).
+    Converged { iterations: usize, at_limit: bool },
+    /// Rows still violated after the iteration.
+    Failed { iterations: usize },
+    /// The Jacobian has no full row rank (only when asked to check).
+    Singular { row: usize, rank: usize },
+}
+
+/// What a solve works on.
+struct Block<'b> {
+    /// Rows of the chain.
+    rows: &'b [usize],
+    /// Unknowns that may change.
+    cols: &'b [usize],
+    /// Values to stay close to (the given ones).
+    anchor: &'b [f64],
+    /// Report a rank-deficient Jacobian instead of iterating on.
+    need_full_rank: bool,
+}
+
+/// One Newton step for the optimality system of the closest point,
+///
+/// ```text
+///     min ½‖y_C − a‖²  s.t.  g_R(y) = 0:
+///     (y_C − a) + Jᵀμ = 0,   g_R(y) = 0,
+///
+///     [ H  Jᵀ ] [ Δ  ]     [ d ]
+///     [ J  0  ] [ μ⁺ ] = − [ g ],     H = I + Σ_k μ_k ∇²g_k,
+/// ```
+///
+/// with `d = y_C − a`, the multiplier estimate `μ = argmin ‖d + Jᵀμ‖` and
+/// `∇²(μᵀg)` by forward differences of `Jᵀμ`. Without the curvature term
+/// (`H = I`) this is the Gauss–Newton step, which diverges when the given
+/// point is farther from the manifold than its radius of curvature (the
+/// tangential error is multiplied by about `‖d‖ κ` per step). `None` when
+/// the multipliers vanish or the model is not finite nearby (the caller
+/// keeps the Gauss–Newton step).
+fn closest_point_newton_step(
+    chain: &Chain<'_>,
+    y: &[f64],
+    block: &Block<'_>,
+    jac: &DMatrix<f64>,
+    g: &[f64],
+    d: &[f64],
+) -> Option<Vec<f64>> {
+    let (rows, cols) = (block.rows, block.cols);
+    let (r, c) = (rows.len(), cols.len());
+    let jt = jac.transpose();
+    let mu = min_change_step(&jt, d, &vec![0.0; r])?.delta;
+    if mu.iter().all(|&m| m == 0.0) {
+        return None;
+    }
+    let jt_mu = |j: &DMatrix<f64>, e: usize| -> f64 {
+        rows.iter()
+            .zip(&mu)
+            .map(|(&row, m)| j[(row, cols[e])] * m)
+            .sum()
+    };
+    let (k, n) = chain.jac.shape();
+    let mut jp = DMatrix::zeros(k, n);
+    let mut yp = y.to_vec();
+    let mut h: DMatrix<f64> = DMatrix::identity(c, c);
+    for (b, &col) in cols.iter().enumerate() {
+        let step = f64::EPSILON.sqrt() * (1.0 + y[col].abs());
+        yp[col] = y[col] + step;
+        chain.sys.constraints_jacobian(chain.t, &yp, &mut jp);
+        yp[col] = y[col];
+        for e in 0..c {
+            h[(e, b)] += (jt_mu(&jp, e) - jt_mu(&chain.jac, e)) / step;
+        }
+    }
+    if !h.iter().all(|v: &f64| v.is_finite()) {
+        return None;
+    }
+    let h = (&h + h.transpose()) * 0.5;
+    let mut kkt = DMatrix::zeros(c + r, c + r);
+    kkt.view_mut((0, 0), (c, c)).copy_from(&h);
+    kkt.view_mut((0, c), (c, r)).copy_from(&jt);
+    kkt.view_mut((c, 0), (r, c)).copy_from(jac);
+    let rhs: Vec<f64> = d.iter().chain(g).copied().collect();
+    let sol = min_change_step(&kkt, &rhs, &vec![0.0; c + r])?;
+    let delta = sol.delta[..c].to_vec();
+    delta.iter().all(|v| v.is_finite()).then_some(delta)
+}
+
+/// The constrained Gauss–Newton iteration of the module docs on `block`,
+/// in place on `y` (with the curvature-corrected Newton step of
+/// [`closest_point_newton_step`] where the rows leave freedom). Stops when
+/// the rows are satisfied and the correction is at round-off level (zero
+/// iterations when the first correction is exactly zero), or stagnates
+/// there, or at `max_iterations`.
+fn gauss_newton(
+    chain: &mut Chain<'_>,
+    y: &mut [f64],
+    block: &Block<'_>,
+    opts: &InitOptions,
+) -> Result<Solve, SolveError> {
+    let (rows, cols) = (block.rows, block.cols);
+    let mut jac = DMatrix::zeros(rows.len(), cols.len());
+    let mut g = vec![0.0; rows.len()];
+    let mut d = vec![0.0; cols.len()];
+    let mut trial = y.to_vec();
+    let mut prev_size = f64::INFINITY;
+    let mut iterations = 0;
+    chain.eval_or_err(y, "constraint chain during initialisation")?;
+    loop {
+        let within = rows.iter().all(|&r| chain.satisfied(r, y, opts.tol));
+        if iterations >= opts.max_iterations {
+            return Ok(if within {
+                Solve::Converged {
+                    iterations,
+                    at_limit: true,
+                }
+            } else {
+                Solve::Failed { iterations }
+            });
+        }
+        for (a, &r) in rows.iter().enumerate() {
+            g[a] = chain.g[r];
+            for (b, &c) in cols.iter().enumerate() {
+                jac[(a, b)] = chain.jac[(r, c)];
+            }
+        }
+        for (b, &c) in cols.iter().enumerate() {
+            d[b] = y[c] - block.anchor[c];
+        }
+        let step = min_change_step(&jac, &g, &d).ok_or_else(|| {
+            SolveError::invalid(
+                "singular value decomposition of the constraint Jacobian did not converge",
+            )
+        })?;
+        if block.need_full_rank && step.rank < rows.len() {
+            let row = step
+                .deficient_row
+                .and_then(|a| rows.get(a))
+                .or(rows.first())
+                .copied();
+            if let Some(row) = row {
+                return Ok(Solve::Singular {
+                    row,
+                    rank: step.rank,
+                });
+            }
+        }
+        // Where the constraints leave freedom, the curvature of the
+        // manifold enters the closest-point problem: take the Newton step
+        // of its optimality system instead of the Gauss–Newton one.
+        let mut delta = step.delta;
+        if step.rank < cols.len() && d.iter().any(|&v| v != 0.0) {
+            if let Some(newton) = closest_point_newton_step(chain, y, block, &jac, &g, &d) {
+                delta = newton;
+            }
+        }
+        let size = delta.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let ymax = cols.iter().fold(0.0_f64, |m, &c| m.max(y[c].abs()));
+        let roundoff = f64::EPSILON * (1.0 + ymax);
+        if iterations > 0
+            && within
+            && (size <= 16.0 * roundoff || (size <= 1e4 * roundoff && size >= 0.5 * prev_size))
+        {
+            return Ok(Solve::Converged {
+                iterations,
+                at_limit: false,
+            });
+        }
+        if size == 0.0 {
+            return Ok(if within {
+                Solve::Converged {
+                    iterations,
+                    at_limit: false,
+                }
+            } else {
+                Solve::Failed { iterations }
+            });
+        }
+        // Apply the correction, halving it while the model is not finite
+        // at the new point.
+        let mut alpha = 1.0;
+        let mut accepted = false;
+        for _ in 0..=MAX_HALVINGS {
+            trial.copy_from_slice(y);
+            for (b, &c) in cols.iter().enumerate() {
+                trial[c] = y[c] + alpha * delta[b];
+            }
+            if trial.iter().all(|v| v.is_finite()) && chain.eval(&trial) {
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if !accepted {
+            return Err(SolveError::NonFinite {
+                t: chain.t,
+                what: "constraint chain during initialisation",
+            });
+        }
+        y.copy_from_slice(&trial);
+        iterations += 1;
+        prev_size = alpha * size;
+    }
+}
+
+/// Which of the unknowns `cols` the rows `rows` contain (indexed by unknown,
+/// length `n`).
+fn touched(
+    pattern: &[Vec<bool>],
+    n: usize,
+    rows: impl Iterator<Item = usize>,
+    cols: &[usize],
+) -> Vec<bool> {
+    let mut t = vec![false; n];
+    for r in rows {
+        for &c in cols {
+            t[c] |= pattern[r][c];
+        }
+    }
+    t
+}
+
+/// Bookkeeping of the projection stages.
+#[derive(Default)]
+struct Progress {
+    notes: Vec<String>,
+    projection_iterations: usize,
+}
+
+/// One attempt at a projection stage; `true` when its rows are satisfied.
+fn projection_stage(
+    chain: &mut Chain<'_>,
+    y: &mut [f64],
+    block: &Block<'_>,
+    opts: &InitOptions,
+    level: u8,
+    progress: &mut Progress,
+) -> Result<bool, SolveError> {
+    match gauss_newton(chain, y, block, opts)? {
+        Solve::Converged {
+            iterations,
+            at_limit,
+        } => {
+            progress.projection_iterations += iterations;
+            if at_limit {
+                progress.notes.push(format!(
+                    "level {level}: iteration limit reached with the constraints satisfied; \
+                     the projection may not be the closest point"
+                ));
+            }
+            Ok(true)
+        }
+        Solve::Failed { iterations } => {
+            progress.projection_iterations += iterations;
+            Ok(false)
+        }
+        Solve::Singular { .. } => Ok(false),
+    }
+}
+
+/// Compute consistent initial values from the given ones.
+///
+/// `y0` holds every unknown of the formulation: the differential values
+/// (positions, velocities) are the data, the algebraic values are a first
+/// guess (any finite value will do, `0` is fine). See the module
+/// documentation for the algorithm. Returns the consistent `y` with a
+/// report, or
+///
+/// * [`SolveError::InvalidInput`] — wrong length, a non-finite value (named),
+///   invalid options, or multipliers the constraints do not determine
+///   (singular block, naming the constraint);
+/// * [`SolveError::InconsistentInitialValues`] — in [`InitMode::Strict`] a
+///   violated constraint of the lowest violated level (the worst of that
+///   level) and its residual at the given values; in [`InitMode::Project`] a
+///   constraint that cannot be satisfied (e.g. a rank-zero Jacobian at the
+///   given point);
+/// * [`SolveError::NonFinite`] — the model produced NaN or ∞.
+pub fn consistent(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    y0: &[f64],
+    opts: &InitOptions,
+) -> Result<Consistent, SolveError> {
+    opts.validate()?;
+    validate_point(sys, t0, y0)?;
+    let info = sys.info();
+    let n = info.unknowns();
+    let members = &info.constraints;
+    let k = members.len();
+
+    let diff_cols: Vec<usize> = (0..n)
+        .filter(|&j| info.variables[j].kind == VarKind::Differential)
+        .collect();
+    let alg_cols: Vec<usize> = (0..n)
+        .filter(|&j| info.variables[j].kind == VarKind::Algebraic)
+        .collect();
+
+    let mut y = y0.to_vec();
+    let mut chain = Chain::new(sys, t0);
+    let pattern = structure(&mut chain, &y)?;
+    let mut progress = Progress::default();
+
+    // Algebraic unknowns in no member of the chain (GGL's η): exactly 0.
+    let mut zeroed = Vec::new();
+    for &a in &alg_cols {
+        if !(0..k).any(|r| pattern[r][a]) {
+            y[a] = 0.0;
+            zeroed.push(info.variables[a].name.clone());
+        }
+    }
+    // The anchor of every least-change problem: the values as given.
+    let given = y.clone();
+    chain.eval_or_err(&y, "constraint chain at the initial values")?;
+    let before = chain.g.clone();
+
+    // Classify the rows: top level per source, containing an algebraic
+    // unknown → algebraic row; everything else → differential row.
+    let top_level = |source: u16| {
+        members
+            .iter()
+            .filter(|m| m.source == source)
+            .map(|m| m.level)
+            .max()
+            .unwrap_or(0)
+    };
+    let is_alg_row = |r: usize| {
+        members[r].level == top_level(members[r].source) && alg_cols.iter().any(|&a| pattern[r][a])
+    };
+    let alg_rows: Vec<usize> = (0..k).filter(|&r| is_alg_row(r)).collect();
+    let diff_rows: Vec<usize> = (0..k).filter(|&r| !is_alg_row(r)).collect();
+    let alg_touched = touched(&pattern, n, alg_rows.iter().copied(), &alg_cols);
+    let alg_solve_cols: Vec<usize> = alg_cols
+        .iter()
+        .copied()
+        .filter(|&a| alg_touched[a])
+        .collect();
+
+    // Step 1: the differential rows.
+    let violated: Vec<usize> = diff_rows
+        .iter()
+        .copied()
+        .filter(|&r| !chain.satisfied(r, &y, opts.tol))
+        .collect();
+    if !violated.is_empty() {
+        if opts.mode == InitMode::Strict {
+            // The lowest violated level is the cause (a velocity residual
+            // at a wrong position means little); the worst row within it.
+            let lowest = violated
+                .iter()
+                .map(|&r| members[r].level)
+                .min()
+                .unwrap_or(0);
+            let candidates: Vec<usize> = violated
+                .iter()
+                .copied()
+                .filter(|&r| members[r].level == lowest)
+                .collect();
+            let r = chain.worst(&candidates, &y).unwrap_or(violated[0]);
+            return Err(SolveError::InconsistentInitialValues {
+                equation: equation_text(&members[r].expr),
+                residual: before[r],
+            });
+        }
+        let mut levels: Vec<u8> = diff_rows.iter().map(|&r| members[r].level).collect();
+        levels.sort_unstable();
+        levels.dedup();
+        for &level in &levels {
+            let rows: Vec<usize> = diff_rows
+                .iter()
+                .copied()
+                .filter(|&r| members[r].level <= level)
+                .collect();
+            chain.eval_or_err(&y, "constraint chain during initialisation")?;
+            if rows.iter().all(|&r| chain.satisfied(r, &y, opts.tol)) {
+                continue;
+            }
+            let earlier = touched(
+                &pattern,
+                n,
+                diff_rows
+                    .iter()
+                    .copied()
+                    .filter(|&r| members[r].level < level),
+                &diff_cols,
+            );
+            let here = touched(
+                &pattern,
+                n,
+                diff_rows
+                    .iter()
+                    .copied()
+                    .filter(|&r| members[r].level == level),
+                &diff_cols,
+            );
+            let all = touched(&pattern, n, rows.iter().copied(), &diff_cols);
+            let new_cols: Vec<usize> = diff_cols
+                .iter()
+                .copied()
+                .filter(|&c| here[c] && !earlier[c])
+                .collect();
+            let all_cols: Vec<usize> = diff_cols.iter().copied().filter(|&c| all[c]).collect();
+            let start = y.clone();
+            let mut done = false;
+            if !new_cols.is_empty() {
+                let block = Block {
+                    rows: &rows,
+                    cols: &new_cols,
+                    anchor: &given,
+                    need_full_rank: false,
+                };
+                done = projection_stage(&mut chain, &mut y, &block, opts, level, &mut progress)?;
+            }
+            if !done && all_cols.len() > new_cols.len() {
+                y.copy_from_slice(&start);
+                progress.notes.push(format!(
+                    "level {level}: the unknowns new at this level could not satisfy it; \
+                     corrected all differential unknowns of levels ≤ {level} jointly"
+                ));
+                let block = Block {
+                    rows: &rows,
+                    cols: &all_cols,
+                    anchor: &given,
+                    need_full_rank: false,
+                };
+                done = projection_stage(&mut chain, &mut y, &block, opts, level, &mut progress)?;
+            }
+            if !done {
+                chain.eval_or_err(&y, "constraint chain during initialisation")?;
+                let failing: Vec<usize> = rows
+                    .iter()
+                    .copied()
+                    .filter(|&r| !chain.satisfied(r, &y, opts.tol))
+                    .collect();
+                let pool = if failing.is_empty() { &rows } else { &failing };
+                let r = chain.worst(pool, &y).unwrap_or(rows[0]);
+                let residual = if violated.contains(&r) {
+                    before[r]
+                } else {
+                    chain.g[r]
+                };
+                return Err(SolveError::InconsistentInitialValues {
+                    equation: equation_text(&members[r].expr),
+                    residual,
+                });
+            }
+        }
+    }
+
+    // Step 2: the algebraic rows, for the algebraic unknowns they contain.
+    let mut newton_iterations = 0;
+    if !alg_rows.is_empty() {
+        let block = Block {
+            rows: &alg_rows,
+            cols: &alg_solve_cols,
+            anchor: &given,
+            need_full_rank: true,
+        };
+        match gauss_newton(&mut chain, &mut y, &block, opts)? {
+            Solve::Converged {
+                iterations,
+                at_limit,
+            } => {
+                newton_iterations = iterations;
+                if at_limit {
+                    progress.notes.push(
+                        "algebraic unknowns: iteration limit reached with the constraints satisfied"
+                            .to_string(),
+                    );
+                }
+            }
+            Solve::Failed { .. } => {
+                chain.eval_or_err(&y, "constraint chain during initialisation")?;
+                let r = chain.worst(&alg_rows, &y).unwrap_or(alg_rows[0]);
+                return Err(SolveError::InconsistentInitialValues {
+                    equation: equation_text(&members[r].expr),
+                    residual: chain.g[r],
+                });
+            }
+            Solve::Singular { row, rank } => {
+                let names: Vec<&str> = alg_solve_cols
+                    .iter()
+                    .map(|&a| info.variables[a].name.as_str())
+                    .collect();
+                return Err(SolveError::invalid(format!(
+                    "the constraints do not determine the algebraic unknowns ({}) at t0 = {t0}: \
+                     the Jacobian of {} with respect to them is singular (rank {rank} of {}); \
+                     the configuration is singular or the constraints are redundant",
+                    names.join(", "),
+                    equation_text(&members[row].expr),
+                    alg_rows.len()
+                )));
+            }
+        }
+    }
+
+    // Final check of the whole chain.
+    chain.eval_or_err(&y, "constraint chain at the consistent values")?;
+    let after = chain.g.clone();
+    let unsatisfied: Vec<usize> = (0..k)
+        .filter(|&r| !chain.satisfied(r, &y, opts.tol))
+        .collect();
+    if let Some(r) = chain.worst(&unsatisfied, &y) {
+        return Err(SolveError::InconsistentInitialValues {
+            equation: equation_text(&members[r].expr),
+            residual: after[r],
+        });
+    }
+
+    let changes: Vec<VarChange> = diff_cols
+        .iter()
+        .copied()
+        .filter(|&j| y[j].to_bits() != y0[j].to_bits())
+        .map(|j| VarChange {
+            name: info.variables[j].name.clone(),
+            index: j,
+            before: y0[j],
+            after: y[j],
+        })
+        .collect();
+    let algebraic: Vec<VarChange> = alg_solve_cols
+        .iter()
+        .map(|&j| VarChange {
+            name: info.variables[j].name.clone(),
+            index: j,
+            before: y0[j],
+            after: y[j],
+        })
+        .collect();
+    let constraints: Vec<ConstraintResidual> = members
+        .iter()
+        .enumerate()
+        .map(|(r, m)| ConstraintResidual {
+            level: m.level,
+            source: m.source,
+            equation: equation_text(&m.expr),
+            before: before[r],
+            after: after[r],
+        })
+        .collect();
+    let mut level_list: Vec<u8> = members.iter().map(|m| m.level).collect();
+    level_list.sort_unstable();
+    level_list.dedup();
+    let levels = level_list
+        .into_iter()
+        .map(|level| {
+            let max = |v: &[f64]| {
+                (0..k)
+                    .filter(|&r| members[r].level == level)
+                    .fold(0.0_f64, |m, r| m.max(v[r].abs()))
+            };
+            LevelResidual {
+                level,
+                before: max(&before),
+                after: max(&after),
+            }
+        })
+        .collect();
+
+    Ok(Consistent {
+        report: InitReport {
+            mode: opts.mode,
+            projected: !changes.is_empty(),
+            changes,
+            algebraic,
+            zeroed,
+            constraints,
+            levels,
+            projection_iterations: progress.projection_iterations,
+            newton_iterations,
+            notes: progress.notes,
+        },
+        y,
+    })
+}
+
+/// `y'(t0)` at (consistent) initial values `y0`.
+///
+/// Among the least-squares solutions of `E(y0) y' = f(t0, y0)` — the affine
+/// set `E⁺f + ker E`, `E` of size M×N, possibly rectangular (`M > N` for
+/// overdetermined formulations) and rank-deficient (zero algebraic columns
+/// and constraint rows) — return the one that best satisfies the
+/// differentiated constraint chain `G(y0) y' + ∂g/∂t = 0`, and among those
+/// the one of minimum norm:
+///
+/// ```text
+///     y' = E⁺f + Z ζ,   ζ = −(G Z)⁺ (G E⁺f + g_t),   Z: orthonormal basis of ker E.
+/// ```
+///
+/// On differential rows `E y' = f` holds to round-off whenever it is
+/// solvable; the kernel directions (multipliers) get the derivative the
+/// chain implies (`λ'` from the derivative of the acceleration constraint,
+/// `η' = 0` for GGL multipliers, which appear in no constraint). `g_t` is a
+/// central difference in `t` (exactly 0 for autonomous models).
+///
+/// Errors: [`SolveError::InvalidInput`] for a wrong length or non-finite
+/// value, [`SolveError::NonFinite`] when the model produces NaN or ∞.
+pub fn initial_derivative(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    y0: &[f64],
+) -> Result<Vec<f64>, SolveError> {
+    validate_point(sys, t0, y0)?;
+    let info = sys.info();
+    let (m, n) = (info.equations(), info.unknowns());
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let mut e = DMatrix::zeros(m, n);
+    sys.leading(y0, &mut e);
+    let mut f = vec![0.0; m];
+    sys.rhs(t0, y0, &mut f);
+    if !e.iter().all(|v| v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            t: t0,
+            what: "leading matrix at the initial values",
+        });
+    }
+    if !f.iter().all(|v| v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            t: t0,
+            what: "right-hand side at the initial values",
+        });
+    }
+    // Zero rows padded below so that V is N×N and carries ker E.
+    let rows = m.max(n);
+    let mut a = DMatrix::zeros(rows, n);
+    a.view_mut((0, 0), (m, n)).copy_from(&e);
+    let svd_failed = || {
+        SolveError::invalid("singular value decomposition of the leading matrix did not converge")
+    };
+    let svd =
+        SVD::try_new(a, true, true, f64::EPSILON * 5.0, SVD_MAX_ITER).ok_or_else(svd_failed)?;
+    let (u, vt) = match (svd.u.as_ref(), svd.v_t.as_ref()) {
+        (Some(u), Some(vt)) => (u, vt),
+        _ => return Err(svd_failed()),
+    };
+    let s = &svd.singular_values; // descending, length n
+    let smax = s.iter().fold(0.0_f64, |acc, &v| acc.max(v));
+    let rank = if smax > 0.0 {
+        s.iter().filter(|&&v| v > smax * RCOND).count()
+    } else {
+        0
+    };
+    let mut yp = vec![0.0; n];
+    for i in 0..rank {
+        let uf: f64 = (0..m).map(|r| u[(r, i)] * f[r]).sum();
+        let coef = uf / s[i];
+        for (c, ypc) in yp.iter_mut().enumerate() {
+            *ypc += coef * vt[(i, c)];
+        }
+    }
+
+    let k = info.constraints.len();
+    let nz = n - rank;
+    if nz > 0 && k > 0 {
+        let mut chain = Chain::new(sys, t0);
+        chain.eval_or_err(y0, "constraint chain at the initial values")?;
+        // g_t by a central difference in t.
+        let dt = f64::EPSILON.cbrt() * t0.abs().max(1.0);
+        let mut gp = vec![0.0; k];
+        let mut gm = vec![0.0; k];
+        sys.constraints(t0 + dt, y0, &mut gp);
+        sys.constraints(t0 - dt, y0, &mut gm);
+        // rhs of the kernel problem: (G Z) ζ = −(G E⁺f + g_t); passed to
+        // `min_change_step` as the residual g = G E⁺f + g_t.
+        let mut resid = vec![0.0; k];
+        for (r, res) in resid.iter_mut().enumerate() {
+            let gy: f64 = (0..n).map(|c| chain.jac[(r, c)] * yp[c]).sum();
+            *res = gy + (gp[r] - gm[r]) / (2.0 * dt);
+        }
+        if !resid.iter().all(|v| v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                t: t0,
+                what: "time derivative of the constraint chain",
+            });
+        }
+        let mut gz = DMatrix::zeros(k, nz);
+        for r in 0..k {
+            for z in 0..nz {
+                gz[(r, z)] = (0..n).map(|c| chain.jac[(r, c)] * vt[(rank + z, c)]).sum();
+            }
+        }
+        let zeros = vec![0.0; nz];
+        let step = min_change_step(&gz, &resid, &zeros).ok_or_else(|| {
+            SolveError::invalid(
+                "singular value decomposition of the constraint Jacobian did not converge",
+            )
+        })?;
+        for (z, zeta) in step.delta.iter().enumerate() {
+            for (c, ypc) in yp.iter_mut().enumerate() {
+                *ypc += zeta * vt[(rank + z, c)];
+            }
+        }
+    }
+    if !yp.iter().all(|v| v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            t: t0,
+            what: "initial derivative",
+        });
+    }
+    Ok(yp)
+}
