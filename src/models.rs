@@ -8,6 +8,11 @@ use std::path::Path;
 /// Model-language source of the built-in pendulum (also `scenes/pendulum.dae`).
 pub const PENDULUM_SOURCE: &str = include_str!("../scenes/pendulum.dae");
 
+/// The built-in pendulum, compiled by the `dae!` macro from the same text.
+pub mod builtin {
+    crate::dae! { include "scenes/pendulum.dae" }
+}
+
 /// Names of the built-in models.
 pub const BUILTIN_MODELS: [&str; 1] = ["pendulum"];
 
@@ -65,6 +70,9 @@ pub fn derive(src: &ModelSource) -> Result<Derived, ModelError> {
 
 /// A runnable model: the compiled built-in or an interpreted file.
 pub fn load(spec: &str) -> Result<Box<dyn Model + Send + Sync>, ModelError> {
+    if spec == "pendulum" {
+        return Ok(Box::new(builtin::Pendulum::default()));
+    }
     let src = source(spec)?;
     let d = derive(&src)?;
     Ok(Box::new(InterpretedModel::new(&d)))

@@ -1,0 +1,173 @@
+//! The `dae` binary end to end: `derive` and `run` contracts, exit codes,
+//! error messages with positions, determinism.
+
+use std::io::Write;
+use std::process::{Command, Output};
+
+fn dae(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dae"))
+        .args(args)
+        .output()
+        .expect("the dae binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::File::create(&path).unwrap().write_all(text.as_bytes()).unwrap();
+    let p = path.display().to_string();
+    (dir, p)
+}
+
+#[test]
+fn derive_json_is_deterministic_and_has_the_contract_shape() {
+    let a = dae(&["derive", "--format", "json"]);
+    let b = dae(&["derive", "--format", "json"]);
+    assert!(a.status.success(), "{}", stderr(&a));
+    assert_eq!(a.stdout, b.stdout, "two runs must be byte-identical");
+    let v: serde_json::Value = serde_json::from_slice(&a.stdout).unwrap();
+    let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+    for k in ["model", "variables", "parameters", "constraints", "invariants", "formulations"] {
+        assert!(keys.contains(&k), "missing {k}");
+    }
+    assert_eq!(v["model"], "Pendulum");
+    assert_eq!(v["variables"][4]["kind"], "algebraic");
+    assert_eq!(v["constraints"][1]["expr"], "2*x*v + 2*y*w");
+    assert_eq!(v["constraints"][2]["level"], 2);
+    let f = &v["formulations"];
+    assert_eq!(f.as_array().unwrap().len(), 8);
+    let ovd0 = f.as_array().unwrap().iter().find(|x| x["name"] == "ovd0").unwrap();
+    assert_eq!(ovd0["equations"], 7);
+    assert!(ovd0["d_index"].is_null());
+    assert_eq!(ovd0["algebraic_equations"], 3);
+    // The JSON text keeps the contract's field order.
+    let text = stdout(&a);
+    let pos = |k: &str| text.find(&format!("\"{k}\"")).unwrap();
+    assert!(pos("model") < pos("variables") && pos("variables") < pos("parameters"));
+    assert!(pos("constraints") < pos("invariants") && pos("invariants") < pos("formulations"));
+}
+
+#[test]
+fn derive_text_and_latex_render_files() {
+    for fmt in ["text", "latex"] {
+        let o = dae(&["derive", "scenes/double_pendulum.dae", "--format", fmt]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stdout(&o).contains("lambda2") || stdout(&o).contains("\\lambda_{2}"));
+    }
+}
+
+#[test]
+fn bad_model_files_report_line_and_column_and_exit_2() {
+    let cases = [
+        ("pub M {\n  differential { x }\n  equations { der(x) = q; }\n}\n", "3:24", "unknown name `q`"),
+        ("pub M {\n  differential { x }\n  algebraic { z }\n  equations { der(z) = x; 0 = x; }\n}\n", "4:19", "algebraic"),
+        ("pub M {\n  parameters { k = abc }\n  differential { x }\n  equations { der(x) = x; }\n}\n", "2:20", "must be a numeric literal"),
+        ("pub M {\n  differential { x }\n  equations { der(x) = sinh(x); }\n}\n", "3:24", "unknown function"),
+        ("pub M {}\n", "1:5", "empty"),
+        ("pub M {\n  differential { x }\n  equations { der(x) = (x; }\n}\n", "", "cannot read model"),
+    ];
+    for (text, at, msg) in cases {
+        let (_dir, path) = temp_file("bad.dae", text);
+        let o = dae(&["derive", &path]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{text}: {err}");
+        assert!(err.contains(msg), "{text}: expected `{msg}` in {err}");
+        assert!(err.contains(&format!("{path}:{at}")), "{text}: expected position {at} in {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let o = dae(&["derive", "no/such/file.dae"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("cannot read model file"));
+}
+
+#[test]
+fn garbage_never_panics() {
+    let inputs = [
+        "", "{", "}", "pub", "pub M", "pub M {", "pub M { differential }", "pub M { equations { = ; } }",
+        "pub M { differential { x } equations { der(x) = x^^2; } }", "\u{0}\u{1}", "pub M { differential { x, } equations { der(x) = 1/0; } }",
+        "pub M { differential { x } equations { der(x) = x; 0 = 0; } }", "#[derive] pub M {}",
+        "pub M { differential { x } algebraic { z } equations { der(x) = z; 0 = x; } formulations { } }",
+    ];
+    for text in inputs {
+        let (_dir, path) = temp_file("g.dae", text);
+        let o = dae(&["derive", &path, "--format", "json"]);
+        assert_eq!(o.status.code(), Some(2), "{text:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{text:?}: {}", stderr(&o));
+    }
+}
+
+#[test]
+fn run_honours_the_json_contract() {
+    let o = dae(&["run", "s01", "--solver", "radau5", "--formulation", "rcd0", "--tol", "1e-7"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for k in [
+        "scene", "solver", "formulation", "tol", "status", "error", "t_end", "final", "err", "err_sum", "err_lambda",
+        "tsim_s", "stats", "residuals", "invariant_drift",
+    ] {
+        assert!(v.get(k).is_some(), "missing {k}");
+    }
+    assert_eq!(v["status"], "ok");
+    assert!(v["error"].is_null());
+    assert_eq!(v["t_end"], 20.0);
+    assert!(v["err"].as_f64().unwrap() < 1e-3);
+    for k in ["steps", "rejected", "residual_evals", "jacobian_evals", "factorizations", "newton_iterations"] {
+        assert!(v["stats"][k].as_u64().is_some(), "stats.{k}");
+    }
+    for k in ["level0", "level1", "level2"] {
+        assert!(v["residuals"][k].as_f64().is_some(), "residuals.{k}");
+    }
+    assert!(v["invariant_drift"]["energy"].as_f64().is_some());
+    assert!(v["final"]["lambda"].as_f64().is_some());
+}
+
+#[test]
+fn run_rejects_bad_flags_with_exit_2() {
+    for args in [
+        &["run", "--tol", "-1"][..],
+        &["run", "--tol", "NaN"],
+        &["run", "--tol", "0"],
+        &["run", "--solver", "euler"],
+        &["run", "--formulation", "xyz"],
+        &["run", "--solver", "radau5", "--formulation", "ovd0"],
+        &["run", "no-such-scene"],
+    ] {
+        let o = dae(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).is_empty());
+    }
+}
+
+#[test]
+fn malformed_scene_files_exit_2_naming_the_field_and_line() {
+    let good = "name = \"T\"\nmodel = \"pendulum\"\n[initial]\nx = 1.0\ny = 0.0\nv = 0.0\nw = 0.0\n[time]\nend = 1.0\n[reference]\nkind = \"none\"\n";
+    let cases = [
+        (good.replace("model = \"pendulum\"\n", ""), "model"),
+        (good.replace("[initial]\nx = 1.0", "[initial]\nq = 1.0"), "q"),
+        (good.replace("end = 1.0", "end = 1.0\n[sweep]\nsolvers = [\"euler\"]"), "euler"),
+        (good.replace("end = 1.0", "end = 1.0\n[sweep]\nformulations = [\"abc\"]"), "abc"),
+        (good.replace("end = 1.0", "end = 1.0\n[sweep]\ntolerances = [nan]"), "tolerances"),
+        (good.replace("end = 1.0", "end = 1.0\n[sweep]\ntolerances = [-1e-6]"), "tolerances"),
+        (good.replace("name = \"T\"", "name = \"T"), "TOML"),
+    ];
+    for (text, needle) in cases {
+        let (_dir, path) = temp_file("scene.toml", &text);
+        let o = dae(&["run", &path]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{text}: {err}");
+        assert!(err.contains(needle), "expected `{needle}` in: {err}");
+        assert!(err.contains(&path), "expected the file name in: {err}");
+    }
+    // The good one runs.
+    let (_dir, path) = temp_file("scene.toml", good);
+    let o = dae(&["run", &path, "--solver", "radau5", "--formulation", "rcd0"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
