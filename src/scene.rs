@@ -1,0 +1,1043 @@
+//! Scene files: what to integrate, how long, what to compare against, and
+//! which solvers × formulations × tolerances to sweep.
+//!
+//! A scene is a small TOML file:
+//!
+//! ```toml
+//! name = "S01"
+//! model = "pendulum"          # built-in name, or a path to a .dae file
+//! [parameters]                # optional overrides of the model defaults
+//! g = 13.7503716373294544
+//! [initial]                   # differential unknowns; algebraic ones are computed
+//! x = 1.0
+//! y = 0.0
+//! v = 0.0
+//! w = 0.0
+//! [time]
+//! end = 20.0                  # start = 0.0 unless given
+//! check = [20.0]              # or: check_every = 2.0; neither: check at end
+//! [reference]
+//! kind = "pendulum-exact"     # or "none" (the default)
+//! [sweep]                     # optional; defaults: every solver, formulation,
+//! solvers = ["radau5", "bdf"] # and the tolerances 1e-5 … 1e-12
+//! formulations = ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0"]
+//! tolerances = [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
+//! ```
+//!
+//! Everything that can be checked without the model is checked when the
+//! scene is parsed, and every problem is a [`SceneError`] that names the
+//! field and its place in the file as `file:line:column`. Names of
+//! variables and parameters need the model: [`Scene::check_names`].
+//!
+//! A model path is relative to the directory of the scene file; the
+//! resolved path is stored in [`ModelSource::File`].
+//!
+//! ```
+//! use dae::scene::{ModelSource, Scene};
+//!
+//! let s = Scene::builtin("s02").unwrap();
+//! assert_eq!(s.model, ModelSource::Builtin("pendulum".into()));
+//! assert_eq!(s.time.checks.len(), 1000);
+//! assert_eq!(s.parameter("g"), Some(13.7503716373294544));
+//! assert_eq!(s.sweep.tolerances.len(), 8);
+//! ```
+
+use serde::de::{Deserializer, MapAccess, Visitor};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// Solver names a scene may sweep ([`dae_solvers::SOLVER_NAMES`]).
+pub const KNOWN_SOLVERS: &[&str] = &dae_solvers::SOLVER_NAMES;
+
+/// Formulation names a scene may sweep
+/// ([`dae_core::system::FORMULATION_NAMES`], the paper's eight).
+pub const KNOWN_FORMULATIONS: &[&str] = &dae_core::system::FORMULATION_NAMES;
+
+/// Tolerances swept when a scene gives none: `RTOL = ATOL = 10⁻ⁱ`,
+/// `i = 5, …, 12` (paper §2.2).
+pub const DEFAULT_TOLERANCES: [f64; 8] = [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12];
+
+/// Names of the built-in scenes.
+pub const BUILTIN_SCENES: [&str; 2] = ["s01", "s02"];
+
+/// Upper bound on the number of check times a scene may ask for.
+pub const MAX_CHECK_TIMES: usize = 10_000_000;
+
+const S01_TOML: &str = include_str!("../scenes/s01.toml");
+const S02_TOML: &str = include_str!("../scenes/s02.toml");
+
+/// Reference kinds a scene may name.
+pub const REFERENCE_KINDS: [&str; 2] = ["pendulum-exact", "none"];
+
+/// A place in a scene: the file (or `<built-in NAME>`, or the origin given to
+/// [`Scene::parse`]) and a 1-based line and column (in characters).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Location {
+    /// File path or other origin of the text.
+    pub origin: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column, counted in characters.
+    pub column: usize,
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}", self.origin, self.line, self.column)
+    }
+}
+
+/// Everything that can be wrong with a scene. Each variant that stems from
+/// the text carries its [`Location`]; the messages read
+/// `file:line:column: ` followed by the field (as `section.key`) and the
+/// problem.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// The scene file could not be read.
+    #[error("cannot read scene file `{}`: {source}", path.display())]
+    Io {
+        /// The path as given or resolved.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Neither an existing file nor a built-in scene.
+    #[error(
+        "no scene file `{}` and no built-in scene of that name (built-in scenes: {})",
+        path.display(),
+        BUILTIN_SCENES.join(", ")
+    )]
+    NotFound {
+        /// The argument given.
+        path: PathBuf,
+    },
+    /// Not valid TOML.
+    #[error("{at}: invalid TOML: {message}")]
+    Syntax {
+        /// Where the parser stopped.
+        at: Location,
+        /// The parser's message.
+        message: String,
+    },
+    /// A value of the wrong type (a string for a number, …).
+    #[error("{at}: `{field}`: {message}")]
+    InvalidType {
+        /// Where.
+        at: Location,
+        /// `section.key`.
+        field: String,
+        /// What was expected and found.
+        message: String,
+    },
+    /// A required field is absent.
+    #[error("{at}: missing field `{field}`")]
+    MissingField {
+        /// The enclosing table (line 1 for top-level fields).
+        at: Location,
+        /// `section.key`.
+        field: String,
+    },
+    /// A field the scene format does not have (often a typo).
+    #[error("{at}: unknown field `{field}`, expected one of: {expected}")]
+    UnknownField {
+        /// Where.
+        at: Location,
+        /// `section.key`.
+        field: String,
+        /// The fields allowed there.
+        expected: String,
+    },
+    /// NaN or infinite where a finite number is needed.
+    #[error("{at}: `{field}` = {value} is not a finite number")]
+    NotFinite {
+        /// Where.
+        at: Location,
+        /// `section.key`.
+        field: String,
+        /// The value.
+        value: f64,
+    },
+    /// A value that is well-typed but unusable.
+    #[error("{at}: `{field}` {reason}")]
+    InvalidValue {
+        /// Where.
+        at: Location,
+        /// `section.key`.
+        field: String,
+        /// Why.
+        reason: String,
+    },
+    /// A tolerance that is NaN, infinite, not positive or not below 1.
+    #[error("{at}: `sweep.tolerances`: tolerance {value:e} must be a finite number in (0, 1)")]
+    InvalidTolerance {
+        /// Where.
+        at: Location,
+        /// The value.
+        value: f64,
+    },
+    /// `time.end` not after `time.start`.
+    #[error("{at}: `time.end` = {end} must be greater than `time.start` = {start}")]
+    EmptyHorizon {
+        /// Where `end` is.
+        at: Location,
+        /// Start time.
+        start: f64,
+        /// End time.
+        end: f64,
+    },
+    /// A check time outside `[start, end]`.
+    #[error("{at}: `time.check`: check time {time} is outside the horizon [{start}, {end}]")]
+    CheckOutsideHorizon {
+        /// Where.
+        at: Location,
+        /// The check time.
+        time: f64,
+        /// Start time.
+        start: f64,
+        /// End time.
+        end: f64,
+    },
+    /// Check times must increase strictly.
+    #[error("{at}: `time.check`: check time {time} does not come after {previous}; list check times in increasing order")]
+    CheckNotIncreasing {
+        /// Where.
+        at: Location,
+        /// The check time.
+        time: f64,
+        /// The one before it.
+        previous: f64,
+    },
+    /// Both `check` and `check_every`.
+    #[error("{at}: `time.check` and `time.check_every` are exclusive; give one of them")]
+    CheckConflict {
+        /// Where the second one is.
+        at: Location,
+    },
+    /// More check times than [`MAX_CHECK_TIMES`].
+    #[error("{at}: `time.check_every` gives {count} check times, more than the limit {max}")]
+    TooManyCheckTimes {
+        /// Where.
+        at: Location,
+        /// How many it would give (saturated).
+        count: f64,
+        /// [`MAX_CHECK_TIMES`].
+        max: usize,
+    },
+    /// `reference.kind` not one of [`REFERENCE_KINDS`].
+    #[error("{at}: `reference.kind` = \"{kind}\" is unknown (known: {})", REFERENCE_KINDS.join(", "))]
+    UnknownReference {
+        /// Where.
+        at: Location,
+        /// The kind given.
+        kind: String,
+    },
+    /// A solver not in [`KNOWN_SOLVERS`].
+    #[error("{at}: `sweep.solvers`: unknown solver \"{name}\" (known: {})", KNOWN_SOLVERS.join(", "))]
+    UnknownSolver {
+        /// Where.
+        at: Location,
+        /// The name given.
+        name: String,
+    },
+    /// A formulation not in [`KNOWN_FORMULATIONS`].
+    #[error(
+        "{at}: `sweep.formulations`: unknown formulation \"{name}\" (known: {})",
+        KNOWN_FORMULATIONS.join(", ")
+    )]
+    UnknownFormulation {
+        /// Where.
+        at: Location,
+        /// The name given.
+        name: String,
+    },
+    /// The same name twice in a sweep list.
+    #[error("{at}: `{field}`: \"{name}\" is listed twice")]
+    Duplicate {
+        /// Where the second one is.
+        at: Location,
+        /// `sweep.solvers`, …
+        field: String,
+        /// The repeated entry.
+        name: String,
+    },
+    /// The model file a scene names does not exist.
+    #[error("{at}: `model`: model file `{}` does not exist", path.display())]
+    ModelNotFound {
+        /// Where.
+        at: Location,
+        /// The resolved path.
+        path: PathBuf,
+    },
+    /// An `[initial]` entry the model does not have.
+    #[error("{at}: `initial.{name}`: the model has no variable `{name}` (variables: {})", known.join(", "))]
+    UnknownVariable {
+        /// Where.
+        at: Location,
+        /// The name given.
+        name: String,
+        /// The model's variables.
+        known: Vec<String>,
+    },
+    /// A `[parameters]` entry the model does not have.
+    #[error("{at}: `parameters.{name}`: the model has no parameter `{name}` (parameters: {})", known.join(", "))]
+    UnknownParameter {
+        /// Where.
+        at: Location,
+        /// The name given.
+        name: String,
+        /// The model's parameters.
+        known: Vec<String>,
+    },
+}
+
+/// Which model a scene integrates.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub enum ModelSource {
+    /// A model compiled into the tool, by name (e.g. `pendulum`).
+    Builtin(String),
+    /// A `.dae` model file, resolved against the scene file's directory.
+    File(PathBuf),
+}
+
+/// `name = value` from `[parameters]` or `[initial]`, with its place.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NamedValue {
+    /// The key.
+    pub name: String,
+    /// The value (finite).
+    pub value: f64,
+    /// 1-based line of the key.
+    pub line: usize,
+    /// 1-based column of the key.
+    pub column: usize,
+}
+
+/// How the check times were specified.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum CheckRule {
+    /// Explicit `check = [...]`.
+    List,
+    /// `check_every = step`.
+    Every(f64),
+    /// Neither: the end of the horizon only.
+    EndOnly,
+}
+
+/// The horizon and the check times.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TimeSpec {
+    /// Initial time (default 0).
+    pub start: f64,
+    /// Final time (`> start`).
+    pub end: f64,
+    /// Check times: strictly increasing, within `[start, end]`, not empty.
+    pub checks: Vec<f64>,
+    /// How they were given.
+    pub rule: CheckRule,
+}
+
+/// What the numerical solution is compared against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum ReferenceKind {
+    /// [`crate::reference::PendulumExact`], from the scene's start and
+    /// parameters.
+    PendulumExact,
+    /// No reference: errors are not computed.
+    None,
+}
+
+impl ReferenceKind {
+    /// The name used in scene files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ReferenceKind::PendulumExact => "pendulum-exact",
+            ReferenceKind::None => "none",
+        }
+    }
+}
+
+/// What `dae sweep` runs: every solver × formulation × tolerance.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Sweep {
+    /// Solver names, each in [`KNOWN_SOLVERS`].
+    pub solvers: Vec<String>,
+    /// Formulation names, each in [`KNOWN_FORMULATIONS`].
+    pub formulations: Vec<String>,
+    /// Tolerances (`RTOL = ATOL`), each finite in `(0, 1)`.
+    pub tolerances: Vec<f64>,
+}
+
+impl Default for Sweep {
+    fn default() -> Self {
+        Sweep {
+            solvers: KNOWN_SOLVERS.iter().map(|s| s.to_string()).collect(),
+            formulations: KNOWN_FORMULATIONS.iter().map(|s| s.to_string()).collect(),
+            tolerances: DEFAULT_TOLERANCES.to_vec(),
+        }
+    }
+}
+
+/// A parsed and validated scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Scene {
+    /// Where the scene came from: a file path, `<built-in NAME>`, or the origin
+    /// passed to [`Scene::parse`]. Used in error messages.
+    pub origin: String,
+    /// Display name.
+    pub name: String,
+    /// The model.
+    pub model: ModelSource,
+    /// Parameter overrides, in file order.
+    pub parameters: Vec<NamedValue>,
+    /// Initial values of differential unknowns, in file order.
+    pub initial: Vec<NamedValue>,
+    /// Horizon and check times.
+    pub time: TimeSpec,
+    /// Reference solution.
+    pub reference: ReferenceKind,
+    /// Sweep grid.
+    pub sweep: Sweep,
+}
+
+impl Scene {
+    /// A built-in scene by name (`s01`, `s02`; case-insensitive): the paper's
+    /// scenarios, identical to `scenes/s01.toml` and `scenes/s02.toml`.
+    ///
+    /// ```
+    /// let s = dae::scene::Scene::builtin("s01").unwrap();
+    /// assert_eq!((s.time.end, s.time.checks.clone()), (20.0, vec![20.0]));
+    /// assert!(dae::scene::Scene::builtin("s03").is_none());
+    /// ```
+    pub fn builtin(name: &str) -> Option<Scene> {
+        let key = name.to_ascii_lowercase();
+        let text = match key.as_str() {
+            "s01" => S01_TOML,
+            "s02" => S02_TOML,
+            _ => return None,
+        };
+        // The embedded files are tested to parse; fall back to None rather
+        // than panic should that ever fail.
+        Scene::parse(text, &format!("<built-in {key}>"), None).ok()
+    }
+
+    /// Read a scene file, or a built-in scene by name when no file of that
+    /// name exists. Model paths in the file are resolved against its
+    /// directory.
+    pub fn load(path_or_builtin: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path_or_builtin.as_ref();
+        if !path.exists() {
+            if let Some(scene) = path.to_str().and_then(Scene::builtin) {
+                return Ok(scene);
+            }
+            return Err(SceneError::NotFound {
+                path: path.to_path_buf(),
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Scene::parse(&text, &path.display().to_string(), Some(&base))
+    }
+
+    /// Parse and validate scene text. `origin` names the text in error
+    /// messages; a relative model path is resolved against `base_dir` (the
+    /// current directory when `None`).
+    ///
+    /// ```
+    /// use dae::scene::{Scene, SceneError};
+    ///
+    /// let text = "name = \"t\"\nmodel = \"pendulum\"\n[initial]\nx = 1\n[time]\nend = 0\n";
+    /// let err = Scene::parse(text, "t.toml", None).unwrap_err();
+    /// assert!(matches!(err, SceneError::EmptyHorizon { .. }));
+    /// assert_eq!(
+    ///     err.to_string(),
+    ///     "t.toml:6:7: `time.end` = 0 must be greater than `time.start` = 0"
+    /// );
+    /// ```
+    pub fn parse(text: &str, origin: &str, base_dir: Option<&Path>) -> Result<Scene, SceneError> {
+        let src = Source { text, origin };
+        let raw: RawScene = toml::from_str(text).map_err(|e| src.toml_error(&e))?;
+        src.validate(raw, base_dir)
+    }
+
+    /// Value of a parameter override, if the scene gives one.
+    pub fn parameter(&self, name: &str) -> Option<f64> {
+        self.parameters
+            .iter()
+            .find(|p| p.name == name)
+            .map(|p| p.value)
+    }
+
+    /// Initial value the scene gives for a variable, if any.
+    pub fn initial_value(&self, name: &str) -> Option<f64> {
+        self.initial
+            .iter()
+            .find(|p| p.name == name)
+            .map(|p| p.value)
+    }
+
+    /// Check the names in `[initial]` against the model's `variables` and
+    /// those in `[parameters]` against its `parameters`; the first unknown
+    /// one is reported with its line.
+    ///
+    /// ```
+    /// let s = dae::scene::Scene::builtin("s01").unwrap();
+    /// assert!(s.check_names(&["x", "y", "v", "w", "lambda"], &["m", "l", "g"]).is_ok());
+    /// let err = s.check_names(&["x", "y", "v", "w"], &["m", "l"]).unwrap_err();
+    /// assert!(err.to_string().contains("`parameters.g`"));
+    /// ```
+    pub fn check_names(&self, variables: &[&str], parameters: &[&str]) -> Result<(), SceneError> {
+        let known = |list: &[&str]| list.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        for entry in &self.parameters {
+            if !parameters.contains(&entry.name.as_str()) {
+                return Err(SceneError::UnknownParameter {
+                    at: self.location(entry),
+                    name: entry.name.clone(),
+                    known: known(parameters),
+                });
+            }
+        }
+        for entry in &self.initial {
+            if !variables.contains(&entry.name.as_str()) {
+                return Err(SceneError::UnknownVariable {
+                    at: self.location(entry),
+                    name: entry.name.clone(),
+                    known: known(variables),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn location(&self, entry: &NamedValue) -> Location {
+        Location {
+            origin: self.origin.clone(),
+            line: entry.line,
+            column: entry.column,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The raw serde layer: everything optional and spanned, validated afterwards.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    name: Option<Spanned<String>>,
+    model: Option<Spanned<String>>,
+    parameters: Option<RawNamed>,
+    initial: Option<Spanned<RawNamed>>,
+    time: Option<Spanned<RawTime>>,
+    reference: Option<Spanned<RawReference>>,
+    sweep: Option<RawSweep>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTime {
+    start: Option<Spanned<f64>>,
+    end: Option<Spanned<f64>>,
+    check: Option<Spanned<Vec<Spanned<f64>>>>,
+    check_every: Option<Spanned<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawReference {
+    kind: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSweep {
+    solvers: Option<Spanned<Vec<Spanned<String>>>>,
+    formulations: Option<Spanned<Vec<Spanned<String>>>>,
+    tolerances: Option<Spanned<Vec<Spanned<f64>>>>,
+}
+
+/// A table of `name = number`, in file order, with spans.
+struct RawNamed(Vec<(Spanned<String>, Spanned<f64>)>);
+
+impl<'de> Deserialize<'de> for RawNamed {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct NamedVisitor;
+        impl<'de> Visitor<'de> for NamedVisitor {
+            type Value = RawNamed;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a table of `name = number` entries")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<RawNamed, A::Error> {
+                let mut entries = Vec::new();
+                while let Some(key) = map.next_key::<Spanned<String>>()? {
+                    let value = map.next_value::<Spanned<f64>>()?;
+                    entries.push((key, value));
+                }
+                Ok(RawNamed(entries))
+            }
+        }
+        deserializer.deserialize_map(NamedVisitor)
+    }
+}
+
+/// The scene text with its origin, for locating errors.
+struct Source<'a> {
+    text: &'a str,
+    origin: &'a str,
+}
+
+impl Source<'_> {
+    /// 1-based line and column (in characters) of a byte offset.
+    fn location(&self, offset: usize) -> Location {
+        let mut offset = offset.min(self.text.len());
+        while !self.text.is_char_boundary(offset) {
+            offset -= 1;
+        }
+        let before = &self.text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        let column = before[line_start..].chars().count() + 1;
+        Location {
+            origin: self.origin.to_string(),
+            line,
+            column,
+        }
+    }
+
+    fn at(&self, span: &Range<usize>) -> Location {
+        self.location(span.start)
+    }
+
+    /// `section.key` for the text at `offset`: the closest `[section]`
+    /// header above and the key on that line, as far as they can be found.
+    fn field_at(&self, offset: usize) -> String {
+        let offset = offset.min(self.text.len());
+        let mut section = String::new();
+        let mut key = String::new();
+        let mut pos = 0;
+        for line in self.text.split_inclusive('\n') {
+            let trimmed = line.trim();
+            if pos > offset {
+                break;
+            }
+            if trimmed.starts_with('[') {
+                let header = trimmed.trim_start_matches('[');
+                let end = header.find(']').unwrap_or(header.len());
+                section = header[..end].trim().to_string();
+                key.clear();
+            } else if let Some(eq) = line.find('=') {
+                let candidate = line[..eq].trim();
+                if !candidate.is_empty() && !candidate.starts_with('#') {
+                    key = candidate.trim_matches('"').to_string();
+                }
+            }
+            pos += line.len();
+        }
+        match (section.is_empty(), key.is_empty()) {
+            (true, _) => key,
+            (false, true) => section,
+            (false, false) => format!("{section}.{key}"),
+        }
+    }
+
+    /// Turn a TOML/serde error into a located [`SceneError`].
+    fn toml_error(&self, e: &toml::de::Error) -> SceneError {
+        let span = e.span().unwrap_or(0..0);
+        let at = self.at(&span);
+        let message = e.message().trim().replace('\n', ": ");
+        if let Some(rest) = message.strip_prefix("unknown field `") {
+            let name = rest.split('`').next().unwrap_or_default().to_string();
+            let expected = rest
+                .split_once("expected ")
+                .map_or_else(String::new, |(_, x)| x.replace("one of ", ""));
+            let section = self.field_at(span.start);
+            let section = section.split('.').next().unwrap_or_default();
+            let field = if section.is_empty() || section == name {
+                name
+            } else {
+                format!("{section}.{name}")
+            };
+            return SceneError::UnknownField {
+                at,
+                field,
+                expected,
+            };
+        }
+        if message.starts_with("invalid type")
+            || message.starts_with("invalid value")
+            || message.starts_with("invalid length")
+        {
+            return SceneError::InvalidType {
+                at,
+                field: self.field_at(span.start),
+                message,
+            };
+        }
+        SceneError::Syntax { at, message }
+    }
+
+    fn missing(&self, field: &str, table: Option<&Range<usize>>) -> SceneError {
+        SceneError::MissingField {
+            at: table.map_or_else(|| self.location(0), |s| self.at(s)),
+            field: field.to_string(),
+        }
+    }
+
+    fn finite(&self, field: &str, v: &Spanned<f64>) -> Result<f64, SceneError> {
+        let value = *v.get_ref();
+        if value.is_finite() {
+            Ok(value)
+        } else {
+            Err(SceneError::NotFinite {
+                at: self.at(&v.span()),
+                field: field.to_string(),
+                value,
+            })
+        }
+    }
+
+    fn named(&self, section: &str, raw: RawNamed) -> Result<Vec<NamedValue>, SceneError> {
+        raw.0
+            .into_iter()
+            .map(|(key, value)| {
+                let name = key.get_ref().clone();
+                let v = self.finite(&format!("{section}.{name}"), &value)?;
+                let at = self.at(&key.span());
+                Ok(NamedValue {
+                    name,
+                    value: v,
+                    line: at.line,
+                    column: at.column,
+                })
+            })
+            .collect()
+    }
+
+    fn validate(&self, raw: RawScene, base_dir: Option<&Path>) -> Result<Scene, SceneError> {
+        let name = raw.name.ok_or_else(|| self.missing("name", None))?;
+        if name.get_ref().trim().is_empty() {
+            return Err(SceneError::InvalidValue {
+                at: self.at(&name.span()),
+                field: "name".into(),
+                reason: "must not be empty".into(),
+            });
+        }
+        let model_raw = raw.model.ok_or_else(|| self.missing("model", None))?;
+        let model = self.model(&model_raw, base_dir)?;
+        let parameters = match raw.parameters {
+            Some(p) => self.named("parameters", p)?,
+            None => Vec::new(),
+        };
+        let initial_raw = raw.initial.ok_or_else(|| self.missing("initial", None))?;
+        let initial_span = initial_raw.span();
+        let initial = self.named("initial", initial_raw.into_inner())?;
+        if initial.is_empty() {
+            return Err(SceneError::InvalidValue {
+                at: self.at(&initial_span),
+                field: "initial".into(),
+                reason: "must give at least one initial value".into(),
+            });
+        }
+        let time_raw = raw.time.ok_or_else(|| self.missing("time", None))?;
+        let time = self.time(time_raw)?;
+        let reference = match raw.reference {
+            None => ReferenceKind::None,
+            Some(r) => {
+                let span = r.span();
+                let kind = r
+                    .into_inner()
+                    .kind
+                    .ok_or_else(|| self.missing("reference.kind", Some(&span)))?;
+                match kind.get_ref().as_str() {
+                    "pendulum-exact" => ReferenceKind::PendulumExact,
+                    "none" => ReferenceKind::None,
+                    other => {
+                        return Err(SceneError::UnknownReference {
+                            at: self.at(&kind.span()),
+                            kind: other.to_string(),
+                        })
+                    }
+                }
+            }
+        };
+        let sweep = match raw.sweep {
+            None => Sweep::default(),
+            Some(s) => self.sweep(s)?,
+        };
+        Ok(Scene {
+            origin: self.origin.to_string(),
+            name: name.into_inner(),
+            model,
+            parameters,
+            initial,
+            time,
+            reference,
+            sweep,
+        })
+    }
+
+    fn model(
+        &self,
+        raw: &Spanned<String>,
+        base_dir: Option<&Path>,
+    ) -> Result<ModelSource, SceneError> {
+        let value = raw.get_ref().trim();
+        if value.is_empty() {
+            return Err(SceneError::InvalidValue {
+                at: self.at(&raw.span()),
+                field: "model".into(),
+                reason: "must name a built-in model or a .dae file".into(),
+            });
+        }
+        let is_path = value.ends_with(".dae") || value.contains('/') || value.contains('\\');
+        if !is_path {
+            return Ok(ModelSource::Builtin(value.to_string()));
+        }
+        let given = Path::new(value);
+        let path = match base_dir {
+            Some(base) if given.is_relative() => base.join(given),
+            _ => given.to_path_buf(),
+        };
+        if !path.is_file() {
+            return Err(SceneError::ModelNotFound {
+                at: self.at(&raw.span()),
+                path,
+            });
+        }
+        Ok(ModelSource::File(path))
+    }
+
+    fn time(&self, raw: Spanned<RawTime>) -> Result<TimeSpec, SceneError> {
+        let table = raw.span();
+        let raw = raw.into_inner();
+        let start = match &raw.start {
+            Some(s) => self.finite("time.start", s)?,
+            None => 0.0,
+        };
+        let end_raw = raw
+            .end
+            .as_ref()
+            .ok_or_else(|| self.missing("time.end", Some(&table)))?;
+        let end = self.finite("time.end", end_raw)?;
+        if end <= start {
+            return Err(SceneError::EmptyHorizon {
+                at: self.at(&end_raw.span()),
+                start,
+                end,
+            });
+        }
+        let (checks, rule) = match (raw.check, raw.check_every) {
+            (Some(_), Some(every)) => {
+                return Err(SceneError::CheckConflict {
+                    at: self.at(&every.span()),
+                })
+            }
+            (Some(list), None) => (self.check_list(list, start, end)?, CheckRule::List),
+            (None, Some(every)) => {
+                let step = self.finite("time.check_every", &every)?;
+                (
+                    self.check_every(&every, step, start, end)?,
+                    CheckRule::Every(step),
+                )
+            }
+            (None, None) => (vec![end], CheckRule::EndOnly),
+        };
+        Ok(TimeSpec {
+            start,
+            end,
+            checks,
+            rule,
+        })
+    }
+
+    fn check_list(
+        &self,
+        list: Spanned<Vec<Spanned<f64>>>,
+        start: f64,
+        end: f64,
+    ) -> Result<Vec<f64>, SceneError> {
+        let list_span = list.span();
+        let list = list.into_inner();
+        if list.is_empty() {
+            return Err(SceneError::InvalidValue {
+                at: self.at(&list_span),
+                field: "time.check".into(),
+                reason:
+                    "is empty: give at least one check time, or leave it out to check at the end"
+                        .into(),
+            });
+        }
+        let mut out: Vec<f64> = Vec::with_capacity(list.len());
+        for item in &list {
+            let t = self.finite("time.check", item)?;
+            let at = self.at(&item.span());
+            if !(start..=end).contains(&t) {
+                return Err(SceneError::CheckOutsideHorizon {
+                    at,
+                    time: t,
+                    start,
+                    end,
+                });
+            }
+            if let Some(&previous) = out.last() {
+                if t <= previous {
+                    return Err(SceneError::CheckNotIncreasing {
+                        at,
+                        time: t,
+                        previous,
+                    });
+                }
+            }
+            out.push(t);
+        }
+        Ok(out)
+    }
+
+    /// `start + k·every`, `k = 1, 2, …` while `≤ end` (with a slack of
+    /// 10⁻⁹·every for rounding; a time within the slack beyond `end` is
+    /// clamped to `end`). Each time is computed from `k` directly, not by
+    /// accumulation.
+    fn check_every(
+        &self,
+        raw: &Spanned<f64>,
+        every: f64,
+        start: f64,
+        end: f64,
+    ) -> Result<Vec<f64>, SceneError> {
+        let at = self.at(&raw.span());
+        if every <= 0.0 {
+            return Err(SceneError::InvalidValue {
+                at,
+                field: "time.check_every".into(),
+                reason: format!("= {every} must be positive"),
+            });
+        }
+        let count = ((end - start) / every + 1e-9).floor();
+        if count.is_nan() || count < 1.0 {
+            return Err(SceneError::InvalidValue {
+                at,
+                field: "time.check_every".into(),
+                reason: format!("= {every} gives no check time in ({start}, {end}]"),
+            });
+        }
+        if count.is_nan() || count > MAX_CHECK_TIMES as f64 {
+            return Err(SceneError::TooManyCheckTimes {
+                at,
+                count,
+                max: MAX_CHECK_TIMES,
+            });
+        }
+        let n = count as usize;
+        let mut out = Vec::with_capacity(n);
+        for k in 1..=n {
+            let t = (k as f64).mul_add(every, start).min(end);
+            if out.last().is_some_and(|&p: &f64| t <= p) {
+                // Steps below the resolution of the times themselves.
+                return Err(SceneError::InvalidValue {
+                    at,
+                    field: "time.check_every".into(),
+                    reason: format!("= {every} is too small to separate check times near {t}"),
+                });
+            }
+            out.push(t);
+        }
+        Ok(out)
+    }
+
+    fn names(
+        &self,
+        field: &str,
+        raw: Spanned<Vec<Spanned<String>>>,
+        known: &[&str],
+        unknown: impl Fn(Location, String) -> SceneError,
+    ) -> Result<Vec<String>, SceneError> {
+        let span = raw.span();
+        let list = raw.into_inner();
+        if list.is_empty() {
+            return Err(SceneError::InvalidValue {
+                at: self.at(&span),
+                field: field.into(),
+                reason: "is empty: leave it out to sweep all".into(),
+            });
+        }
+        let mut out: Vec<String> = Vec::with_capacity(list.len());
+        for item in list {
+            let at = self.at(&item.span());
+            let name = item.into_inner();
+            if !known.contains(&name.as_str()) {
+                return Err(unknown(at, name));
+            }
+            if out.contains(&name) {
+                return Err(SceneError::Duplicate {
+                    at,
+                    field: field.into(),
+                    name,
+                });
+            }
+            out.push(name);
+        }
+        Ok(out)
+    }
+
+    fn sweep(&self, raw: RawSweep) -> Result<Sweep, SceneError> {
+        let defaults = Sweep::default();
+        let solvers = match raw.solvers {
+            Some(list) => self.names("sweep.solvers", list, KNOWN_SOLVERS, |at, name| {
+                SceneError::UnknownSolver { at, name }
+            })?,
+            None => defaults.solvers,
+        };
+        let formulations = match raw.formulations {
+            Some(list) => self.names(
+                "sweep.formulations",
+                list,
+                KNOWN_FORMULATIONS,
+                |at, name| SceneError::UnknownFormulation { at, name },
+            )?,
+            None => defaults.formulations,
+        };
+        let tolerances = match raw.tolerances {
+            Some(list) => {
+                let span = list.span();
+                let list = list.into_inner();
+                if list.is_empty() {
+                    return Err(SceneError::InvalidValue {
+                        at: self.at(&span),
+                        field: "sweep.tolerances".into(),
+                        reason: "is empty: leave it out for 1e-5 … 1e-12".into(),
+                    });
+                }
+                let mut out: Vec<f64> = Vec::with_capacity(list.len());
+                for item in list {
+                    let at = self.at(&item.span());
+                    let value = item.into_inner();
+                    if !(value.is_finite() && value > 0.0 && value < 1.0) {
+                        return Err(SceneError::InvalidTolerance { at, value });
+                    }
+                    if out.contains(&value) {
+                        return Err(SceneError::Duplicate {
+                            at,
+                            field: "sweep.tolerances".into(),
+                            name: format!("{value:e}"),
+                        });
+                    }
+                    out.push(value);
+                }
+                out
+            }
+            None => defaults.tolerances,
+        };
+        Ok(Sweep {
+            solvers,
+            formulations,
+            tolerances,
+        })
+    }
+}
