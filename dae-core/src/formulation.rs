@@ -109,6 +109,14 @@ impl Formulation {
 /// Largest number of Laplace-expansion steps spent on a selector.
 const SELECTOR_BUDGET: usize = 20_000;
 
+/// Most constraints for which a selector is derived symbolically. Selector
+/// rows of coupled systems are products over the whole coupling chain (for
+/// a chain of `n` pendulums a row touches every link), and their Jacobians
+/// grow with the square of that: at 16 links deriving `psi1` alone takes
+/// seconds and hundreds of MB. Beyond this bound the projected formulations
+/// do not apply (a run-time numeric selector is future work).
+pub const SELECTOR_MAX_CONSTRAINTS: usize = 8;
+
 /// Why a formulation does not apply to a model, or `Ok`.
 pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String> {
     let all_ge1 = an.chains.iter().all(|c| c.top() >= 1);
@@ -388,8 +396,10 @@ fn project(s: &[Vec<Expr>], cols: &[usize], rows: &[SymRow]) -> Vec<SymRow> {
 fn selector(g: &[Vec<Expr>]) -> Result<Vec<Vec<Expr>>, String> {
     let m = g.len();
     let n = g.first().map_or(0, Vec::len);
-    if m > 60 {
-        return Err("too many constraints for a symbolic selector".into());
+    if m > SELECTOR_MAX_CONSTRAINTS {
+        return Err(format!(
+            "a symbolic selector is derived for at most {SELECTOR_MAX_CONSTRAINTS} constraints, this model has {m}"
+        ));
     }
     // Pivot columns: a structural matching that prefers the last columns.
     let adj: Vec<Vec<usize>> = (0..m)
