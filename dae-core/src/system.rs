@@ -208,71 +208,45 @@ pub trait DaeSystem {
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]);
 }
 
-impl<T: DaeSystem + ?Sized> DaeSystem for Box<T> {
-    fn info(&self) -> &FormulationInfo {
-        (**self).info()
-    }
-    fn parameter_values(&self) -> Vec<f64> {
-        (**self).parameter_values()
-    }
-    fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
-        (**self).rhs(t, y, f)
-    }
-    fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
-        (**self).residual(t, y, yp, r)
-    }
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
-        (**self).leading(y, e)
-    }
-    fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
-        (**self).rhs_jacobian(t, y, j)
-    }
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
-        (**self).leading_jacobian(y, z, j)
-    }
-    fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
-        (**self).constraints(t, y, g)
-    }
-    fn constraints_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
-        (**self).constraints_jacobian(t, y, j)
-    }
-    fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
-        (**self).invariants(t, y, out)
-    }
+/// Forward every method through a pointer type.
+macro_rules! forward_dae_system {
+    ($($ptr:ty),*) => {$(
+        impl<T: DaeSystem + ?Sized> DaeSystem for $ptr {
+            fn info(&self) -> &FormulationInfo {
+                (**self).info()
+            }
+            fn parameter_values(&self) -> Vec<f64> {
+                (**self).parameter_values()
+            }
+            fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
+                (**self).rhs(t, y, f)
+            }
+            fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
+                (**self).residual(t, y, yp, r)
+            }
+            fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
+                (**self).leading(y, e)
+            }
+            fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+                (**self).rhs_jacobian(t, y, j)
+            }
+            fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+                (**self).leading_jacobian(y, z, j)
+            }
+            fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
+                (**self).constraints(t, y, g)
+            }
+            fn constraints_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+                (**self).constraints_jacobian(t, y, j)
+            }
+            fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
+                (**self).invariants(t, y, out)
+            }
+        }
+    )*};
 }
 
-impl<T: DaeSystem + ?Sized> DaeSystem for &T {
-    fn info(&self) -> &FormulationInfo {
-        (**self).info()
-    }
-    fn parameter_values(&self) -> Vec<f64> {
-        (**self).parameter_values()
-    }
-    fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
-        (**self).rhs(t, y, f)
-    }
-    fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
-        (**self).residual(t, y, yp, r)
-    }
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
-        (**self).leading(y, e)
-    }
-    fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
-        (**self).rhs_jacobian(t, y, j)
-    }
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
-        (**self).leading_jacobian(y, z, j)
-    }
-    fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
-        (**self).constraints(t, y, g)
-    }
-    fn constraints_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
-        (**self).constraints_jacobian(t, y, j)
-    }
-    fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
-        (**self).invariants(t, y, out)
-    }
-}
+forward_dae_system!(Box<T>, &T);
 
 /// Sizes known at compile time: implemented by macro-generated formulations
 /// so that a solver can use stack arrays (`[f64; N]`, `SMatrix`) on its fast
