@@ -29,7 +29,7 @@ pub struct RunArgs {
     #[arg(long)]
     pub formulation: Option<String>,
     /// Tolerance, RTOL = ATOL (default 1e-8).
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, allow_negative_numbers = true)]
     pub tol: f64,
     /// Output format.
     #[arg(long, value_enum, default_value = "json")]
