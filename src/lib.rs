@@ -23,6 +23,7 @@ pub mod models;
 pub mod reference;
 pub mod runner;
 pub mod scene;
+pub mod sweep;
 
 /// Everything a user of the macro and the solvers needs.
 pub mod prelude {

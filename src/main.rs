@@ -25,6 +25,16 @@ enum Command {
     },
     /// Run one scene with one solver, formulation and tolerance.
     Run(cli::run::RunArgs),
+    /// Sweep solvers × formulations × tolerances: tables, figures, index.html.
+    Sweep(cli::sweep::SweepArgs),
+}
+
+/// Run a sweep; print its report and exit with its code.
+fn sweep(args: &cli::sweep::SweepArgs) -> Result<String, Failure> {
+    let (out, code) = cli::sweep::run(args)?;
+    print!("{out}");
+    let _ = std::io::stdout().flush();
+    std::process::exit(code);
 }
 
 fn main() {
@@ -38,7 +48,9 @@ fn main() {
             }
             Err(f) => Err(f),
         },
-        None => cli::derive::run("pendulum", Format::Text),
+        Some(Command::Sweep(args)) => sweep(&args),
+        // No arguments: the built-in S01 sweep into out/s01.
+        None => sweep(&cli::sweep::SweepArgs::default()),
     };
     match result {
         Ok(out) => {

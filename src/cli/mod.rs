@@ -2,6 +2,7 @@
 
 pub mod derive;
 pub mod run;
+pub mod sweep;
 
 /// A failed command: the message and the exit code.
 #[derive(Debug)]

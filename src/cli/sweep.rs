@@ -1,0 +1,161 @@
+//! `dae sweep [SCENE] [--solvers …] [--formulations …] [--tols …]
+//! [--repeats N] [--jobs N] [--out DIR] [--format text|json]`.
+//!
+//! Every solver × formulation × tolerance of the scene's `[sweep]` table
+//! (flags override it). Prints the success matrix, the efficiency table,
+//! the Pareto front, the fastest pair per target error and, for S01/S02,
+//! the comparison with the paper; writes `results.csv`, `results.json`,
+//! the figures (SVG and PNG) and `index.html` to `DIR` (default
+//! `out/<scene name in lower case>`). `dae` without arguments runs
+//! `dae sweep s01 --out out/s01`.
+
+use super::run::Format;
+use super::Failure;
+use crate::scene::Scene;
+use crate::sweep::{self, SweepOptions};
+use dae_solvers::init::InitMode;
+use std::path::PathBuf;
+
+/// Flags of `dae sweep`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct SweepArgs {
+    /// Scene file (TOML) or built-in scene name (`s01`, `s02`).
+    #[arg(default_value = "s01")]
+    pub scene: String,
+    /// Solvers, comma-separated (default: the scene's `[sweep]` solvers).
+    #[arg(long, value_delimiter = ',')]
+    pub solvers: Option<Vec<String>>,
+    /// Formulations, comma-separated (default: the scene's).
+    #[arg(long, value_delimiter = ',')]
+    pub formulations: Option<Vec<String>>,
+    /// Tolerances RTOL = ATOL, comma-separated (default: the scene's).
+    #[arg(long, value_delimiter = ',')]
+    pub tols: Option<Vec<f64>>,
+    /// Timed integrations per run, at most (a run is timed again only while
+    /// its timings total under 1 s); tsim is their median.
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// Threads for the accuracy pass (timing stays sequential).
+    #[arg(long, default_value_t = 1)]
+    pub jobs: usize,
+    /// Output directory (default: out/<scene name in lower case>, e.g.
+    /// out/s01; `dae` without arguments writes to out/s01).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// What to print on stdout: the text tables or the results JSON.
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: Format,
+    /// Refuse inconsistent initial values instead of projecting them.
+    #[arg(long)]
+    pub strict_init: bool,
+    /// Do not draw the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl Default for SweepArgs {
+    /// `dae sweep s01 --out out/s01`: what `dae` without arguments runs.
+    fn default() -> Self {
+        SweepArgs {
+            scene: "s01".into(),
+            solvers: None,
+            formulations: None,
+            tols: None,
+            repeats: 3,
+            jobs: 1,
+            out: Some(PathBuf::from("out/s01")),
+            format: Format::Text,
+            strict_init: false,
+            quiet: false,
+        }
+    }
+}
+
+/// The default output directory of a scene: `out/<name in lower case>`,
+/// with characters other than letters, digits, `-` and `_` replaced.
+pub fn default_out_dir(scene_name: &str) -> PathBuf {
+    let name: String = scene_name
+        .to_lowercase()
+        .chars()
+        .map(|c| {
+            if c.is_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    PathBuf::from("out").join(if name.is_empty() {
+        "sweep".into()
+    } else {
+        name
+    })
+}
+
+/// Run the sweep; `Ok((stdout, exit code))`.
+pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
+    if let Some(tols) = &args.tols {
+        for t in tols {
+            super::run::check_tol(*t, "--tols")?;
+        }
+    }
+    if args.repeats == 0 {
+        return Err(Failure::input(
+            "--repeats 0: at least one timed run is needed",
+        ));
+    }
+    let scene = Scene::load(&args.scene).map_err(|e| Failure::input(e.to_string()))?;
+    let mut opts = SweepOptions::from_scene(&scene);
+    if let Some(s) = &args.solvers {
+        opts.solvers = s.clone();
+    }
+    if let Some(f) = &args.formulations {
+        opts.formulations = f.clone();
+    }
+    if let Some(t) = &args.tols {
+        opts.tolerances = t.clone();
+    }
+    opts.repeats = args.repeats;
+    opts.jobs = args.jobs.max(1);
+    opts.init_mode = if args.strict_init {
+        InitMode::Strict
+    } else {
+        InitMode::Project
+    };
+    opts.progress = !args.quiet;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out_dir(&scene.name));
+    let report = sweep::run(&scene, &opts).map_err(|e| Failure::input(e.to_string()))?;
+    let summary = sweep::Summary::of(&report);
+    // An output directory that cannot be written is a bad `--out` (exit 2).
+    let written =
+        sweep::write_outputs(&report, &summary, &dir).map_err(|e| Failure::input(e.to_string()))?;
+    for n in &written.notes {
+        eprintln!("note: {n}");
+    }
+    let index = dir.join("index.html");
+    let out = match args.format {
+        Format::Json => {
+            eprintln!(
+                "wrote {} files to {} (open {})",
+                written.files.len(),
+                dir.display(),
+                index.display()
+            );
+            sweep::results_json_string(&report, &summary)
+        }
+        Format::Text => {
+            let mut s = sweep::table::text_report(&report, &summary);
+            s.push_str(&format!(
+                "\nWrote results.csv, results.json, {} figure file(s) and index.html to {}\nOpen {}\n",
+                written.files.iter().filter(|p| p.extension().is_some_and(|e| e == "svg" || e == "png")).count(),
+                dir.display(),
+                index.display()
+            ));
+            s
+        }
+    };
+    Ok((out, 0))
+}

@@ -1,0 +1,292 @@
+//! `index.html`: the tables and figures of a sweep on one self-contained
+//! page (inline CSS, no JavaScript, figures linked relatively).
+
+use super::paper::Verdict;
+use super::plot::Figure;
+use super::table::{efficiency_rows, paper_cell, sci, tol_label, Mark};
+use super::{Summary, SweepReport};
+use std::fmt::Write;
+
+/// Escape text for HTML.
+pub fn esc(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            '\'' => o.push_str("&#39;"),
+            c => o.push(c),
+        }
+    }
+    o
+}
+
+const STYLE: &str = "body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:2em auto;max-width:1500px;\
+padding:0 1em;color:#222}h1{font-size:1.6em}h2{margin-top:2em;border-bottom:1px solid #ccc}\
+table{border-collapse:collapse;margin:.5em 0;font-size:.9em}th,td{border:1px solid #ccc;padding:.25em .6em;\
+text-align:right;white-space:nowrap}th{background:#f3f3f3}td.l,th.l{text-align:left}\
+td.X{background:#d8f0d8}td.x{background:#fff3c4}td.o{background:#f8d0d0}td.na{background:#eee;color:#666}\
+td.fail{color:#a00}td.more{background:#d8f0d8}td.eq{background:#eef}td.behind{background:#f8d0d0}\
+figure{margin:1.5em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.9em;color:#444}\
+.note{background:#fff8e0;border-left:4px solid #e0b000;padding:.4em .8em}.scroll{overflow-x:auto}\
+code{background:#f3f3f3;padding:0 .2em}";
+
+fn table(rows: &[Vec<String>], left_cols: usize) -> String {
+    let mut s = String::from("<div class=\"scroll\"><table>\n");
+    for (i, r) in rows.iter().enumerate() {
+        s.push_str("<tr>");
+        for (c, cell) in r.iter().enumerate() {
+            let tag = if i == 0 { "th" } else { "td" };
+            let class = if c < left_cols { " class=\"l\"" } else { "" };
+            let _ = write!(s, "<{tag}{class}>{}</{tag}>", esc(cell));
+        }
+        s.push_str("</tr>\n");
+    }
+    s.push_str("</table></div>\n");
+    s
+}
+
+fn success_html(summary: &Summary) -> String {
+    let m = &summary.success;
+    let reasons = m.reasons();
+    let mut s = String::from("<table>\n<tr><th class=\"l\"></th>");
+    for f in &m.formulations {
+        let _ = write!(s, "<th>{}</th>", esc(f));
+    }
+    s.push_str("</tr>\n");
+    for r in &m.rows {
+        let _ = write!(s, "<tr><th class=\"l\">{}</th>", esc(&r.solver));
+        for c in &r.cells {
+            match (&c.reason, c.mark) {
+                (Some(why), _) => {
+                    let n = reasons.iter().position(|x| x == why).map_or(0, |i| i + 1);
+                    let _ = write!(
+                        s,
+                        "<td class=\"na\" title=\"{}\">-<sup>{n}</sup></td>",
+                        esc(why)
+                    );
+                }
+                (None, mark) => {
+                    let class = match mark {
+                        Mark::Every => "X",
+                        Mark::Some => "x",
+                        _ => "o",
+                    };
+                    let _ = write!(
+                        s,
+                        "<td class=\"{class}\" title=\"{} of {} tolerances\">{}</td>",
+                        c.ok,
+                        c.runs,
+                        mark.symbol()
+                    );
+                }
+            }
+        }
+        s.push_str("</tr>\n");
+    }
+    s.push_str("</table>\n<p>");
+    for (i, r) in reasons.iter().enumerate() {
+        let _ = write!(s, "<sup>{}</sup> {}<br>", i + 1, esc(r));
+    }
+    let _ = writeln!(s, "{}</p>", esc(m.legend));
+    s
+}
+
+fn paper_html(summary: &Summary) -> String {
+    let Some(c) = &summary.paper else {
+        return "<p>Only for the paper's scenes S01 and S02 (built-in pendulum, paper Tables 6 and 9).</p>\n".into();
+    };
+    let mut tols: Vec<f64> = Vec::new();
+    for cell in c.rows.iter().flat_map(|r| &r.cells) {
+        if !tols.iter().any(|t| super::paper::same_tol(*t, cell.tol)) {
+            tols.push(cell.tol);
+        }
+    }
+    let mut s = format!("<p>{}: {}</p>\n<div class=\"scroll\"><table>\n<tr><th class=\"l\">ours</th><th class=\"l\">paper</th>", esc(&c.table), esc(&c.note));
+    for t in &tols {
+        let _ = write!(s, "<th>{}</th>", tol_label(*t));
+    }
+    s.push_str("</tr>\n");
+    for r in &c.rows {
+        let _ = write!(
+            s,
+            "<tr><td class=\"l\">{}({})</td><td class=\"l\">{}({})</td>",
+            esc(&r.solver),
+            esc(&r.formulation),
+            esc(&r.paper_solver),
+            esc(&r.formulation)
+        );
+        for t in &tols {
+            match r.cells.iter().find(|c| super::paper::same_tol(c.tol, *t)) {
+                Some(cell) => {
+                    let class = match cell.verdict {
+                        Verdict::MoreAccurate | Verdict::PaperFailed => "more",
+                        Verdict::Equal => "eq",
+                        Verdict::Behind | Verdict::WeFailed => "behind",
+                        _ => "na",
+                    };
+                    let ours = cell
+                        .ours
+                        .map_or_else(|| "failed".to_string(), |v| sci(Some(v)));
+                    let _ = write!(
+                        s,
+                        "<td class=\"{class}\">{} / {}<br><small>{}</small></td>",
+                        esc(&ours),
+                        esc(&paper_cell(cell.paper)),
+                        cell.verdict.label()
+                    );
+                }
+                None => s.push_str("<td></td>"),
+            }
+        }
+        s.push_str("</tr>\n");
+    }
+    s.push_str("</table></div>\n<p>Cells: ours (err_sum) / paper (ERR). ");
+    let counts: Vec<String> = c
+        .counts
+        .iter()
+        .filter(|k| k.cells > 0)
+        .map(|k| format!("{} {}", k.cells, k.verdict.label()))
+        .collect();
+    let _ = writeln!(s, "{}.</p>", esc(&counts.join(", ")));
+    if !c.illegible.is_empty() {
+        let _ = writeln!(
+            s,
+            "<p>Illegible in the seed text, not compared: {}.</p>",
+            esc(&c.illegible.join(", "))
+        );
+    }
+    s
+}
+
+/// The page.
+pub fn index(
+    report: &SweepReport,
+    summary: &Summary,
+    figures: &[&Figure],
+    notes: &[String],
+) -> String {
+    let sc = &report.scene;
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>dae sweep {}</title>\n\
+         <style>{STYLE}</style>\n</head>\n<body>\n<h1>dae sweep — {}</h1>\n",
+        esc(&sc.name),
+        esc(&sc.name)
+    );
+    let _ = writeln!(
+        s,
+        "<p>Scene <code>{}</code>: model <code>{}</code>, t ∈ [{}, {}] s, {} check time(s), reference \
+         <code>{}</code>. {} solver(s) × {} formulation(s) × {} tolerance(s) (RTOL = ATOL): {} runs in {:.1} s. \
+         tsim = median of up to {} timed integrations per run (fewer once they took {} s){}. Data: <a href=\"results.csv\">results.csv</a>, \
+         <a href=\"results.json\">results.json</a>.</p>",
+        esc(&sc.origin),
+        esc(&sc.model),
+        sc.t0,
+        sc.t_end,
+        sc.checks,
+        esc(sc.reference),
+        report.solvers.len(),
+        report.formulations.len(),
+        report.tolerances.len(),
+        report.runs.len(),
+        report.wall_s,
+        report.repeats,
+        super::REPEAT_BUDGET_S,
+        if report.jobs > 1 {
+            format!(" (accuracy pass on {} threads, timing pass sequential)", report.jobs)
+        } else {
+            " (one sequential pass)".to_string()
+        }
+    );
+    for n in notes {
+        let _ = writeln!(s, "<p class=\"note\">{}</p>", esc(n));
+    }
+    s.push_str("<h2>Success matrix</h2>\n");
+    s.push_str(&success_html(summary));
+    if report.has_reference() {
+        s.push_str(
+            "<h2>The trade</h2>\n<p>Both summaries use <code>err</code>, the largest pointwise error of the \
+             differential unknowns over the check times. Pareto front: successful runs that no other successful run \
+             beats on both tsim and err (at least as good in both, strictly better in one), by increasing tsim.</p>\n",
+        );
+        let mut rows = vec![vec![
+            "pair".to_string(),
+            "tol".into(),
+            "tsim_s".into(),
+            "err".into(),
+        ]];
+        rows.extend(summary.pareto.iter().map(|p| {
+            vec![
+                p.pair(),
+                tol_label(p.tol),
+                sci(Some(p.tsim_s)),
+                sci(Some(p.err)),
+            ]
+        }));
+        s.push_str("<h3>Pareto front</h3>\n");
+        s.push_str(&table(&rows, 1));
+        s.push_str("<h3>Fastest run per target error</h3>\n");
+        let mut rows = vec![vec![
+            "target err".to_string(),
+            "fastest pair".into(),
+            "tol".into(),
+            "tsim_s".into(),
+            "err".into(),
+        ]];
+        for t in &summary.targets {
+            let mut r = vec![format!("≤ {}", sci(Some(t.target)))];
+            match &t.best {
+                Some(p) => r.extend([
+                    p.pair(),
+                    tol_label(p.tol),
+                    sci(Some(p.tsim_s)),
+                    sci(Some(p.err)),
+                ]),
+                None => r.extend([
+                    "none met it".to_string(),
+                    String::new(),
+                    String::new(),
+                    String::new(),
+                ]),
+            }
+            rows.push(r);
+        }
+        s.push_str(&table(&rows, 2));
+    } else {
+        s.push_str(
+            "<h2>The trade</h2>\n<p class=\"note\">This scene has no reference (<code>[reference] kind = \
+             \"none\"</code>): errors are not measured, so there is no Pareto front and no target table. Residuals \
+             and drift are reported below.</p>\n",
+        );
+    }
+    s.push_str("<h2>Against the paper</h2>\n");
+    s.push_str(&paper_html(summary));
+    s.push_str("<h2>Figures</h2>\n");
+    for f in figures {
+        let _ = writeln!(
+            s,
+            "<figure><a href=\"{0}.svg\"><img src=\"{0}.svg\" alt=\"{1}\"></a><figcaption>{2} \
+             (<a href=\"{0}.svg\">SVG</a>, <a href=\"{0}.png\">PNG</a>)</figcaption></figure>",
+            esc(&f.file),
+            esc(&f.title),
+            esc(&f.caption)
+        );
+    }
+    let inv = report.invariants.first().map_or("I", String::as_str);
+    let _ = write!(
+        s,
+        "<h2>Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds; err: largest pointwise \
+         error of the differential unknowns over the check times; err_sum: sum over the check times of the errors \
+         of all unknowns (the paper's ERR reading); err_lambda: largest error of the multiplier; evals / jac / LU: \
+         residual and Jacobian evaluations and LU factorisations; |gk|: largest residual of the level-k \
+         constraints over the check times; drift: largest |{0}(t) − {0}(t0)|.</p>\n",
+        esc(inv)
+    );
+    s.push_str(&table(&efficiency_rows(&report.runs), 1));
+    s.push_str("</body>\n</html>\n");
+    s
+}

@@ -1,0 +1,794 @@
+//! `dae sweep`: every solver × formulation × tolerance of a scene, and the
+//! paper's report of the speed/accuracy trade — success matrix, efficiency
+//! table, Pareto front, fastest pair per target error, comparison with the
+//! paper's tables, figures and an `index.html` that shows them together.
+//!
+//! # Flow
+//! [`run`] loads the scene's model, decides for every pair whether it is
+//! applicable ([`Pair::not_applicable`] gives the reason otherwise: the
+//! model does not provide the formulation, or [`Solver::accepts`] refuses
+//! it), runs every applicable pair at every tolerance with
+//! [`crate::runner::run`] and returns a [`SweepReport`]. [`Summary::of`]
+//! derives the tables; [`write_outputs`] writes `results.csv`,
+//! `results.json`, the figures and `index.html`, each file whole
+//! ([`write::atomic_write`]).
+//!
+//! # Timing
+//! `tsim_s` is the median of `repeats` timed integrations of the same run
+//! (integration only: no model loading, no consistent initialisation, output
+//! only at the check times); a run is timed again only while its timed
+//! integrations took less than [`REPEAT_BUDGET_S`] in total, so slow runs
+//! (seconds each, where timing noise is relatively small) are timed fewer
+//! times. Every individual time is kept in [`SweepRun::tsim_runs`]. Timed
+//! integrations never overlap with other work of the sweep:
+//! - `jobs = 1` (default): one sequential pass; each run is integrated
+//!   `repeats` times in a row and the first integration also gives the
+//!   errors and statistics.
+//! - `jobs > 1`: an accuracy pass runs the runs in parallel on `jobs`
+//!   threads (each thread loads its own model), then a timing pass re-runs
+//!   every successful run `repeats` times sequentially. Failed runs are not
+//!   re-timed: their `tsim_s` is the time to failure of the one
+//!   (parallel) attempt.
+//!
+//! At the figure tolerance (1e-7 like the paper, else the sweep's nearest
+//! in `log10`) one further, untimed integration samples the solution for the
+//! figures: 801 equidistant times, or only the check times when a scene has
+//! 100 or more of them (as the paper plots S02 "every 2 s only").
+//!
+//! [`Solver::accepts`]: dae_solvers::Solver::accepts
+
+pub mod html;
+pub mod paper;
+pub mod pareto;
+pub mod plot;
+pub mod table;
+pub mod write;
+
+use crate::cli::run::load_model;
+use crate::reference::PendulumExact;
+use crate::runner::{self, RunError, RunRecord, RunSpec, Trajectory};
+use crate::scene::{ModelSource, ReferenceKind, Scene};
+use dae_core::system::{FormulationError, Model};
+use dae_solvers::init::InitMode;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde::Serialize;
+use std::borrow::Borrow;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+/// The tolerance the paper's figures use.
+pub const FIGURE_TOL: f64 = 1e-7;
+/// Equidistant samples for the figures of scenes with few check times.
+pub const FIGURE_SAMPLES: usize = 801;
+/// From this many check times on, figures use the check times only.
+pub const CHECKS_AS_SAMPLES: usize = 100;
+/// A run is timed again only while its timed integrations took less than
+/// this in total (seconds): a slow run is timed fewer than `repeats` times.
+pub const REPEAT_BUDGET_S: f64 = 1.0;
+
+/// What to sweep and how.
+#[derive(Clone, Debug)]
+pub struct SweepOptions {
+    /// Solver names (each known to [`dae_solvers::solver_by_name`]).
+    pub solvers: Vec<String>,
+    /// Formulation names (each one of the eight).
+    pub formulations: Vec<String>,
+    /// Tolerances, `RTOL = ATOL`.
+    pub tolerances: Vec<f64>,
+    /// Timed integrations per run (median reported); at least 1.
+    pub repeats: usize,
+    /// Threads of the accuracy pass; 1 = one sequential pass.
+    pub jobs: usize,
+    /// Project inconsistent initial values (default) or refuse them.
+    pub init_mode: InitMode,
+    /// Show a progress bar on stderr (only drawn when stderr is a terminal).
+    pub progress: bool,
+}
+
+impl SweepOptions {
+    /// The scene's own `[sweep]` grid, 3 repeats, sequential.
+    pub fn from_scene(scene: &Scene) -> Self {
+        SweepOptions {
+            solvers: scene.sweep.solvers.clone(),
+            formulations: scene.sweep.formulations.clone(),
+            tolerances: scene.sweep.tolerances.clone(),
+            repeats: 3,
+            jobs: 1,
+            init_mode: InitMode::Project,
+            progress: true,
+        }
+    }
+}
+
+/// Why a sweep could not run or its results could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    /// A solver name that is not known.
+    #[error("unknown solver `{name}` (known: {known})", known = dae_solvers::SOLVER_NAMES.join(", "))]
+    UnknownSolver {
+        /// The name given.
+        name: String,
+    },
+    /// A formulation name that is not one of the eight.
+    #[error("unknown formulation `{name}` (known: {known})", known = dae_core::system::FORMULATION_NAMES.join(", "))]
+    UnknownFormulation {
+        /// The name given.
+        name: String,
+    },
+    /// A tolerance that is not positive and finite.
+    #[error("tolerance {tol}: a tolerance must be positive and finite")]
+    BadTolerance {
+        /// The value given.
+        tol: f64,
+    },
+    /// Nothing to sweep.
+    #[error("nothing to sweep: no {what} given")]
+    Empty {
+        /// `solvers`, `formulations` or `tolerances`.
+        what: &'static str,
+    },
+    /// The scene's model could not be loaded.
+    #[error("{0}")]
+    Model(String),
+    /// A run could not start (bad scene input, e.g. an unusable reference).
+    #[error(transparent)]
+    Run(#[from] RunError),
+    /// A worker thread panicked.
+    #[error("a sweep worker thread panicked")]
+    WorkerPanicked,
+    /// A file could not be written.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The destination.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+}
+
+/// One solver × formulation pair of the grid.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Pair {
+    /// Solver.
+    pub solver: String,
+    /// Formulation.
+    pub formulation: String,
+    /// Why the pair is not run: "not provided by the model" or the
+    /// solver's reason from `Solver::accepts`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_applicable: Option<String>,
+}
+
+/// One run of the sweep: the runner's record (serialised flat, exactly as
+/// `dae run` prints it) plus every timed integration.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SweepRun {
+    /// The record; `tsim_s` is the median of `tsim_runs`.
+    #[serde(flatten)]
+    pub record: RunRecord,
+    /// Every timed integration in seconds.
+    pub tsim_runs: Vec<f64>,
+}
+
+impl Borrow<RunRecord> for SweepRun {
+    fn borrow(&self) -> &RunRecord {
+        &self.record
+    }
+}
+
+/// What was swept, in short.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneInfo {
+    /// Scene name.
+    pub name: String,
+    /// Where it came from.
+    pub origin: String,
+    /// Model (built-in name or path).
+    pub model: String,
+    /// Start time.
+    pub t0: f64,
+    /// End time.
+    pub t_end: f64,
+    /// Number of check times.
+    pub checks: usize,
+    /// Reference kind.
+    pub reference: &'static str,
+}
+
+/// Everything a sweep measured.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SweepReport {
+    /// The scene.
+    pub scene: SceneInfo,
+    /// Solvers, in row order.
+    pub solvers: Vec<String>,
+    /// Formulations, in column order.
+    pub formulations: Vec<String>,
+    /// Tolerances, in sweep order.
+    pub tolerances: Vec<f64>,
+    /// Timed integrations per run.
+    pub repeats: usize,
+    /// Threads of the accuracy pass.
+    pub jobs: usize,
+    /// Tolerance of the solution, error and residual figures.
+    pub figure_tol: f64,
+    /// Every pair, applicable or not.
+    pub pairs: Vec<Pair>,
+    /// Every run, in pair × tolerance order.
+    pub runs: Vec<SweepRun>,
+    /// Wall-clock time of the whole sweep in seconds.
+    pub wall_s: f64,
+    /// Unknowns of the model, in order.
+    pub variables: Vec<String>,
+    /// Invariants of the model.
+    pub invariants: Vec<String>,
+    /// Constraint levels present in the model's chain, with their
+    /// expressions (`level`, `0 = expr`).
+    pub constraints: Vec<(u8, String)>,
+    /// `true` for the built-in pendulum (enables the paper comparison).
+    #[serde(skip)]
+    pub builtin_pendulum: bool,
+}
+
+impl SweepReport {
+    /// Whether the scene has a reference (errors are measured).
+    pub fn has_reference(&self) -> bool {
+        self.scene.reference != ReferenceKind::None.as_str()
+    }
+
+    /// The runs at the figure tolerance that succeeded, in pair order.
+    pub fn figure_runs(&self) -> Vec<&SweepRun> {
+        self.runs
+            .iter()
+            .filter(|r| r.record.status == "ok" && paper::same_tol(r.record.tol, self.figure_tol))
+            .collect()
+    }
+}
+
+/// The tables derived from a report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// X / x / o / - per pair.
+    pub success: table::SuccessMatrix,
+    /// Runs not beaten on both time and `err`.
+    pub pareto: Vec<pareto::Point>,
+    /// Fastest run per target error.
+    pub targets: Vec<pareto::Target>,
+    /// Comparison with the paper (scenes S01 and S02 only).
+    pub paper: Option<paper::Comparison>,
+}
+
+impl Summary {
+    /// Derive the tables.
+    pub fn of(report: &SweepReport) -> Summary {
+        let paper = paper::PaperTable::for_scene(
+            &report.scene.name,
+            report.builtin_pendulum,
+            report.scene.t_end,
+        )
+        .filter(|_| report.has_reference())
+        .map(|t| paper::compare(&t, report));
+        Summary {
+            success: table::success_matrix(
+                &report.solvers,
+                &report.formulations,
+                &report.pairs,
+                &report.runs,
+            ),
+            pareto: pareto::pareto_front(&report.runs),
+            targets: pareto::targets(&report.runs, &pareto::TARGETS),
+            paper,
+        }
+    }
+}
+
+/// Median of a non-empty list (mean of the two middle values for an even
+/// count); 0 for an empty one.
+pub fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// The tolerance of the figures: 1e-7 if swept, else the nearest in log10
+/// (the first of equally near ones).
+pub fn figure_tol(tolerances: &[f64]) -> f64 {
+    let dist = |t: f64| (t.log10() - FIGURE_TOL.log10()).abs();
+    tolerances
+        .iter()
+        .copied()
+        .fold(None::<f64>, |best, t| match best {
+            Some(b) if dist(b) <= dist(t) => Some(b),
+            _ => Some(t),
+        })
+        .unwrap_or(FIGURE_TOL)
+}
+
+/// Sample times of the figures (empty: the check times are used).
+pub fn sample_times(scene: &Scene) -> Vec<f64> {
+    if scene.time.checks.len() >= CHECKS_AS_SAMPLES {
+        return Vec::new();
+    }
+    let (a, b) = (scene.time.start, scene.time.end);
+    let n = FIGURE_SAMPLES - 1;
+    (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect()
+}
+
+/// Check the grid before anything runs.
+pub fn validate(opts: &SweepOptions) -> Result<(), SweepError> {
+    for (what, empty) in [
+        ("solvers", opts.solvers.is_empty()),
+        ("formulations", opts.formulations.is_empty()),
+        ("tolerances", opts.tolerances.is_empty()),
+    ] {
+        if empty {
+            return Err(SweepError::Empty { what });
+        }
+    }
+    if let Some(s) = opts
+        .solvers
+        .iter()
+        .find(|s| dae_solvers::solver_by_name(s).is_none())
+    {
+        return Err(SweepError::UnknownSolver { name: s.clone() });
+    }
+    if let Some(f) = opts
+        .formulations
+        .iter()
+        .find(|f| !dae_core::system::FORMULATION_NAMES.contains(&f.as_str()))
+    {
+        return Err(SweepError::UnknownFormulation { name: f.clone() });
+    }
+    if let Some(t) = opts
+        .tolerances
+        .iter()
+        .find(|t| !(t.is_finite() && **t > 0.0))
+    {
+        return Err(SweepError::BadTolerance { tol: *t });
+    }
+    Ok(())
+}
+
+/// Every pair of the grid with its applicability.
+pub fn pairs(
+    model: &dyn Model,
+    solvers: &[String],
+    formulations: &[String],
+) -> Result<Vec<Pair>, SweepError> {
+    let mut out = Vec::new();
+    for s in solvers {
+        let solver = dae_solvers::solver_by_name(s)
+            .ok_or_else(|| SweepError::UnknownSolver { name: s.clone() })?;
+        for f in formulations {
+            let not_applicable = match model.formulation(f) {
+                Ok(sys) => solver.accepts(sys.info()).err(),
+                Err(FormulationError::NotProvided { .. }) => {
+                    Some("not provided by the model".to_string())
+                }
+                Err(FormulationError::Unknown { .. }) => {
+                    return Err(SweepError::UnknownFormulation { name: f.clone() })
+                }
+            };
+            out.push(Pair {
+                solver: s.clone(),
+                formulation: f.clone(),
+                not_applicable,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// One run of the grid.
+#[derive(Clone, Debug)]
+struct Job {
+    solver: String,
+    formulation: String,
+    tol: f64,
+    /// Sample the solution for the figures (an untimed integration).
+    figure: bool,
+}
+
+/// What every run shares.
+struct Ctx<'a> {
+    scene: &'a Scene,
+    initial: Vec<(String, f64)>,
+    reference: Option<PendulumExact>,
+    init_mode: InitMode,
+    samples: Vec<f64>,
+    repeats: usize,
+}
+
+impl Ctx<'_> {
+    fn run(&self, model: &dyn Model, job: &Job, samples: &[f64]) -> Result<RunRecord, RunError> {
+        runner::run(&RunSpec {
+            scene: &self.scene.name,
+            model,
+            initial: &self.initial,
+            t0: self.scene.time.start,
+            t_end: self.scene.time.end,
+            check: &self.scene.time.checks,
+            reference: self.reference.as_ref(),
+            solver: &job.solver,
+            formulation: &job.formulation,
+            tol: job.tol,
+            init_mode: self.init_mode,
+            samples,
+            repeats: 1,
+        })
+    }
+
+    /// The accuracy run: errors, statistics and (at the figure tolerance)
+    /// the sampled trajectory. Its time counts as a timed integration only
+    /// when it carried no extra samples.
+    fn accuracy(&self, model: &dyn Model, job: &Job) -> Result<(RunRecord, bool), RunError> {
+        let sampled = job.figure && !self.samples.is_empty();
+        let mut rec = self.run(model, job, if sampled { &self.samples } else { &[] })?;
+        if !job.figure {
+            rec.trajectory = Trajectory::default();
+        }
+        Ok((rec, !sampled))
+    }
+
+    /// Add timed integrations (output at the check times only) until there
+    /// are `repeats` of them or they took [`REPEAT_BUDGET_S`]; at least one.
+    fn timings(
+        &self,
+        model: &dyn Model,
+        job: &Job,
+        mut times: Vec<f64>,
+    ) -> Result<Vec<f64>, RunError> {
+        while times.is_empty()
+            || (times.len() < self.repeats && times.iter().sum::<f64>() < REPEAT_BUDGET_S)
+        {
+            times.push(self.run(model, job, &[])?.tsim_s);
+        }
+        Ok(times)
+    }
+}
+
+fn progress_bar(len: usize, prefix: &'static str, show: bool) -> ProgressBar {
+    let target = if show && std::io::stderr().is_terminal() {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    };
+    let bar = ProgressBar::with_draw_target(Some(len as u64), target);
+    let style = ProgressStyle::with_template(
+        "{prefix:>9} [{bar:32.cyan/blue}] {pos}/{len} {elapsed:>4} {wide_msg}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar())
+    .progress_chars("=> ");
+    bar.set_style(style);
+    bar.set_prefix(prefix);
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
+}
+
+fn job_label(job: &Job) -> String {
+    format!("{}({}) tol {:e}", job.solver, job.formulation, job.tol)
+}
+
+/// Run the sweep.
+pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError> {
+    let start = Instant::now();
+    validate(opts)?;
+    let model = load_model(scene).map_err(|f| SweepError::Model(f.message))?;
+    let info = model.model_info().clone();
+    let initial: Vec<(String, f64)> = scene
+        .initial
+        .iter()
+        .map(|v| (v.name.clone(), v.value))
+        .collect();
+    let reference = match scene.reference {
+        ReferenceKind::PendulumExact => Some(runner::pendulum_reference(&*model, &initial)?),
+        ReferenceKind::None => None,
+    };
+    let pairs = pairs(&*model, &opts.solvers, &opts.formulations)?;
+    let fig_tol = figure_tol(&opts.tolerances);
+    let jobs: Vec<Job> = pairs
+        .iter()
+        .filter(|p| p.not_applicable.is_none())
+        .flat_map(|p| {
+            opts.tolerances.iter().map(move |&tol| Job {
+                solver: p.solver.clone(),
+                formulation: p.formulation.clone(),
+                tol,
+                figure: paper::same_tol(tol, fig_tol),
+            })
+        })
+        .collect();
+    let ctx = Ctx {
+        scene,
+        initial,
+        reference,
+        init_mode: opts.init_mode,
+        samples: sample_times(scene),
+        repeats: opts.repeats.max(1),
+    };
+    let runs = if opts.jobs <= 1 {
+        sequential(&ctx, &*model, &jobs, opts.progress)?
+    } else {
+        parallel(&ctx, &*model, &jobs, opts.jobs, opts.progress)?
+    };
+    let mut levels: Vec<(u8, String)> = info
+        .constraints
+        .iter()
+        .map(|c| (c.level, c.expr.clone()))
+        .collect();
+    levels.sort_by_key(|(l, _)| *l);
+    let builtin_pendulum = scene.model == ModelSource::Builtin("pendulum".into());
+    Ok(SweepReport {
+        scene: SceneInfo {
+            name: scene.name.clone(),
+            origin: scene.origin.clone(),
+            model: match &scene.model {
+                ModelSource::Builtin(n) => n.clone(),
+                ModelSource::File(p) => p.display().to_string(),
+            },
+            t0: scene.time.start,
+            t_end: scene.time.end,
+            checks: scene.time.checks.len(),
+            reference: scene.reference.as_str(),
+        },
+        solvers: opts.solvers.clone(),
+        formulations: opts.formulations.clone(),
+        tolerances: opts.tolerances.clone(),
+        repeats: ctx.repeats,
+        jobs: opts.jobs.max(1),
+        figure_tol: fig_tol,
+        pairs,
+        runs,
+        wall_s: start.elapsed().as_secs_f64(),
+        variables: info.variables.iter().map(|v| v.name.clone()).collect(),
+        invariants: info.invariants.clone(),
+        constraints: levels,
+        builtin_pendulum,
+    })
+}
+
+/// `jobs = 1`: accuracy and timing in one sequential pass.
+fn sequential(
+    ctx: &Ctx<'_>,
+    model: &dyn Model,
+    jobs: &[Job],
+    progress: bool,
+) -> Result<Vec<SweepRun>, SweepError> {
+    let bar = progress_bar(jobs.len(), "sweep", progress);
+    let mut out = Vec::with_capacity(jobs.len());
+    for job in jobs {
+        bar.set_message(job_label(job));
+        let (mut record, timed) = ctx.accuracy(model, job)?;
+        let mut times = if timed {
+            vec![record.tsim_s]
+        } else {
+            Vec::new()
+        };
+        if record.status == "ok" {
+            times = ctx.timings(model, job, times)?;
+        } else if times.is_empty() {
+            times.push(record.tsim_s);
+        }
+        record.tsim_s = median(&times);
+        out.push(SweepRun {
+            record,
+            tsim_runs: times,
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(out)
+}
+
+/// `jobs > 1`: a parallel accuracy pass, then a sequential timing pass.
+fn parallel(
+    ctx: &Ctx<'_>,
+    model: &dyn Model,
+    jobs: &[Job],
+    threads: usize,
+    progress: bool,
+) -> Result<Vec<SweepRun>, SweepError> {
+    let bar = progress_bar(jobs.len(), "accuracy", progress);
+    let next = AtomicUsize::new(0);
+    let mut slots: Vec<Option<RunRecord>> = vec![None; jobs.len()];
+    std::thread::scope(|s| -> Result<(), SweepError> {
+        let handles: Vec<_> = (0..threads.min(jobs.len().max(1)))
+            .map(|_| {
+                let (next, bar) = (&next, &bar);
+                s.spawn(move || -> Result<Vec<(usize, RunRecord)>, SweepError> {
+                    // Each thread integrates with its own model instance.
+                    let model = load_model(ctx.scene).map_err(|f| SweepError::Model(f.message))?;
+                    let mut done = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(job) = jobs.get(i) else { break };
+                        bar.set_message(job_label(job));
+                        let (rec, _) = ctx.accuracy(&*model, job)?;
+                        done.push((i, rec));
+                        bar.inc(1);
+                    }
+                    Ok(done)
+                })
+            })
+            .collect();
+        for h in handles {
+            for (i, rec) in h.join().map_err(|_| SweepError::WorkerPanicked)?? {
+                slots[i] = Some(rec);
+            }
+        }
+        Ok(())
+    })?;
+    bar.finish_and_clear();
+    let ok = slots.iter().flatten().filter(|r| r.status == "ok").count();
+    let bar = progress_bar(ok, "timing", progress);
+    let mut out = Vec::with_capacity(jobs.len());
+    for (job, slot) in jobs.iter().zip(slots) {
+        let mut record = slot.ok_or(SweepError::WorkerPanicked)?;
+        let times = if record.status == "ok" {
+            bar.set_message(job_label(job));
+            let t = ctx.timings(model, job, Vec::new())?;
+            bar.inc(1);
+            t
+        } else {
+            vec![record.tsim_s]
+        };
+        record.tsim_s = median(&times);
+        out.push(SweepRun {
+            record,
+            tsim_runs: times,
+        });
+    }
+    bar.finish_and_clear();
+    Ok(out)
+}
+
+/// The JSON document `results.json`:
+///
+/// ```text
+/// { "scene":   {name, origin, model, t0, t_end, checks, reference},
+///   "sweep":   {solvers, formulations, tolerances, repeats, jobs, figure_tol, wall_s, pairs: [...]},
+///   "runs":    [ RunRecord fields (as `dae run` prints them) + "tsim_runs": [...] ],
+///   "success": {legend, formulations, rows: [{solver, cells: [{formulation, mark, ok, runs, reason?}]}]},
+///   "pareto":  {error: "err", definition, rows: [{solver, formulation, tol, tsim_s, err}]},
+///   "targets": {error: "err", rows: [{target, best: {solver, formulation, tol, tsim_s, err} | null}]},
+///   "paper":   {table, note, rows: [...], counts: [...]} | null }
+/// ```
+pub fn results_json(report: &SweepReport, summary: &Summary) -> serde_json::Value {
+    serde_json::to_value(ResultsDoc::new(report, summary)).unwrap_or(serde_json::Value::Null)
+}
+
+/// `results.json`, field by field in document order.
+#[derive(Serialize)]
+struct ResultsDoc<'a> {
+    scene: &'a SceneInfo,
+    sweep: SweepDoc<'a>,
+    runs: &'a [SweepRun],
+    success: &'a table::SuccessMatrix,
+    pareto: Explained<&'a [pareto::Point]>,
+    targets: Explained<&'a [pareto::Target]>,
+    paper: Option<&'a paper::Comparison>,
+}
+
+#[derive(Serialize)]
+struct SweepDoc<'a> {
+    solvers: &'a [String],
+    formulations: &'a [String],
+    tolerances: &'a [f64],
+    repeats: usize,
+    jobs: usize,
+    figure_tol: f64,
+    wall_s: f64,
+    pairs: &'a [Pair],
+}
+
+#[derive(Serialize)]
+struct Explained<T> {
+    error: &'static str,
+    definition: &'static str,
+    rows: T,
+}
+
+impl<'a> ResultsDoc<'a> {
+    fn new(report: &'a SweepReport, summary: &'a Summary) -> Self {
+        ResultsDoc {
+            scene: &report.scene,
+            sweep: SweepDoc {
+                solvers: &report.solvers,
+                formulations: &report.formulations,
+                tolerances: &report.tolerances,
+                repeats: report.repeats,
+                jobs: report.jobs,
+                figure_tol: report.figure_tol,
+                wall_s: report.wall_s,
+                pairs: &report.pairs,
+            },
+            runs: &report.runs,
+            success: &summary.success,
+            pareto: Explained {
+                error: "err",
+                definition: "successful runs with a finite err; a run is on the front when no other such run is at \
+                             least as fast (tsim_s) and at least as accurate (err) and strictly better in one; sorted \
+                             by tsim_s",
+                rows: &summary.pareto,
+            },
+            targets: Explained {
+                error: "err",
+                definition: "for each target error, the fastest successful run with err <= target (null: none)",
+                rows: &summary.targets,
+            },
+            paper: summary.paper.as_ref(),
+        }
+    }
+}
+
+/// Serialise `results.json` (pretty, with a final newline).
+pub fn results_json_string(report: &SweepReport, summary: &Summary) -> String {
+    serde_json::to_string_pretty(&ResultsDoc::new(report, summary)).unwrap_or_default() + "\n"
+}
+
+/// What [`write_outputs`] wrote.
+#[derive(Clone, Debug, Default)]
+pub struct Outputs {
+    /// Files written, in order.
+    pub files: Vec<PathBuf>,
+    /// Figures that could not be drawn, and why.
+    pub notes: Vec<String>,
+}
+
+fn write_file(dir: &Path, name: &str, bytes: &[u8], out: &mut Outputs) -> Result<(), SweepError> {
+    let path = dir.join(name);
+    write::atomic_write(&path, bytes).map_err(|source| SweepError::Write {
+        path: path.clone(),
+        source,
+    })?;
+    out.files.push(path);
+    Ok(())
+}
+
+/// Write `results.csv`, `results.json`, the figures (SVG and PNG) and
+/// `index.html` into `dir` (created if needed). A figure that cannot be
+/// drawn is a note in `index.html`, not an error.
+pub fn write_outputs(
+    report: &SweepReport,
+    summary: &Summary,
+    dir: &Path,
+) -> Result<Outputs, SweepError> {
+    std::fs::create_dir_all(dir).map_err(|source| SweepError::Write {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let mut out = Outputs::default();
+    let csv = table::results_csv(report).map_err(|source| SweepError::Write {
+        path: dir.join("results.csv"),
+        source,
+    })?;
+    write_file(dir, "results.csv", &csv, &mut out)?;
+    let json = results_json_string(report, summary);
+    write_file(dir, "results.json", json.as_bytes(), &mut out)?;
+    let figures = plot::figures(report);
+    for fig in &figures.figures {
+        match plot::render(fig, dir) {
+            Ok(files) => out.files.extend(files),
+            Err(e) => out.notes.push(format!("figure {}: {e}", fig.file)),
+        }
+    }
+    out.notes.extend(figures.notes.iter().cloned());
+    let drawn: Vec<&plot::Figure> = figures
+        .figures
+        .iter()
+        .filter(|f| {
+            out.files
+                .iter()
+                .any(|p| p.ends_with(format!("{}.svg", f.file)))
+        })
+        .collect();
+    let page = html::index(report, summary, &drawn, &out.notes);
+    write_file(dir, "index.html", page.as_bytes(), &mut out)?;
+    Ok(out)
+}

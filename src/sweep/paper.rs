@@ -1,0 +1,407 @@
+//! The paper's efficiency tables (Steinbrecher 2015, Table 6 for S01 and
+//! Table 9 for S02), shipped in `data/` and embedded, and the comparison of
+//! our `err_sum` with the paper's ERR.
+//!
+//! Families: our `radau5` is compared with RADAU5, our `bdf` with DASSL and
+//! with DASPK (one comparison row per paper code). A cell is labelled by
+//! the ratio `ours / paper`: below 1/2 **more accurate**, within a factor
+//! 2 either way **equal**, above 2 **behind**. Where only one side
+//! succeeded the cell says so.
+
+use super::{SweepReport, SweepRun};
+use serde::Serialize;
+
+/// Table 9 of the paper (S02), as shipped in `shared/reference/`.
+pub const TABLE9_S02_CSV: &str = include_str!("../../data/paper_table9_s02.csv");
+/// Table 6 of the paper (S01), transcribed from the seed text; `?` marks
+/// cells the seed's OCR makes illegible.
+pub const TABLE6_S01_CSV: &str = include_str!("../../data/paper_table6_s01.csv");
+
+/// Factor within which two errors count as equal.
+pub const EQUAL_FACTOR: f64 = 2.0;
+
+/// One cell of a paper table.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", content = "value", rename_all = "snake_case")]
+pub enum PaperCell {
+    /// A value.
+    Value(f64),
+    /// The integration was not successful (`-` in the paper).
+    Failed,
+    /// The seed text is illegible here.
+    Illegible,
+}
+
+/// One row: a code, a formulation, a quantity over the tolerances.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PaperRow {
+    /// Paper code (`RADAU5`, `DASSL`, …).
+    pub solver: String,
+    /// Formulation.
+    pub formulation: String,
+    /// `tsim_s` or `err`.
+    pub quantity: String,
+    /// One cell per tolerance of the table.
+    pub cells: Vec<PaperCell>,
+}
+
+/// A parsed paper table.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PaperTable {
+    /// Which table (`Table 6 (S01)` …).
+    pub label: String,
+    /// Tolerances of the columns.
+    pub tolerances: Vec<f64>,
+    /// Rows in file order.
+    pub rows: Vec<PaperRow>,
+}
+
+/// Why a paper table could not be parsed.
+#[derive(Debug, thiserror::Error)]
+pub enum PaperError {
+    /// Missing or malformed header.
+    #[error("{label}: bad header: {why}")]
+    Header {
+        /// Table.
+        label: String,
+        /// What is wrong.
+        why: String,
+    },
+    /// A malformed row.
+    #[error("{label}: line {line}: {why}")]
+    Row {
+        /// Table.
+        label: String,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        why: String,
+    },
+}
+
+impl PaperTable {
+    /// Parse the CSV shape of `data/paper_table*.csv`: `#` comment lines,
+    /// a header `solver,formulation,quantity,TOL…`, then rows; an empty
+    /// cell is a failed run, `?` an illegible one.
+    pub fn parse(label: &str, text: &str) -> Result<PaperTable, PaperError> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+        let (_, header) = lines.next().ok_or_else(|| PaperError::Header {
+            label: label.into(),
+            why: "no header".into(),
+        })?;
+        let head: Vec<&str> = header.split(',').map(str::trim).collect();
+        if head.len() < 4 || head[..3] != ["solver", "formulation", "quantity"] {
+            return Err(PaperError::Header {
+                label: label.into(),
+                why: format!("expected solver,formulation,quantity,… got `{header}`"),
+            });
+        }
+        let tolerances = head[3..]
+            .iter()
+            .map(|t| {
+                t.parse::<f64>().map_err(|_| PaperError::Header {
+                    label: label.into(),
+                    why: format!("tolerance `{t}` is not a number"),
+                })
+            })
+            .collect::<Result<Vec<f64>, _>>()?;
+        let mut rows = Vec::new();
+        for (i, line) in lines {
+            let f: Vec<&str> = line.split(',').map(str::trim).collect();
+            let row_err = |why: String| PaperError::Row {
+                label: label.into(),
+                line: i + 1,
+                why,
+            };
+            if f.len() != 3 + tolerances.len() {
+                return Err(row_err(format!(
+                    "{} fields, expected {}",
+                    f.len(),
+                    3 + tolerances.len()
+                )));
+            }
+            let cells = f[3..]
+                .iter()
+                .map(|c| match *c {
+                    "" => Ok(PaperCell::Failed),
+                    "?" => Ok(PaperCell::Illegible),
+                    v => v
+                        .parse::<f64>()
+                        .map(PaperCell::Value)
+                        .map_err(|_| row_err(format!("`{v}` is not a number"))),
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            rows.push(PaperRow {
+                solver: f[0].into(),
+                formulation: f[1].into(),
+                quantity: f[2].into(),
+                cells,
+            });
+        }
+        Ok(PaperTable {
+            label: label.into(),
+            tolerances,
+            rows,
+        })
+    }
+
+    /// The paper table for a scene, when the scene is one of the paper's:
+    /// its name is `S01`/`S02` (any case), it integrates the built-in
+    /// pendulum and its horizon is the paper's.
+    pub fn for_scene(name: &str, builtin_pendulum: bool, t_end: f64) -> Option<PaperTable> {
+        if !builtin_pendulum {
+            return None;
+        }
+        let (label, text) = match name.to_ascii_uppercase().as_str() {
+            "S01" if t_end == 20.0 => ("Table 6 (S01)", TABLE6_S01_CSV),
+            "S02" if t_end == 2000.0 => ("Table 9 (S02)", TABLE9_S02_CSV),
+            _ => return None,
+        };
+        PaperTable::parse(label, text).ok()
+    }
+
+    /// The cell of `quantity` for a code, formulation and tolerance.
+    pub fn cell(
+        &self,
+        solver: &str,
+        formulation: &str,
+        quantity: &str,
+        tol: f64,
+    ) -> Option<PaperCell> {
+        let col = self.tolerances.iter().position(|t| same_tol(*t, tol))?;
+        self.rows
+            .iter()
+            .find(|r| r.solver == solver && r.formulation == formulation && r.quantity == quantity)
+            .map(|r| r.cells[col])
+    }
+
+    /// Whether the paper ran this code on this formulation at all.
+    pub fn has(&self, solver: &str, formulation: &str) -> bool {
+        self.rows
+            .iter()
+            .any(|r| r.solver == solver && r.formulation == formulation)
+    }
+}
+
+/// Tolerances equal up to rounding of their decimal form.
+pub fn same_tol(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
+}
+
+/// The paper codes of our solver's family.
+pub fn family(solver: &str) -> &'static [&'static str] {
+    match solver {
+        "radau5" => &["RADAU5"],
+        "bdf" => &["DASSL", "DASPK"],
+        _ => &[],
+    }
+}
+
+/// How our error compares with the paper's in one cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// `ours < paper / 2`.
+    MoreAccurate,
+    /// Within a factor 2.
+    Equal,
+    /// `ours > 2 · paper`.
+    Behind,
+    /// We succeeded where the paper's code failed.
+    PaperFailed,
+    /// The paper's code succeeded where we failed.
+    WeFailed,
+    /// Both failed.
+    BothFailed,
+    /// The paper's cell is illegible in the seed.
+    Illegible,
+}
+
+impl Verdict {
+    /// Short label for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            Verdict::MoreAccurate => "more accurate",
+            Verdict::Equal => "equal",
+            Verdict::Behind => "behind",
+            Verdict::PaperFailed => "paper failed",
+            Verdict::WeFailed => "we failed",
+            Verdict::BothFailed => "both failed",
+            Verdict::Illegible => "illegible",
+        }
+    }
+
+    /// Compare our error (`None`: our run failed) with the paper's cell.
+    pub fn of(ours: Option<f64>, paper: PaperCell) -> Verdict {
+        match (ours, paper) {
+            (_, PaperCell::Illegible) => Verdict::Illegible,
+            (Some(_), PaperCell::Failed) => Verdict::PaperFailed,
+            (None, PaperCell::Failed) => Verdict::BothFailed,
+            (None, PaperCell::Value(_)) => Verdict::WeFailed,
+            (Some(o), PaperCell::Value(p)) => {
+                if o * EQUAL_FACTOR < p {
+                    Verdict::MoreAccurate
+                } else if o > p * EQUAL_FACTOR {
+                    Verdict::Behind
+                } else {
+                    Verdict::Equal
+                }
+            }
+        }
+    }
+}
+
+/// One cell of the comparison.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CompareCell {
+    /// Tolerance.
+    pub tol: f64,
+    /// Our `err_sum` (`None` when our run failed).
+    pub ours: Option<f64>,
+    /// The paper's ERR.
+    pub paper: PaperCell,
+    /// The label.
+    pub verdict: Verdict,
+}
+
+/// One row: our pair against one paper code on the same formulation.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CompareRow {
+    /// Our solver.
+    pub solver: String,
+    /// Formulation.
+    pub formulation: String,
+    /// The paper code.
+    pub paper_solver: String,
+    /// One cell per tolerance of ours that the paper table has.
+    pub cells: Vec<CompareCell>,
+}
+
+/// The comparison with the paper for one scene.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Which table.
+    pub table: String,
+    /// What is compared.
+    pub note: String,
+    /// Rows.
+    pub rows: Vec<CompareRow>,
+    /// Paper rows (`CODE(formulation)`) we ran against but whose every
+    /// cell is illegible in the seed: left out of `rows`.
+    pub illegible: Vec<String>,
+    /// How many cells got each verdict, in [`Verdict`] order.
+    pub counts: Vec<VerdictCount>,
+}
+
+/// How many cells got one verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct VerdictCount {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Number of cells.
+    pub cells: usize,
+}
+
+/// Compare our runs with a paper table: every pair of ours whose family
+/// code the paper ran on the same formulation.
+pub fn compare(table: &PaperTable, report: &SweepReport) -> Comparison {
+    compare_runs(
+        table,
+        &report.solvers,
+        &report.formulations,
+        &report.tolerances,
+        &report.runs,
+    )
+}
+
+/// [`compare`] on plain lists (used by tests).
+pub fn compare_runs(
+    table: &PaperTable,
+    solvers: &[String],
+    formulations: &[String],
+    tolerances: &[f64],
+    runs: &[SweepRun],
+) -> Comparison {
+    let mut rows = Vec::new();
+    let mut illegible = Vec::new();
+    for s in solvers {
+        for f in formulations {
+            let ours: Vec<&SweepRun> = runs
+                .iter()
+                .filter(|r| &r.record.solver == s && &r.record.formulation == f)
+                .collect();
+            if ours.is_empty() {
+                continue;
+            }
+            for code in family(s) {
+                if !table.has(code, f) {
+                    continue;
+                }
+                let mut cells = Vec::new();
+                for &tol in tolerances {
+                    let Some(paper) = table.cell(code, f, "err", tol) else {
+                        continue;
+                    };
+                    let Some(run) = ours.iter().find(|r| same_tol(r.record.tol, tol)) else {
+                        continue;
+                    };
+                    let mine = if run.record.status == "ok" {
+                        run.record.err_sum
+                    } else {
+                        None
+                    };
+                    cells.push(CompareCell {
+                        tol,
+                        ours: mine,
+                        paper,
+                        verdict: Verdict::of(mine, paper),
+                    });
+                }
+                if !cells.is_empty() && cells.iter().all(|c| c.verdict == Verdict::Illegible) {
+                    illegible.push(format!("{code}({f})"));
+                } else if !cells.is_empty() {
+                    rows.push(CompareRow {
+                        solver: s.clone(),
+                        formulation: f.clone(),
+                        paper_solver: (*code).to_string(),
+                        cells,
+                    });
+                }
+            }
+        }
+    }
+    let all = [
+        Verdict::MoreAccurate,
+        Verdict::Equal,
+        Verdict::Behind,
+        Verdict::PaperFailed,
+        Verdict::WeFailed,
+        Verdict::BothFailed,
+        Verdict::Illegible,
+    ];
+    let counts = all
+        .iter()
+        .map(|v| VerdictCount {
+            verdict: *v,
+            cells: rows
+                .iter()
+                .flat_map(|r| &r.cells)
+                .filter(|c| c.verdict == *v)
+                .count(),
+        })
+        .collect();
+    Comparison {
+        table: table.label.clone(),
+        note: format!(
+            "our err_sum (sum over the check times of |x-x*|+|y-y*|+|v-v*|+|w-w*|+|lambda-lambda*| against the exact \
+             solution) next to the paper's ERR; more accurate: ours < paper/{EQUAL_FACTOR}, equal: within a factor \
+             {EQUAL_FACTOR}, behind: ours > {EQUAL_FACTOR}·paper. radau5 ↔ RADAU5, bdf ↔ DASSL and DASPK."
+        ),
+        rows,
+        illegible,
+        counts,
+    }
+}

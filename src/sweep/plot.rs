@@ -1,0 +1,957 @@
+//! The paper's figures for a sweep, as SVG and PNG (plotters):
+//!
+//! - `solution`: every unknown over time (paper Fig. 2/3, 8/9),
+//! - `error`: the pointwise error over time, log scale (Fig. 4/10),
+//! - `residuals`: constraint residuals per level and the energy drift, log
+//!   scale (Fig. 5/11),
+//!
+//! these three at the figure tolerance with one curve per pair, and
+//! - `work_precision`: `err` against `tsim`, log-log, one line per
+//!   solver(formulation) through its tolerances, with the Pareto front
+//!   (Fig. 6/12). Without a reference it plots the position-constraint
+//!   residual instead of the error.
+//!
+//! A figure is first described as data ([`Figure`]: panels of series) and
+//! then drawn by one renderer on either backend. Colours encode the
+//! formulation, line style and marker the solver, so a pair keeps its look
+//! in every figure and every sweep.
+
+use super::table::tol_label;
+use super::{write, SweepReport, SweepRun};
+use plotters::coord::ranged1d::{Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Width of the legend strip on the right of every figure, in pixels.
+const LEGEND_WIDTH: u32 = 250;
+/// Height of the title band, in pixels.
+const TITLE_HEIGHT: u32 = 44;
+/// The lowest value a log axis shows; smaller values and exact zeros are
+/// drawn there (plotters labels no tick below `f64::EPSILON`).
+const LOG_FLOOR: f64 = 1e-16;
+
+/// Why a figure could not be drawn or written.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// The plotting library failed (e.g. no usable font).
+    #[error("drawing failed: {0}")]
+    Draw(String),
+    /// The file could not be written.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+}
+
+fn draw_err<E: std::fmt::Display>(e: E) -> PlotError {
+    PlotError::Draw(e.to_string())
+}
+
+/// Point markers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Marker {
+    /// No marker.
+    None,
+    /// A circle.
+    Circle,
+    /// A triangle.
+    Triangle,
+    /// A square.
+    Square,
+}
+
+/// How a series looks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Look {
+    /// Colour.
+    pub color: RGBColor,
+    /// Dashed line.
+    pub dashed: bool,
+    /// Marker at the data points (drawn only where `markers` is asked).
+    pub marker: Marker,
+    /// Line width in pixels.
+    pub width: u32,
+}
+
+/// Colours of the formulations (in [`dae_core::system::FORMULATION_NAMES`]
+/// order), a colour-blind-friendly categorical palette.
+const FORMULATION_COLORS: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),  // ori2 blue
+    RGBColor(255, 127, 14),  // rcd1 orange
+    RGBColor(44, 160, 44),   // rcd0 green
+    RGBColor(214, 39, 40),   // ovd1 red
+    RGBColor(148, 103, 189), // ovd0 purple
+    RGBColor(140, 86, 75),   // ggl1 brown
+    RGBColor(227, 119, 194), // psi1 pink
+    RGBColor(23, 190, 207),  // psi0 cyan
+];
+
+/// The look of a pair: colour from the formulation, shade, dash and marker
+/// from the solver.
+pub fn look(solver: &str, formulation: &str) -> Look {
+    let f = dae_core::system::FORMULATION_NAMES
+        .iter()
+        .position(|n| *n == formulation)
+        .unwrap_or(0);
+    let s = dae_solvers::SOLVER_NAMES
+        .iter()
+        .position(|n| *n == solver)
+        .unwrap_or(0);
+    let RGBColor(r, g, b) = FORMULATION_COLORS[f % FORMULATION_COLORS.len()];
+    // Every other solver a darker shade, so that coinciding curves of two
+    // solvers on one formulation stay apart.
+    let shade = |c: u8| {
+        if s % 2 == 1 {
+            (f64::from(c) * 0.62).round() as u8
+        } else {
+            c
+        }
+    };
+    Look {
+        color: RGBColor(shade(r), shade(g), shade(b)),
+        dashed: s % 2 == 1,
+        marker: [Marker::Circle, Marker::Triangle, Marker::Square][s % 3],
+        width: 2,
+    }
+}
+
+/// One curve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend label, `solver(formulation)`.
+    pub label: String,
+    /// Look.
+    pub look: Look,
+    /// Data points.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// One chart of a figure.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Panel {
+    /// Caption above the chart.
+    pub title: String,
+    /// x-axis description with unit.
+    pub x_label: String,
+    /// y-axis description with unit.
+    pub y_label: String,
+    /// Logarithmic x axis.
+    pub x_log: bool,
+    /// Logarithmic y axis.
+    pub y_log: bool,
+    /// Draw markers at the data points.
+    pub markers: bool,
+    /// On a log axis, leave out exact zeros (an error or drift at `t0`)
+    /// instead of drawing them on the lower edge.
+    pub drop_zeros: bool,
+    /// Curves.
+    pub series: Vec<Series>,
+}
+
+/// A figure: a title, a grid of panels and one legend.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Figure {
+    /// File stem (`solution` → `solution.svg`, `solution.png`).
+    pub file: String,
+    /// Title.
+    pub title: String,
+    /// What the figure shows (for `index.html`).
+    pub caption: String,
+    /// Panels, row-major.
+    pub panels: Vec<Panel>,
+    /// Panels per row.
+    pub cols: usize,
+    /// Size in pixels.
+    pub size: (u32, u32),
+    /// Legend entries (label, look, with marker).
+    pub legend: Vec<(String, Look, bool)>,
+}
+
+/// The figures of a sweep and notes on the ones left out.
+#[derive(Clone, Debug, Default)]
+pub struct Figures {
+    /// Figures to draw.
+    pub figures: Vec<Figure>,
+    /// Why a figure is missing or what it shows instead.
+    pub notes: Vec<String>,
+}
+
+/// Unit of an unknown for the axis label, by the naming convention of the
+/// shipped mechanical models (SI): positions `x, y, z…` in m, velocities
+/// `v, w, vx…` in m/s, multipliers `lambda…` in N/m (forces `2·x·λ`),
+/// GGL multipliers `eta…` in 1/s. Other names get no unit.
+pub fn unit_of(name: &str) -> Option<&'static str> {
+    let base = name.trim_end_matches(|c: char| c.is_ascii_digit());
+    match base {
+        "x" | "y" | "z" => Some("m"),
+        "v" | "w" | "u" | "vx" | "vy" | "vz" => Some("m/s"),
+        "lambda" | "lam" => Some("N/m"),
+        "eta" | "mu" => Some("1/s"),
+        _ => None,
+    }
+}
+
+fn with_unit(label: &str, unit: Option<&str>) -> String {
+    match unit {
+        Some(u) => format!("{label} [{u}]"),
+        None => label.to_string(),
+    }
+}
+
+fn level_name(level: u8) -> &'static str {
+    match level {
+        0 => "position",
+        1 => "velocity",
+        2 => "acceleration",
+        _ => "higher",
+    }
+}
+
+/// Units of the residual of each level: the constraints of the shipped
+/// models are squared lengths (m², m²/s, m²/s²); for other constraints the
+/// unit is left out.
+fn residual_unit(report: &SweepReport, level: u8) -> Option<&'static str> {
+    let squared = report
+        .constraints
+        .iter()
+        .filter(|(l, _)| *l == 0)
+        .all(|(_, e)| e.contains("^2"));
+    if !squared {
+        return None;
+    }
+    [Some("m²"), Some("m²/s"), Some("m²/s²")]
+        .get(level as usize)
+        .copied()
+        .flatten()
+}
+
+fn label(run: &SweepRun) -> String {
+    format!("{}({})", run.record.solver, run.record.formulation)
+}
+
+fn legend_of(runs: &[&SweepRun], markers: bool) -> Vec<(String, Look, bool)> {
+    runs.iter()
+        .map(|r| {
+            (
+                label(r),
+                look(&r.record.solver, &r.record.formulation),
+                markers,
+            )
+        })
+        .collect()
+}
+
+fn grid_size(panels: usize, cols: usize, panel_h: u32, width: u32) -> (u32, u32) {
+    let rows = panels.div_ceil(cols.max(1)).max(1) as u32;
+    (width, TITLE_HEIGHT + rows * panel_h)
+}
+
+/// Describe the figures of a sweep.
+pub fn figures(report: &SweepReport) -> Figures {
+    let mut out = Figures::default();
+    let runs = report.figure_runs();
+    let tol = tol_label(report.figure_tol);
+    let name = &report.scene.name;
+    let sampled_at = if report.scene.checks >= super::CHECKS_AS_SAMPLES {
+        " (plotted at the check times only)"
+    } else {
+        ""
+    };
+    if runs.is_empty() {
+        out.notes.push(format!(
+            "no run succeeded at the figure tolerance {tol}: the solution, error and residual figures are left out"
+        ));
+    } else {
+        out.figures
+            .push(solution_figure(report, &runs, &tol, sampled_at));
+        if report.has_reference() {
+            out.figures
+                .push(error_figure(report, &runs, &tol, sampled_at));
+        } else {
+            out.notes.push(format!(
+                "scene {name} has no reference ([reference] kind = \"none\"): no error figure; the work-precision \
+                 diagram plots the position-constraint residual instead of the error"
+            ));
+        }
+        out.figures
+            .push(residual_figure(report, &runs, &tol, sampled_at));
+    }
+    match work_precision_figure(report) {
+        Some(f) => out.figures.push(f),
+        None => out.notes.push(
+            "no successful run with a finite error: the work-precision diagram is left out".into(),
+        ),
+    }
+    out
+}
+
+fn solution_figure(
+    report: &SweepReport,
+    runs: &[&SweepRun],
+    tol: &str,
+    sampled_at: &str,
+) -> Figure {
+    let panels: Vec<Panel> = report
+        .variables
+        .iter()
+        .map(|v| Panel {
+            title: v.clone(),
+            x_label: "t [s]".into(),
+            y_label: with_unit(v, unit_of(v)),
+            x_log: false,
+            y_log: false,
+            markers: false,
+            drop_zeros: false,
+            series: runs
+                .iter()
+                .filter_map(|r| {
+                    let tr = &r.record.trajectory;
+                    let i = tr.names.iter().position(|n| n == v)?;
+                    Some(Series {
+                        label: label(r),
+                        look: look(&r.record.solver, &r.record.formulation),
+                        points: tr.t.iter().zip(&tr.y).map(|(t, y)| (*t, y[i])).collect(),
+                    })
+                })
+                .collect(),
+        })
+        .collect();
+    let cols = if panels.len() > 1 { 2 } else { 1 };
+    Figure {
+        file: "solution".into(),
+        title: format!(
+            "{}: numerical solution{}, RTOL = ATOL = {tol}",
+            report.scene.name,
+            if sampled_at.is_empty() { "" } else { " at the check times" }
+        ),
+        caption: format!(
+            "Every unknown over time at RTOL = ATOL = {tol}, one curve per solver(formulation){sampled_at} \
+             (paper Fig. 3 / 9)."
+        ),
+        size: grid_size(panels.len(), cols, 300, 1400),
+        panels,
+        cols,
+        legend: legend_of(runs, false),
+    }
+}
+
+fn error_figure(report: &SweepReport, runs: &[&SweepRun], tol: &str, sampled_at: &str) -> Figure {
+    let series = runs
+        .iter()
+        .map(|r| {
+            let tr = &r.record.trajectory;
+            Series {
+                label: label(r),
+                look: look(&r.record.solver, &r.record.formulation),
+                points: tr.t.iter().zip(&tr.err).map(|(t, e)| (*t, *e)).collect(),
+            }
+        })
+        .collect();
+    Figure {
+        file: "error".into(),
+        title: format!(
+            "{}: error against the exact solution{}, RTOL = ATOL = {tol}",
+            report.scene.name,
+            if sampled_at.is_empty() { "" } else { " at the check times" }
+        ),
+        caption: format!(
+            "Largest pointwise error of the differential unknowns, max(|x−x*|, |y−y*|, |v−v*|, |w−w*|), over \
+             time at RTOL = ATOL = {tol}{sampled_at}; log scale (paper Fig. 4 / 10). Exact zeros (t = t0) are \
+             left out; values below 1e-16 are drawn on the lower edge."
+        ),
+        panels: vec![Panel {
+            title: "max(|x−x*|, |y−y*|, |v−v*|, |w−w*|)".into(),
+            x_label: "t [s]".into(),
+            y_label: "error [m, m/s]".into(),
+            x_log: false,
+            y_log: true,
+            markers: false,
+            drop_zeros: true,
+            series,
+        }],
+        cols: 1,
+        size: (1300, 700),
+        legend: legend_of(runs, false),
+    }
+}
+
+fn residual_figure(
+    report: &SweepReport,
+    runs: &[&SweepRun],
+    tol: &str,
+    sampled_at: &str,
+) -> Figure {
+    let mut levels: Vec<u8> = report
+        .constraints
+        .iter()
+        .map(|(l, _)| *l)
+        .filter(|l| *l < 3)
+        .collect();
+    levels.dedup();
+    let mut panels: Vec<Panel> = levels
+        .iter()
+        .map(|&l| {
+            let exprs: Vec<&str> = report
+                .constraints
+                .iter()
+                .filter(|(k, _)| *k == l)
+                .map(|(_, e)| e.as_str())
+                .collect();
+            let title = if exprs.len() == 1 && exprs[0].chars().count() <= 40 {
+                format!("{} level: 0 = {}", level_name(l), exprs[0])
+            } else {
+                if exprs.len() == 1 {
+                    format!("{} level", level_name(l))
+                } else {
+                    format!(
+                        "{} level: largest |g| of {} constraints",
+                        level_name(l),
+                        exprs.len()
+                    )
+                }
+            };
+            Panel {
+                title,
+                x_label: "t [s]".into(),
+                y_label: with_unit(&format!("|g{}|", subscript(l)), residual_unit(report, l)),
+                x_log: false,
+                y_log: true,
+                markers: false,
+                drop_zeros: false,
+                series: runs
+                    .iter()
+                    .map(|r| {
+                        let tr = &r.record.trajectory;
+                        Series {
+                            label: label(r),
+                            look: look(&r.record.solver, &r.record.formulation),
+                            points: tr
+                                .t
+                                .iter()
+                                .zip(&tr.residuals)
+                                .map(|(t, g)| (*t, g[l as usize]))
+                                .collect(),
+                        }
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+    if let Some(inv) = report.invariants.first() {
+        let unit = (inv == "energy").then_some("J");
+        panels.push(Panel {
+            title: format!("drift of the invariant `{inv}`"),
+            x_label: "t [s]".into(),
+            y_label: with_unit(&format!("|{inv}(t) − {inv}(t0)|"), unit),
+            x_log: false,
+            y_log: true,
+            markers: false,
+            drop_zeros: true,
+            series: runs
+                .iter()
+                .map(|r| {
+                    let tr = &r.record.trajectory;
+                    Series {
+                        label: label(r),
+                        look: look(&r.record.solver, &r.record.formulation),
+                        points: tr.t.iter().zip(&tr.drift).map(|(t, d)| (*t, *d)).collect(),
+                    }
+                })
+                .collect(),
+        });
+    }
+    let cols = if panels.len() > 1 { 2 } else { 1 };
+    Figure {
+        file: "residuals".into(),
+        title: format!("{}: constraint residuals and drift, RTOL = ATOL = {tol}", report.scene.name),
+        caption: format!(
+            "Absolute residuals of the constraints per level, hidden ones included (largest over the constraints of \
+             a level), and the drift of the {} at RTOL = ATOL = {tol}{sampled_at}; log scale (paper Fig. 5 / 11). \
+             Residuals are in the units of the constraints as written. Values below 1e-16, exact zeros \
+             included, are drawn on the lower edge.",
+            report.invariants.first().map_or("first invariant", String::as_str)
+        ),
+        size: grid_size(panels.len(), cols, 380, 1400),
+        panels,
+        cols,
+        legend: legend_of(runs, false),
+    }
+}
+
+fn subscript(level: u8) -> &'static str {
+    ["₀", "₁", "₂"].get(level as usize).copied().unwrap_or("")
+}
+
+fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
+    let with_ref = report.has_reference();
+    let y_of = |r: &SweepRun| -> Option<f64> {
+        if with_ref {
+            r.record.err
+        } else {
+            r.record.residuals.level0
+        }
+    };
+    let mut series = Vec::new();
+    let mut legend = Vec::new();
+    for p in report.pairs.iter().filter(|p| p.not_applicable.is_none()) {
+        let mut runs: Vec<&SweepRun> = report
+            .runs
+            .iter()
+            .filter(|r| {
+                r.record.solver == p.solver
+                    && r.record.formulation == p.formulation
+                    && r.record.status == "ok"
+            })
+            .collect();
+        // Through the tolerances, loose to tight.
+        runs.sort_by(|a, b| b.record.tol.total_cmp(&a.record.tol));
+        let pts: Vec<(f64, f64)> = runs
+            .iter()
+            .filter_map(|r| {
+                y_of(r)
+                    .filter(|y| y.is_finite())
+                    .map(|y| (r.record.tsim_s, y))
+            })
+            .filter(|(t, _)| *t > 0.0 && t.is_finite())
+            .collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let l = format!("{}({})", p.solver, p.formulation);
+        let lk = look(&p.solver, &p.formulation);
+        legend.push((l.clone(), lk, true));
+        series.push(Series {
+            label: l,
+            look: lk,
+            points: pts,
+        });
+    }
+    if series.is_empty() {
+        return None;
+    }
+    if with_ref {
+        let front = super::pareto::pareto_front(&report.runs);
+        if front.len() > 1 {
+            // A wide grey band under the pairs' lines.
+            let lk = Look {
+                color: RGBColor(200, 200, 200),
+                dashed: false,
+                marker: Marker::None,
+                width: 9,
+            };
+            legend.push(("Pareto front".into(), lk, false));
+            series.insert(
+                0,
+                Series {
+                    label: "Pareto front".into(),
+                    look: lk,
+                    points: front.iter().map(|p| (p.tsim_s, p.err)).collect(),
+                },
+            );
+        }
+    }
+    let tols: Vec<String> = report.tolerances.iter().map(|t| tol_label(*t)).collect();
+    let (title, y_label, what) = if with_ref {
+        (
+            format!("{}: work-precision diagram", report.scene.name),
+            "err [m, m/s]".to_string(),
+            "err (largest pointwise error of the differential unknowns over the check times)"
+                .to_string(),
+        )
+    } else {
+        (
+            format!("{}: work vs position-constraint residual (no reference)", report.scene.name),
+            with_unit("|g₀| (largest over check times)", residual_unit(report, 0)),
+            "the largest position-constraint residual over the check times (the scene has no reference, so no error)"
+                .to_string(),
+        )
+    };
+    Some(Figure {
+        file: "work_precision".into(),
+        title,
+        caption: format!(
+            "{what} against the integration time tsim (median of {} timed runs), log-log; one line per \
+             solver(formulation) through its successful tolerances {}{} (paper Fig. 6 / 12).",
+            report.repeats,
+            tols.join(", "),
+            if with_ref { "; wide grey band: the Pareto front" } else { "" }
+        ),
+        panels: vec![Panel {
+            title: if with_ref {
+                "error against integration time".into()
+            } else {
+                "position-constraint residual against integration time".into()
+            },
+            x_label: "tsim [s]".into(),
+            y_label,
+            x_log: true,
+            y_log: true,
+            markers: true,
+            drop_zeros: true,
+            series,
+        }],
+        cols: 1,
+        size: (1300, 850),
+        legend,
+    })
+}
+
+/// Axis range of a panel's data: linear with 4 % padding, or whole decades
+/// for a log axis (values at or below zero go to the floor).
+fn range(values: impl Iterator<Item = f64> + Clone, log: bool) -> (f64, f64) {
+    let finite = values.filter(|v| v.is_finite());
+    if log {
+        let pos = finite.filter(|v| *v > 0.0);
+        let lo = pos.clone().fold(f64::INFINITY, f64::min).max(LOG_FLOOR);
+        let hi = pos.fold(0.0f64, f64::max);
+        if !lo.is_finite() || hi <= 0.0 {
+            return (LOG_FLOOR, LOG_FLOOR * 1e3);
+        }
+        let lo = 10f64.powf(lo.log10().floor());
+        let mut hi = 10f64.powf(hi.log10().ceil());
+        if hi <= lo {
+            hi = lo * 10.0;
+        }
+        // A hair beyond the decades, so that both end decades get a tick
+        // despite rounding in the tick generator.
+        (lo * (1.0 - 1e-9), hi * (1.0 + 1e-9))
+    } else {
+        let lo = finite.clone().fold(f64::INFINITY, f64::min);
+        let hi = finite.fold(f64::NEG_INFINITY, f64::max);
+        if !lo.is_finite() || !hi.is_finite() {
+            return (0.0, 1.0);
+        }
+        let span = hi - lo;
+        if span <= 1e-12 * (1.0 + lo.abs().max(hi.abs())) {
+            let d = 0.5 * (1.0 + lo.abs().max(hi.abs())) * 1e-3;
+            return (lo - d.max(1e-12), hi + d.max(1e-12));
+        }
+        (lo - 0.04 * span, hi + 0.04 * span)
+    }
+}
+
+/// Tick label of a log axis: `1e-7`, or `3e-7` between decades.
+fn log_tick(v: f64) -> String {
+    if v <= 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let e = v.log10().round();
+    let (e, m) = if (v / 10f64.powf(e) - 1.0).abs() < 1e-6 {
+        (e as i32, 1)
+    } else {
+        let e = v.log10().floor();
+        (e as i32, (v / 10f64.powf(e)).round() as i64)
+    };
+    match e {
+        // 0.01 … 100 read better in decimal.
+        -1 => format!("0.{m}"),
+        -2 => format!("0.0{m}"),
+        0..=2 => format!("{}", m * 10i64.pow(e as u32)),
+        _ => format!("{m}e{e}"),
+    }
+}
+
+/// Tick label of a linear axis: short and without float noise (a value
+/// tiny against the axis span is 0).
+fn lin_tick(v: f64, span: f64) -> String {
+    if v == 0.0 || v.abs() <= 1e-9 * span.abs() {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        return format!("{v:.1e}");
+    }
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.to_string()
+    }
+}
+
+/// Split a pixel polyline into dashes of `on` pixels separated by gaps of
+/// `off` pixels, measured along the line.
+fn dashes(px: &[(i32, i32)], on: f64, off: f64) -> Vec<Vec<(i32, i32)>> {
+    let mut out: Vec<Vec<(i32, i32)>> = Vec::new();
+    let mut cur: Vec<(i32, i32)> = Vec::new();
+    let (mut drawing, mut left) = (true, on);
+    for w in px.windows(2) {
+        let (a, b) = (
+            (w[0].0 as f64, w[0].1 as f64),
+            (w[1].0 as f64, w[1].1 as f64),
+        );
+        let len = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+        let mut pos = 0.0;
+        if drawing && cur.is_empty() {
+            cur.push(w[0]);
+        }
+        while len - pos > left {
+            pos += left;
+            let f = pos / len;
+            let p = (
+                (a.0 + f * (b.0 - a.0)).round() as i32,
+                (a.1 + f * (b.1 - a.1)).round() as i32,
+            );
+            if drawing {
+                cur.push(p);
+                out.push(std::mem::take(&mut cur));
+            } else {
+                cur.push(p);
+            }
+            drawing = !drawing;
+            left = if drawing { on } else { off };
+        }
+        left -= len - pos;
+        if drawing {
+            cur.push(w[1]);
+        } else {
+            cur.clear();
+        }
+    }
+    if drawing && cur.len() > 1 {
+        out.push(cur);
+    }
+    out
+}
+
+/// Stroke a pixel polyline. `segmented` draws it segment by segment: the
+/// bitmap backend joins wide polylines with unlimited miters, which spike
+/// far out of the chart at the sharp turns of noisy data.
+fn stroke<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    px: &[(i32, i32)],
+    style: ShapeStyle,
+    dashed: bool,
+    segmented: bool,
+) -> Result<(), PlotError> {
+    let pieces = if dashed {
+        dashes(px, 9.0, 5.0)
+    } else {
+        vec![px.to_vec()]
+    };
+    for piece in pieces {
+        if piece.len() < 2 {
+            continue;
+        }
+        if segmented {
+            for w in piece.windows(2) {
+                area.draw(&PathElement::new(vec![w[0], w[1]], style))
+                    .map_err(draw_err)?;
+            }
+        } else {
+            area.draw(&PathElement::new(piece, style))
+                .map_err(draw_err)?;
+        }
+    }
+    Ok(())
+}
+
+fn draw_marker<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    at: (i32, i32),
+    marker: Marker,
+    style: ShapeStyle,
+) -> Result<(), PlotError> {
+    let filled = style.filled();
+    match marker {
+        Marker::None => Ok(()),
+        Marker::Circle => area.draw(&Circle::new(at, 4, filled)).map_err(draw_err),
+        Marker::Triangle => area
+            .draw(&TriangleMarker::new(at, 6, filled))
+            .map_err(draw_err),
+        Marker::Square => area
+            .draw(&Rectangle::new(
+                [(at.0 - 4, at.1 - 4), (at.0 + 4, at.1 + 4)],
+                filled,
+            ))
+            .map_err(draw_err),
+    }
+}
+
+fn fill<DB, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    p: &Panel,
+    x_span: (f64, f64),
+    y_span: (f64, f64),
+    segmented: bool,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let x_fmt = |v: &f64| {
+        if p.x_log {
+            log_tick(*v)
+        } else {
+            lin_tick(*v, x_span.1 - x_span.0)
+        }
+    };
+    let y_fmt = |v: &f64| {
+        if p.y_log {
+            log_tick(*v)
+        } else {
+            lin_tick(*v, y_span.1 - y_span.0)
+        }
+    };
+    chart
+        .configure_mesh()
+        .x_desc(p.x_label.as_str())
+        .y_desc(p.y_label.as_str())
+        .x_labels(8)
+        .y_labels(if p.y_log { 20 } else { 6 })
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .bold_line_style(BLACK.mix(0.12))
+        .light_line_style(BLACK.mix(0.04))
+        .draw()
+        .map_err(draw_err)?;
+    let area = chart.plotting_area();
+    let screen = area.use_screen_coord();
+    for s in &p.series {
+        let style = ShapeStyle {
+            color: s.look.color.to_rgba(),
+            filled: false,
+            stroke_width: s.look.width,
+        };
+        let mut px: Vec<(i32, i32)> = s
+            .points
+            .iter()
+            .filter(|(x, y)| x.is_finite() && y.is_finite() && (!p.x_log || *x > 0.0))
+            .filter(|(_, y)| !(p.y_log && p.drop_zeros && *y <= 0.0))
+            .map(|&(x, y)| area.map_coordinate(&(x, if p.y_log { y.max(y_span.0) } else { y })))
+            .collect();
+        px.dedup();
+        stroke(&screen, &px, style, s.look.dashed, segmented)?;
+        if p.markers {
+            for q in &px {
+                draw_marker(&screen, *q, s.look.marker, style)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    p: &Panel,
+    segmented: bool,
+) -> Result<(), PlotError> {
+    let xs = range(
+        p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)),
+        p.x_log,
+    );
+    let ys = range(
+        p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)),
+        p.y_log,
+    );
+    let ((x0, x1), (y0, y1)) = (xs, ys);
+    let mut b = ChartBuilder::on(area);
+    b.caption(p.title.as_str(), ("sans-serif", 17))
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(if p.y_log { 86 } else { 80 });
+    match (p.x_log, p.y_log) {
+        (false, false) => {
+            let mut c = b.build_cartesian_2d(x0..x1, y0..y1).map_err(draw_err)?;
+            fill::<DB, RangedCoordf64, RangedCoordf64>(&mut c, p, xs, ys, segmented)
+        }
+        (false, true) => {
+            let mut c = b
+                .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+                .map_err(draw_err)?;
+            fill(&mut c, p, xs, ys, segmented)
+        }
+        (true, false) => {
+            let mut c = b
+                .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+                .map_err(draw_err)?;
+            fill(&mut c, p, xs, ys, segmented)
+        }
+        (true, true) => {
+            let mut c = b
+                .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+                .map_err(draw_err)?;
+            fill(&mut c, p, xs, ys, segmented)
+        }
+    }
+}
+
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(String, Look, bool)],
+    segmented: bool,
+) -> Result<(), PlotError> {
+    let font = ("sans-serif", 15).into_font();
+    area.draw(&Text::new(
+        "legend",
+        (12, 14),
+        ("sans-serif", 16).into_font().style(FontStyle::Bold),
+    ))
+    .map_err(draw_err)?;
+    for (i, (text, lk, marker)) in entries.iter().enumerate() {
+        let y = 48 + 26 * i as i32;
+        let style = ShapeStyle {
+            color: lk.color.to_rgba(),
+            filled: false,
+            stroke_width: lk.width,
+        };
+        stroke(area, &[(12, y), (58, y)], style, lk.dashed, segmented)?;
+        if *marker {
+            draw_marker(area, (35, y), lk.marker, style)?;
+        }
+        area.draw(&Text::new(text.as_str(), (68, y - 8), font.clone()))
+            .map_err(draw_err)?;
+    }
+    Ok(())
+}
+
+/// Draw a figure on any backend; `segmented` strokes lines segment by
+/// segment (for the bitmap backend, see [`stroke`]).
+pub fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    fig: &Figure,
+    segmented: bool,
+) -> Result<(), PlotError> {
+    root.fill(&WHITE).map_err(draw_err)?;
+    let (top, body) = root.split_vertically(TITLE_HEIGHT);
+    top.draw(&Text::new(
+        fig.title.as_str(),
+        (16, 12),
+        ("sans-serif", 22).into_font().style(FontStyle::Bold),
+    ))
+    .map_err(draw_err)?;
+    let (w, _) = body.dim_in_pixel();
+    let (plots, legend) = body.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
+    let cols = fig.cols.max(1);
+    let rows = fig.panels.len().div_ceil(cols).max(1);
+    let areas = plots.split_evenly((rows, cols));
+    for (p, a) in fig.panels.iter().zip(&areas) {
+        draw_panel(a, p, segmented)?;
+    }
+    draw_legend(&legend, &fig.legend, segmented)?;
+    Ok(())
+}
+
+/// Write a figure as `DIR/<file>.svg` and `DIR/<file>.png`, each whole.
+pub fn render(fig: &Figure, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+    let svg_path = dir.join(format!("{}.svg", fig.file));
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, fig.size).into_drawing_area();
+        draw(&root, fig, false)?;
+        root.present().map_err(draw_err)?;
+    }
+    write::atomic_write(&svg_path, svg.as_bytes())?;
+    let png_path = dir.join(format!("{}.png", fig.file));
+    write::atomic_write_via(&png_path, |tmp: &Path| -> Result<(), PlotError> {
+        let root = BitMapBackend::new(tmp, fig.size).into_drawing_area();
+        draw(&root, fig, true)?;
+        root.present().map_err(draw_err)?;
+        Ok(())
+    })?;
+    Ok(vec![svg_path, png_path])
+}

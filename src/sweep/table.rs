@@ -1,0 +1,564 @@
+//! The paper's tables: the success matrix (Tables 5 and 8) and the
+//! efficiency table (Tables 6 and 9), as data, as terminal text and as CSV.
+
+use super::paper::{Comparison, PaperCell};
+use super::pareto::{Point, Target};
+use super::{Pair, Summary, SweepReport};
+use crate::runner::RunRecord;
+use serde::Serialize;
+use std::borrow::Borrow;
+use std::fmt::Write;
+
+/// A cell of the success matrix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Mark {
+    /// Successful at every tolerance.
+    #[serde(rename = "X")]
+    Every,
+    /// Successful at some tolerances.
+    #[serde(rename = "x")]
+    Some,
+    /// Successful at none.
+    #[serde(rename = "o")]
+    None,
+    /// Not applicable (see the cell's reason).
+    #[serde(rename = "-")]
+    NotApplicable,
+}
+
+impl Mark {
+    /// The paper's symbol.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Mark::Every => "X",
+            Mark::Some => "x",
+            Mark::None => "o",
+            Mark::NotApplicable => "-",
+        }
+    }
+
+    /// Classify a pair from its successful and total run counts.
+    pub fn classify(ok: usize, runs: usize) -> Mark {
+        if runs > 0 && ok == runs {
+            Mark::Every
+        } else if ok > 0 {
+            Mark::Some
+        } else {
+            Mark::None
+        }
+    }
+}
+
+/// One cell: a formulation for one solver.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SuccessCell {
+    /// Formulation.
+    pub formulation: String,
+    /// The mark.
+    pub mark: Mark,
+    /// Successful runs.
+    pub ok: usize,
+    /// Runs (tolerances).
+    pub runs: usize,
+    /// Why the pair is not applicable.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+}
+
+/// One row of the matrix.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SuccessRow {
+    /// Solver.
+    pub solver: String,
+    /// One cell per formulation, in column order.
+    pub cells: Vec<SuccessCell>,
+}
+
+/// The success matrix: solver rows × formulation columns.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SuccessMatrix {
+    /// What the marks mean.
+    pub legend: &'static str,
+    /// Column order.
+    pub formulations: Vec<String>,
+    /// Rows.
+    pub rows: Vec<SuccessRow>,
+}
+
+/// The legend of the success matrix.
+pub const SUCCESS_LEGEND: &str = "X: successful at every tolerance, x: at some, o: at none, -: not applicable \
+                                  (reason given); successful = the integration reached the end of the horizon";
+
+impl SuccessMatrix {
+    /// The cell of a solver and formulation.
+    pub fn cell(&self, solver: &str, formulation: &str) -> Option<&SuccessCell> {
+        self.rows
+            .iter()
+            .find(|r| r.solver == solver)?
+            .cells
+            .iter()
+            .find(|c| c.formulation == formulation)
+    }
+
+    /// Distinct reasons of not-applicable cells, in order of appearance.
+    pub fn reasons(&self) -> Vec<&str> {
+        let mut out: Vec<&str> = Vec::new();
+        for c in self.rows.iter().flat_map(|r| &r.cells) {
+            if let Some(r) = c.reason.as_deref() {
+                if !out.contains(&r) {
+                    out.push(r);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Build the success matrix from the pairs and the runs.
+pub fn success_matrix<R: Borrow<RunRecord>>(
+    solvers: &[String],
+    formulations: &[String],
+    pairs: &[Pair],
+    runs: &[R],
+) -> SuccessMatrix {
+    let rows = solvers
+        .iter()
+        .map(|s| SuccessRow {
+            solver: s.clone(),
+            cells: formulations
+                .iter()
+                .map(|f| {
+                    let reason = pairs
+                        .iter()
+                        .find(|p| &p.solver == s && &p.formulation == f)
+                        .and_then(|p| p.not_applicable.clone());
+                    let mine = runs
+                        .iter()
+                        .map(Borrow::borrow)
+                        .filter(|r| &r.solver == s && &r.formulation == f);
+                    let (ok, n) = mine.fold((0, 0), |(ok, n), r| {
+                        (ok + usize::from(r.status == "ok"), n + 1)
+                    });
+                    let mark = if reason.is_some() {
+                        Mark::NotApplicable
+                    } else {
+                        Mark::classify(ok, n)
+                    };
+                    SuccessCell {
+                        formulation: f.clone(),
+                        mark,
+                        ok,
+                        runs: n,
+                        reason,
+                    }
+                })
+                .collect(),
+        })
+        .collect();
+    SuccessMatrix {
+        legend: SUCCESS_LEGEND,
+        formulations: formulations.to_vec(),
+        rows,
+    }
+}
+
+/// `1.2e-05` (the paper's style); `-` for `None`.
+pub fn sci(v: Option<f64>) -> String {
+    match v {
+        None => "-".into(),
+        Some(v) if !v.is_finite() => format!("{v}"),
+        Some(0.0) => "0".into(),
+        Some(v) => {
+            let s = format!("{v:.1e}");
+            match s.split_once('e') {
+                Some((m, e)) => {
+                    let e: i32 = e.parse().unwrap_or(0);
+                    format!("{m}e{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
+                }
+                None => s,
+            }
+        }
+    }
+}
+
+/// A tolerance as `1e-7`.
+pub fn tol_label(t: f64) -> String {
+    let e = t.log10().round();
+    if (10f64.powf(e) - t).abs() <= 1e-9 * t {
+        format!("1e{}", e as i32)
+    } else {
+        format!("{t:e}")
+    }
+}
+
+/// Render rows of cells as an aligned text table (first column left, the
+/// rest right-aligned).
+pub fn align(rows: &[Vec<String>]) -> String {
+    let cols = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let width: Vec<usize> = (0..cols)
+        .map(|c| {
+            rows.iter()
+                .filter_map(|r| r.get(c))
+                .map(|s| s.chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut s = String::new();
+    for r in rows {
+        let mut line = String::new();
+        for (c, cell) in r.iter().enumerate() {
+            let pad = width[c].saturating_sub(cell.chars().count());
+            if c == 0 {
+                line.push_str(cell);
+                line.push_str(&" ".repeat(pad));
+            } else {
+                line.push_str("  ");
+                line.push_str(&" ".repeat(pad));
+                line.push_str(cell);
+            }
+        }
+        s.push_str(line.trim_end());
+        s.push('\n');
+    }
+    s
+}
+
+/// The success matrix as text, with numbered reasons below.
+pub fn success_text(m: &SuccessMatrix) -> String {
+    let reasons = m.reasons();
+    let mut rows = vec![std::iter::once(String::new())
+        .chain(m.formulations.iter().cloned())
+        .collect::<Vec<_>>()];
+    for r in &m.rows {
+        let mut row = vec![r.solver.clone()];
+        for c in &r.cells {
+            row.push(match &c.reason {
+                Some(why) => format!(
+                    "-{}",
+                    reasons.iter().position(|x| x == why).map_or(0, |i| i + 1)
+                ),
+                None => c.mark.symbol().into(),
+            });
+        }
+        rows.push(row);
+    }
+    let mut s = align(&rows);
+    for (i, r) in reasons.iter().enumerate() {
+        let _ = writeln!(s, "  -{}: {r}", i + 1);
+    }
+    let _ = writeln!(s, "  {}", m.legend);
+    s
+}
+
+/// Column headers of the efficiency table.
+pub const EFFICIENCY_HEADER: [&str; 16] = [
+    "pair",
+    "tol",
+    "status",
+    "tsim_s",
+    "err",
+    "err_sum",
+    "err_lambda",
+    "steps",
+    "rejected",
+    "evals",
+    "jac",
+    "LU",
+    "|g0|",
+    "|g1|",
+    "|g2|",
+    "drift",
+];
+
+/// The efficiency table: one row per run (pairs in sweep order, tolerances
+/// within), with the time, the errors, the work counters, the largest
+/// constraint residual per level and the drift of the first invariant
+/// (energy).
+pub fn efficiency_rows<R: Borrow<RunRecord>>(runs: &[R]) -> Vec<Vec<String>> {
+    let mut rows = vec![EFFICIENCY_HEADER
+        .iter()
+        .map(|s| s.to_string())
+        .collect::<Vec<_>>()];
+    for r in runs.iter().map(Borrow::borrow) {
+        let ok = r.status == "ok";
+        let status = match (&r.error, ok) {
+            (_, true) => "ok".to_string(),
+            (Some(e), false) => match e.t {
+                Some(t) => format!("{} at t={t:.4}", e.kind),
+                None => e.kind.clone(),
+            },
+            (None, false) => r.status.to_string(),
+        };
+        let num = |v: usize| if ok { v.to_string() } else { "-".into() };
+        let val = |v: Option<f64>| if ok { sci(v) } else { "-".into() };
+        rows.push(vec![
+            format!("{}({})", r.solver, r.formulation),
+            tol_label(r.tol),
+            status,
+            if ok { sci(Some(r.tsim_s)) } else { "-".into() },
+            val(r.err),
+            val(r.err_sum),
+            val(r.err_lambda),
+            num(r.stats.steps),
+            num(r.stats.rejected),
+            num(r.stats.residual_evals),
+            num(r.stats.jacobian_evals),
+            num(r.stats.factorizations),
+            val(r.residuals.level0),
+            val(r.residuals.level1),
+            val(r.residuals.level2),
+            val(r.invariant_drift.0.first().map(|(_, v)| *v)),
+        ]);
+    }
+    rows
+}
+
+fn point_row(p: &Point) -> Vec<String> {
+    vec![
+        p.pair(),
+        tol_label(p.tol),
+        sci(Some(p.tsim_s)),
+        sci(Some(p.err)),
+    ]
+}
+
+/// The Pareto front as text.
+pub fn pareto_text(front: &[Point]) -> String {
+    let mut rows = vec![vec![
+        "pair".into(),
+        "tol".into(),
+        "tsim_s".into(),
+        "err".into(),
+    ]];
+    rows.extend(front.iter().map(point_row));
+    align(&rows)
+}
+
+/// The target table as text.
+pub fn targets_text(targets: &[Target]) -> String {
+    let mut rows = vec![vec![
+        "target err".into(),
+        "fastest pair".into(),
+        "tol".into(),
+        "tsim_s".into(),
+        "err".into(),
+    ]];
+    for t in targets {
+        match &t.best {
+            Some(p) => {
+                let mut r = vec![format!("≤ {}", sci(Some(t.target)))];
+                r.extend(point_row(p));
+                rows.push(r);
+            }
+            None => rows.push(vec![
+                format!("≤ {}", sci(Some(t.target))),
+                "none met it".into(),
+            ]),
+        }
+    }
+    align(&rows)
+}
+
+/// A paper cell as text.
+pub fn paper_cell(c: PaperCell) -> String {
+    match c {
+        PaperCell::Value(v) => sci(Some(v)),
+        PaperCell::Failed => "failed".into(),
+        PaperCell::Illegible => "?".into(),
+    }
+}
+
+/// The comparison with the paper as text: one line per row and tolerance
+/// set, `ours / paper verdict`.
+pub fn paper_text(c: &Comparison) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "{}: {}", c.table, c.note);
+    let tols: Vec<f64> = {
+        let mut t: Vec<f64> = Vec::new();
+        for cell in c.rows.iter().flat_map(|r| &r.cells) {
+            if !t.iter().any(|x| super::paper::same_tol(*x, cell.tol)) {
+                t.push(cell.tol);
+            }
+        }
+        t
+    };
+    let mut rows = vec![std::iter::once("ours vs paper".to_string())
+        .chain(tols.iter().map(|t| tol_label(*t)))
+        .collect()];
+    for r in &c.rows {
+        let mut ours = vec![format!("{}({}) err_sum", r.solver, r.formulation)];
+        let mut theirs = vec![format!("  {}({}) ERR", r.paper_solver, r.formulation)];
+        let mut verdict = vec!["  →".to_string()];
+        for t in &tols {
+            match r.cells.iter().find(|c| super::paper::same_tol(c.tol, *t)) {
+                Some(cell) => {
+                    ours.push(cell.ours.map_or_else(|| "failed".into(), |v| sci(Some(v))));
+                    theirs.push(paper_cell(cell.paper));
+                    verdict.push(cell.verdict.label().into());
+                }
+                None => {
+                    ours.push(String::new());
+                    theirs.push(String::new());
+                    verdict.push(String::new());
+                }
+            }
+        }
+        rows.extend([ours, theirs, verdict]);
+    }
+    s.push_str(&align(&rows));
+    let counts: Vec<String> = c
+        .counts
+        .iter()
+        .filter(|k| k.cells > 0)
+        .map(|k| format!("{} {}", k.cells, k.verdict.label()))
+        .collect();
+    let _ = writeln!(s, "  cells: {}", counts.join(", "));
+    if !c.illegible.is_empty() {
+        let _ = writeln!(
+            s,
+            "  illegible in the seed, not compared: {}",
+            c.illegible.join(", ")
+        );
+    }
+    s
+}
+
+/// The whole terminal report.
+pub fn text_report(report: &SweepReport, summary: &Summary) -> String {
+    let mut s = String::new();
+    let sc = &report.scene;
+    let _ = writeln!(
+        s,
+        "Sweep {} ({}): model {}, t in [{}, {}], {} check time(s), reference {}",
+        sc.name, sc.origin, sc.model, sc.t0, sc.t_end, sc.checks, sc.reference
+    );
+    let _ = writeln!(
+        s,
+        "{} solver(s) × {} formulation(s) × {} tolerance(s): {} runs in {:.1} s (tsim = median of up to {} timed \
+         integration(s), fewer once they took {} s{})\n",
+        report.solvers.len(),
+        report.formulations.len(),
+        report.tolerances.len(),
+        report.runs.len(),
+        report.wall_s,
+        report.repeats,
+        super::REPEAT_BUDGET_S,
+        if report.jobs > 1 {
+            format!("; accuracy pass on {} threads, timing pass sequential", report.jobs)
+        } else {
+            String::new()
+        }
+    );
+    let _ = writeln!(s, "Success matrix");
+    s.push_str(&success_text(&summary.success));
+    let _ = writeln!(s, "\nEfficiency (err: max pointwise error of the differential unknowns over the check times; err_sum: sum over check times of all unknowns' errors; |gk|: largest constraint residual of level k; drift: |{}(t) - {}(t0)|)",
+        report.invariants.first().map_or("I", String::as_str),
+        report.invariants.first().map_or("I", String::as_str));
+    s.push_str(&align(&efficiency_rows(&report.runs)));
+    if report.has_reference() {
+        let _ = writeln!(s, "\nPareto front (runs not beaten on both tsim and err)");
+        s.push_str(&pareto_text(&summary.pareto));
+        let _ = writeln!(s, "\nFastest run per target error (err)");
+        s.push_str(&targets_text(&summary.targets));
+    } else {
+        let _ = writeln!(
+            s,
+            "\nNo reference: errors, Pareto front and target table are not available."
+        );
+    }
+    match &summary.paper {
+        Some(c) => {
+            let _ = writeln!(s, "\nAgainst the paper");
+            s.push_str(&paper_text(c));
+        }
+        None => {
+            let _ = writeln!(
+                s,
+                "\nAgainst the paper: only for the paper's scenes S01 and S02 (Tables 6 and 9) with the built-in pendulum."
+            );
+        }
+    }
+    s
+}
+
+/// `results.csv`: one row per run.
+pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut head: Vec<String> = [
+        "scene",
+        "solver",
+        "formulation",
+        "tol",
+        "status",
+        "error_kind",
+        "error_message",
+        "t_end",
+        "tsim_s",
+        "tsim_runs",
+        "err",
+        "err_sum",
+        "err_lambda",
+        "steps",
+        "rejected",
+        "residual_evals",
+        "jacobian_evals",
+        "factorizations",
+        "newton_iterations",
+        "residual_level0",
+        "residual_level1",
+        "residual_level2",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    head.extend(report.invariants.iter().map(|n| format!("drift_{n}")));
+    head.extend(report.variables.iter().map(|n| format!("final_{n}")));
+    w.write_record(&head)?;
+    let opt = |v: Option<f64>| v.map_or_else(String::new, |v| format!("{v:e}"));
+    for run in &report.runs {
+        let r = &run.record;
+        let mut row = vec![
+            r.scene.clone(),
+            r.solver.clone(),
+            r.formulation.clone(),
+            format!("{:e}", r.tol),
+            r.status.to_string(),
+            r.error
+                .as_ref()
+                .map_or_else(String::new, |e| e.kind.clone()),
+            r.error
+                .as_ref()
+                .map_or_else(String::new, |e| e.message.clone()),
+            format!("{:e}", r.t_end),
+            format!("{:e}", r.tsim_s),
+            run.tsim_runs
+                .iter()
+                .map(|t| format!("{t:e}"))
+                .collect::<Vec<_>>()
+                .join(";"),
+            opt(r.err),
+            opt(r.err_sum),
+            opt(r.err_lambda),
+            r.stats.steps.to_string(),
+            r.stats.rejected.to_string(),
+            r.stats.residual_evals.to_string(),
+            r.stats.jacobian_evals.to_string(),
+            r.stats.factorizations.to_string(),
+            r.stats.newton_iterations.to_string(),
+            opt(r.residuals.level0),
+            opt(r.residuals.level1),
+            opt(r.residuals.level2),
+        ];
+        row.extend(
+            report
+                .invariants
+                .iter()
+                .map(|n| opt(r.invariant_drift.get(n))),
+        );
+        row.extend(report.variables.iter().map(|n| opt(r.final_values.get(n))));
+        w.write_record(&row)?;
+    }
+    w.into_inner()
+        .map_err(|e| std::io::Error::other(e.to_string()))
+}

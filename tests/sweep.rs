@@ -1,0 +1,702 @@
+//! `dae sweep`: table builders, success classification, Pareto front and
+//! targets, the paper comparison, whole-file writing (with injected
+//! failures), and two small end-to-end sweeps into a temporary directory.
+
+use dae::runner::{ErrorInfo, Named, Residuals, RunRecord, Trajectory};
+use dae::scene::Scene;
+use dae::sweep::paper::{self, PaperCell, PaperTable, Verdict};
+use dae::sweep::pareto::{self, Point};
+use dae::sweep::table::{self, Mark};
+use dae::sweep::write::{atomic_write, atomic_write_via, atomic_write_with};
+use dae::sweep::{self, Pair, SweepOptions, SweepRun};
+use dae_solvers::Stats;
+use std::io::{self, Write};
+use std::path::Path;
+
+// ---------------------------------------------------------------- helpers
+
+fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -> RunRecord {
+    RunRecord {
+        scene: "T".into(),
+        solver: solver.into(),
+        formulation: formulation.into(),
+        tol,
+        status: "ok",
+        error: None,
+        t_end: 20.0,
+        final_values: Named(vec![("x".into(), 1.0), ("y".into(), 0.0)]),
+        err,
+        err_sum: err.map(|e| 2.0 * e),
+        err_lambda: err.map(|e| e / 2.0),
+        tsim_s: tsim,
+        stats: Stats {
+            steps: 100,
+            rejected: 3,
+            residual_evals: 1000,
+            jacobian_evals: 90,
+            factorizations: 95,
+            newton_iterations: 300,
+        },
+        residuals: Residuals {
+            level0: Some(1e-9),
+            level1: Some(1e-8),
+            level2: None,
+        },
+        invariant_drift: Named(vec![("energy".into(), 1e-7)]),
+        init: None,
+        trajectory: Trajectory::default(),
+    }
+}
+
+fn failed(solver: &str, formulation: &str, tol: f64) -> RunRecord {
+    RunRecord {
+        status: "error",
+        error: Some(ErrorInfo {
+            kind: "step_size_too_small".into(),
+            message: "step size too small".into(),
+            t: Some(1.5),
+        }),
+        err: None,
+        err_sum: None,
+        err_lambda: None,
+        t_end: 1.5,
+        ..rec(solver, formulation, tol, 0.5, None)
+    }
+}
+
+fn run(r: RunRecord) -> SweepRun {
+    SweepRun {
+        tsim_runs: vec![r.tsim_s],
+        record: r,
+    }
+}
+
+fn pair(solver: &str, formulation: &str, na: Option<&str>) -> Pair {
+    Pair {
+        solver: solver.into(),
+        formulation: formulation.into(),
+        not_applicable: na.map(str::to_string),
+    }
+}
+
+fn names(v: &[&str]) -> Vec<String> {
+    v.iter().map(|s| s.to_string()).collect()
+}
+
+fn pt(p: &Point) -> (String, f64) {
+    (p.pair(), p.tol)
+}
+
+// ------------------------------------------------------- success matrix
+
+#[test]
+fn classify_marks() {
+    assert_eq!(Mark::classify(8, 8), Mark::Every);
+    assert_eq!(Mark::classify(1, 8), Mark::Some);
+    assert_eq!(Mark::classify(7, 8), Mark::Some);
+    assert_eq!(Mark::classify(0, 8), Mark::None);
+    assert_eq!(Mark::classify(0, 0), Mark::None);
+    assert_eq!(
+        [Mark::Every, Mark::Some, Mark::None, Mark::NotApplicable].map(Mark::symbol),
+        ["X", "x", "o", "-"]
+    );
+}
+
+fn grid() -> (Vec<String>, Vec<String>, Vec<Pair>, Vec<SweepRun>) {
+    let solvers = names(&["radau5", "bdf"]);
+    let forms = names(&["rcd1", "ovd0", "psi0"]);
+    let pairs = vec![
+        pair("radau5", "rcd1", None),
+        pair(
+            "radau5",
+            "ovd0",
+            Some("overdetermined: solver needs a square system"),
+        ),
+        pair("radau5", "psi0", Some("not provided by the model")),
+        pair("bdf", "rcd1", None),
+        pair(
+            "bdf",
+            "ovd0",
+            Some("overdetermined: solver needs a square system"),
+        ),
+        pair("bdf", "psi0", None),
+    ];
+    let runs = vec![
+        run(rec("radau5", "rcd1", 1e-5, 0.01, Some(1e-4))),
+        run(rec("radau5", "rcd1", 1e-6, 0.02, Some(1e-5))),
+        run(rec("bdf", "rcd1", 1e-5, 0.01, Some(1e-3))),
+        run(failed("bdf", "rcd1", 1e-6)),
+        run(failed("bdf", "psi0", 1e-5)),
+        run(failed("bdf", "psi0", 1e-6)),
+    ];
+    (solvers, forms, pairs, runs)
+}
+
+#[test]
+fn success_matrix_marks_reasons_and_counts() {
+    let (solvers, forms, pairs, runs) = grid();
+    let m = table::success_matrix(&solvers, &forms, &pairs, &runs);
+    assert_eq!(m.formulations, forms);
+    let c = |s, f| m.cell(s, f).unwrap();
+    assert_eq!(
+        (
+            c("radau5", "rcd1").mark,
+            c("radau5", "rcd1").ok,
+            c("radau5", "rcd1").runs
+        ),
+        (Mark::Every, 2, 2)
+    );
+    assert_eq!(
+        (c("bdf", "rcd1").mark, c("bdf", "rcd1").ok),
+        (Mark::Some, 1)
+    );
+    assert_eq!(c("bdf", "psi0").mark, Mark::None);
+    assert_eq!(c("radau5", "ovd0").mark, Mark::NotApplicable);
+    assert_eq!(
+        c("radau5", "ovd0").reason.as_deref(),
+        Some("overdetermined: solver needs a square system")
+    );
+    assert_eq!(
+        c("radau5", "psi0").reason.as_deref(),
+        Some("not provided by the model")
+    );
+    // Distinct reasons in order of appearance, numbered in the text.
+    assert_eq!(
+        m.reasons(),
+        vec![
+            "overdetermined: solver needs a square system",
+            "not provided by the model"
+        ]
+    );
+    let text = table::success_text(&m);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(
+        lines[0].split_whitespace().collect::<Vec<_>>(),
+        ["rcd1", "ovd0", "psi0"]
+    );
+    assert_eq!(
+        lines[1].split_whitespace().collect::<Vec<_>>(),
+        ["radau5", "X", "-1", "-2"]
+    );
+    assert_eq!(
+        lines[2].split_whitespace().collect::<Vec<_>>(),
+        ["bdf", "x", "-1", "o"]
+    );
+    assert!(text.contains("-1: overdetermined: solver needs a square system"));
+    assert!(text.contains("-2: not provided by the model"));
+    // The JSON uses the paper's symbols.
+    let json = serde_json::to_value(&m).unwrap();
+    assert_eq!(json["rows"][0]["cells"][0]["mark"], "X");
+    assert_eq!(json["rows"][1]["cells"][1]["mark"], "-");
+    assert_eq!(json["rows"][1]["cells"][2]["mark"], "o");
+}
+
+// ----------------------------------------------------- efficiency table
+
+#[test]
+fn efficiency_rows_show_values_and_failures() {
+    let (_, _, _, runs) = grid();
+    let rows = table::efficiency_rows(&runs);
+    assert_eq!(rows.len(), 1 + runs.len());
+    assert_eq!(rows[0], table::EFFICIENCY_HEADER.map(String::from).to_vec());
+    let ok = &rows[1];
+    assert_eq!(ok[0], "radau5(rcd1)");
+    assert_eq!(ok[1], "1e-5");
+    assert_eq!(ok[2], "ok");
+    assert_eq!(ok[3], "1.0e-02"); // tsim
+    assert_eq!(ok[4], "1.0e-04"); // err
+    assert_eq!(ok[5], "2.0e-04"); // err_sum
+    assert_eq!(ok[7], "100"); // steps
+    assert_eq!(ok[11], "95"); // factorisations
+    assert_eq!(ok[14], "-"); // no level-2 residual
+    assert_eq!(ok[15], "1.0e-07"); // drift
+    let bad = &rows[4];
+    assert_eq!(bad[0], "bdf(rcd1)");
+    assert_eq!(bad[2], "step_size_too_small at t=1.5000");
+    assert!(bad[3..].iter().all(|c| c == "-"));
+    // Aligned text has one line per row.
+    assert_eq!(table::align(&rows).lines().count(), rows.len());
+}
+
+#[test]
+fn number_formats() {
+    assert_eq!(table::sci(Some(1.23e-5)), "1.2e-05");
+    assert_eq!(table::sci(Some(570.0)), "5.7e+02");
+    assert_eq!(table::sci(Some(0.0)), "0");
+    assert_eq!(table::sci(None), "-");
+    assert_eq!(table::tol_label(1e-7), "1e-7");
+    assert_eq!(table::tol_label(1e-12), "1e-12");
+    assert_eq!(table::tol_label(3e-6), "3e-6");
+    assert_eq!(sweep::median(&[3.0, 1.0, 2.0]), 2.0);
+    assert_eq!(sweep::median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+    assert_eq!(sweep::median(&[]), 0.0);
+}
+
+#[test]
+fn figure_tolerance_is_1e7_or_nearest() {
+    assert_eq!(sweep::figure_tol(&dae::scene::DEFAULT_TOLERANCES), 1e-7);
+    assert_eq!(sweep::figure_tol(&[1e-5, 1e-6]), 1e-6);
+    assert_eq!(sweep::figure_tol(&[1e-9, 1e-12]), 1e-9);
+    // Equally near: the first.
+    assert_eq!(sweep::figure_tol(&[1e-5, 1e-9]), 1e-5);
+}
+
+// ------------------------------------------------------- Pareto, targets
+
+fn trade_runs() -> Vec<SweepRun> {
+    vec![
+        run(rec("a", "f", 1e-5, 1.0, Some(1e-3))), // front (fastest)
+        run(rec("a", "f", 1e-6, 2.0, Some(1e-5))), // front
+        run(rec("b", "g", 1e-5, 2.0, Some(1e-4))), // beaten by a 1e-6 (same time, worse)
+        run(rec("b", "g", 1e-6, 3.0, Some(1e-5))), // beaten (slower, same error)
+        run(rec("b", "g", 1e-7, 4.0, Some(1e-8))), // front (most accurate)
+        run(rec("c", "h", 1e-5, 0.5, None)),       // no reference: not eligible
+        run(failed("c", "h", 1e-6)),               // failed: not eligible
+        run(rec("c", "h", 1e-7, 5.0, Some(1e-8))), // beaten by b 1e-7
+        run(rec("d", "k", 1e-5, 1.0, Some(1e-3))), // tie with a 1e-5: both on the front
+    ]
+}
+
+#[test]
+fn pareto_front_keeps_only_unbeaten_successful_runs() {
+    let runs = trade_runs();
+    let front = pareto::pareto_front(&runs);
+    let got: Vec<(String, f64)> = front.iter().map(pt).collect();
+    assert_eq!(
+        got,
+        vec![
+            ("a(f)".to_string(), 1e-5),
+            ("d(k)".to_string(), 1e-5),
+            ("a(f)".to_string(), 1e-6),
+            ("b(g)".to_string(), 1e-7)
+        ]
+    );
+    // Sorted by time; error falls along the front.
+    assert!(front
+        .windows(2)
+        .all(|w| w[0].tsim_s <= w[1].tsim_s && w[0].err >= w[1].err));
+    // No eligible run beats a front member; every other eligible run is beaten.
+    let all = pareto::eligible(&runs);
+    assert_eq!(all.len(), 7);
+    for p in &all {
+        let beaten = all.iter().any(|q| pareto::beats(q, p));
+        assert_eq!(beaten, !front.contains(p), "{}", p.pair());
+    }
+    assert!(pareto::pareto_front::<RunRecord>(&[]).is_empty());
+}
+
+#[test]
+fn targets_pick_the_fastest_run_that_met_them() {
+    let runs = trade_runs();
+    let t = pareto::targets(&runs, &[1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-9]);
+    let best: Vec<Option<(String, f64)>> = t.iter().map(|t| t.best.as_ref().map(pt)).collect();
+    assert_eq!(
+        best,
+        vec![
+            Some(("a(f)".into(), 1e-5)),
+            Some(("a(f)".into(), 1e-5)), // tie in time and error: sweep order
+            Some(("a(f)".into(), 1e-6)),
+            Some(("b(g)".into(), 1e-7)),
+            Some(("b(g)".into(), 1e-7)), // not c(h): slower
+            None,
+        ]
+    );
+    // The fastest run meeting a target is on the Pareto front.
+    let front = pareto::pareto_front(&runs);
+    assert!(t
+        .iter()
+        .filter_map(|t| t.best.as_ref())
+        .all(|b| front.contains(b)));
+    assert_eq!(pareto::TARGETS.len(), 8);
+    assert_eq!((pareto::TARGETS[0], pareto::TARGETS[7]), (1e-3, 1e-10));
+}
+
+// ----------------------------------------------------------------- paper
+
+#[test]
+fn paper_tables_parse() {
+    let t9 = PaperTable::parse("Table 9", paper::TABLE9_S02_CSV).unwrap();
+    assert_eq!(t9.tolerances, dae::scene::DEFAULT_TOLERANCES.to_vec());
+    assert_eq!(
+        t9.cell("DASSL", "rcd0", "err", 1e-5),
+        Some(PaperCell::Value(3.1e2))
+    );
+    assert_eq!(
+        t9.cell("DASSL", "rcd0", "err", 1e-10),
+        Some(PaperCell::Failed)
+    );
+    assert_eq!(
+        t9.cell("RADAU5", "ggl1", "err", 1e-12),
+        Some(PaperCell::Value(5.2e-4))
+    );
+    assert_eq!(t9.cell("RADAU5", "psi0", "err", 1e-7), None);
+    assert!(t9.has("DASPK", "psi0") && !t9.has("RADAU5", "ovd0"));
+    let t6 = PaperTable::parse("Table 6", paper::TABLE6_S01_CSV).unwrap();
+    assert_eq!(
+        t6.cell("DASPK", "rcd0", "err", 1e-5),
+        Some(PaperCell::Value(5.4e-1))
+    );
+    assert_eq!(
+        t6.cell("DASSL", "psi0", "err", 1e-12),
+        Some(PaperCell::Value(3.8e-8))
+    );
+    assert_eq!(
+        t6.cell("DASSL", "psi1", "err", 1e-6),
+        Some(PaperCell::Failed)
+    );
+    assert_eq!(
+        t6.cell("RADAU5", "rcd1", "err", 1e-7),
+        Some(PaperCell::Value(8.1e-4))
+    );
+    assert_eq!(
+        t6.cell("RADAU5", "rcd0", "err", 1e-7),
+        Some(PaperCell::Illegible)
+    );
+    // Only the paper's scenes.
+    assert!(PaperTable::for_scene("S01", true, 20.0).is_some());
+    assert!(PaperTable::for_scene("s02", true, 2000.0).is_some());
+    assert!(PaperTable::for_scene("S02", false, 2000.0).is_none());
+    assert!(PaperTable::for_scene("S01", true, 10.0).is_none());
+    assert!(PaperTable::for_scene("double_pendulum", false, 10.0).is_none());
+    assert!(PaperTable::parse("bad", "solver,formulation\nA,b\n").is_err());
+    assert!(PaperTable::parse("bad", "solver,formulation,quantity,1e-5\nA,b,err,x\n").is_err());
+}
+
+#[test]
+fn verdicts_use_a_factor_two() {
+    let v = |ours, paper| Verdict::of(ours, paper);
+    assert_eq!(v(Some(1.0), PaperCell::Value(2.1)), Verdict::MoreAccurate);
+    assert_eq!(v(Some(1.0), PaperCell::Value(2.0)), Verdict::Equal);
+    assert_eq!(v(Some(1.0), PaperCell::Value(0.5)), Verdict::Equal);
+    assert_eq!(v(Some(1.0), PaperCell::Value(0.49)), Verdict::Behind);
+    assert_eq!(v(Some(1.0), PaperCell::Failed), Verdict::PaperFailed);
+    assert_eq!(v(None, PaperCell::Value(1.0)), Verdict::WeFailed);
+    assert_eq!(v(None, PaperCell::Failed), Verdict::BothFailed);
+    assert_eq!(v(Some(1.0), PaperCell::Illegible), Verdict::Illegible);
+}
+
+#[test]
+fn comparison_matches_families_and_tolerances() {
+    let t9 = PaperTable::parse("Table 9 (S02)", paper::TABLE9_S02_CSV).unwrap();
+    let mut good = rec("bdf", "rcd0", 1e-5, 1.0, Some(1.0));
+    good.err_sum = Some(1.0); // paper DASSL 3.1e2, DASPK 2.9e2
+    let runs = vec![
+        run(good),
+        run(failed("bdf", "rcd0", 1e-10)), // paper failed too
+        run(rec("radau5", "ggl1", 1e-5, 1.0, Some(1.0))),
+        run(rec("radau5", "ovd0", 1e-5, 1.0, Some(1.0))), // paper has no RADAU5(ovd0)
+    ];
+    let c = paper::compare_runs(
+        &t9,
+        &names(&["radau5", "bdf"]),
+        &names(&["rcd0", "ggl1", "ovd0"]),
+        &[1e-5, 1e-10],
+        &runs,
+    );
+    let rows: Vec<(String, String, String)> = c
+        .rows
+        .iter()
+        .map(|r| {
+            (
+                r.solver.clone(),
+                r.formulation.clone(),
+                r.paper_solver.clone(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        rows,
+        vec![
+            ("radau5".into(), "ggl1".into(), "RADAU5".into()),
+            ("bdf".into(), "rcd0".into(), "DASSL".into()),
+            ("bdf".into(), "rcd0".into(), "DASPK".into()),
+        ]
+    );
+    let dassl = &c.rows[1];
+    assert_eq!(dassl.cells[0].verdict, Verdict::MoreAccurate);
+    assert_eq!(dassl.cells[1].verdict, Verdict::BothFailed);
+    // radau5(ggl1) err_sum = 2.0 against RADAU5(ggl1) 4.7e2.
+    assert_eq!(c.rows[0].cells[0].ours, Some(2.0));
+    assert_eq!(c.rows[0].cells[0].verdict, Verdict::MoreAccurate);
+    let more = c
+        .counts
+        .iter()
+        .find(|k| k.verdict == Verdict::MoreAccurate)
+        .unwrap();
+    assert_eq!(more.cells, 3);
+    assert!(table::paper_text(&c).contains("more accurate"));
+}
+
+// --------------------------------------------------------- atomic writes
+
+/// A writer that fails after `left` bytes, like a disk filling up.
+struct FailAfter<'a> {
+    inner: &'a mut dyn Write,
+    left: usize,
+}
+
+impl Write for FailAfter<'_> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        if self.left == 0 {
+            return Err(io::Error::other("injected failure: disk full"));
+        }
+        let n = buf.len().min(self.left);
+        self.left -= n;
+        self.inner.write(&buf[..n])
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+fn dir_entries(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn atomic_write_replaces_whole_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let dest = dir.path().join("results.csv");
+    atomic_write(&dest, b"first").unwrap();
+    assert_eq!(std::fs::read(&dest).unwrap(), b"first");
+    atomic_write(&dest, b"second, longer content").unwrap();
+    assert_eq!(std::fs::read(&dest).unwrap(), b"second, longer content");
+    assert_eq!(dir_entries(dir.path()), ["results.csv"]);
+}
+
+#[test]
+fn failure_mid_write_keeps_the_old_file_and_leaves_no_partial_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let dest = dir.path().join("results.json");
+    atomic_write(&dest, b"{\"old\": true}").unwrap();
+    let big = vec![b'x'; 100_000];
+    let err = atomic_write_with(&dest, |w| {
+        let mut f = FailAfter {
+            inner: w,
+            left: 4096,
+        };
+        f.write_all(&big)
+    })
+    .unwrap_err();
+    assert!(err.to_string().contains("injected failure"));
+    // The old file is intact and no temporary file is left behind.
+    assert_eq!(std::fs::read(&dest).unwrap(), b"{\"old\": true}");
+    assert_eq!(dir_entries(dir.path()), ["results.json"]);
+}
+
+#[test]
+fn failure_mid_write_without_an_old_file_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let dest = dir.path().join("index.html");
+    let err = atomic_write_with(&dest, |w| {
+        w.write_all(b"<html><body>half a pa")?;
+        Err(io::Error::other("injected failure: interrupted"))
+    })
+    .unwrap_err();
+    assert!(err.to_string().contains("interrupted"));
+    assert!(!dest.exists());
+    assert!(dir_entries(dir.path()).is_empty());
+}
+
+#[test]
+fn failing_producer_of_a_figure_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let dest = dir.path().join("solution.png");
+    std::fs::write(&dest, b"old png").unwrap();
+    let r: Result<(), io::Error> = atomic_write_via(&dest, |tmp| {
+        // The temporary file sits next to the destination and keeps its
+        // extension (the PNG encoder needs it).
+        assert_eq!(tmp.parent(), Some(dir.path()));
+        assert_eq!(tmp.extension().and_then(|e| e.to_str()), Some("png"));
+        std::fs::write(tmp, b"half")?;
+        Err(io::Error::other("encoder failed"))
+    });
+    assert!(r.is_err());
+    assert_eq!(std::fs::read(&dest).unwrap(), b"old png");
+    assert_eq!(dir_entries(dir.path()), ["solution.png"]);
+}
+
+// ------------------------------------------------------------ end to end
+
+fn expect_files(dir: &Path, files: &[&str]) {
+    for f in files {
+        let p = dir.join(f);
+        assert!(p.is_file(), "missing {}", p.display());
+        assert!(
+            std::fs::metadata(&p).unwrap().len() > 0,
+            "empty {}",
+            p.display()
+        );
+    }
+    // No temporary file is left behind.
+    assert!(
+        dir_entries(dir).iter().all(|n| !n.starts_with('.')),
+        "{:?}",
+        dir_entries(dir)
+    );
+}
+
+#[test]
+fn small_s01_sweep_writes_every_output() {
+    let scene = Scene::builtin("s01").unwrap();
+    let opts = SweepOptions {
+        solvers: names(&["radau5"]),
+        formulations: names(&["rcd1", "ovd0"]),
+        tolerances: vec![1e-5, 1e-6],
+        repeats: 2,
+        progress: false,
+        ..SweepOptions::from_scene(&scene)
+    };
+    let report = sweep::run(&scene, &opts).unwrap();
+    assert_eq!(report.runs.len(), 2);
+    assert_eq!(
+        report.pairs[1].not_applicable.as_deref(),
+        Some("overdetermined: solver needs a square system")
+    );
+    assert!(report
+        .runs
+        .iter()
+        .all(|r| !r.tsim_runs.is_empty() && r.tsim_runs.len() <= 2));
+    let summary = sweep::Summary::of(&report);
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s01");
+    let written = sweep::write_outputs(&report, &summary, &out).unwrap();
+    expect_files(
+        &out,
+        &[
+            "results.csv",
+            "results.json",
+            "index.html",
+            "solution.svg",
+            "solution.png",
+            "error.svg",
+            "error.png",
+            "residuals.svg",
+            "residuals.png",
+            "work_precision.svg",
+            "work_precision.png",
+        ],
+    );
+    assert!(written.notes.is_empty(), "{:?}", written.notes);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    for key in [
+        "scene", "sweep", "runs", "success", "pareto", "targets", "paper",
+    ] {
+        assert!(json.get(key).is_some(), "results.json lacks {key}");
+    }
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    // The RunRecord fields, flat, plus the individual timings.
+    for key in [
+        "solver",
+        "formulation",
+        "tol",
+        "status",
+        "err",
+        "err_sum",
+        "tsim_s",
+        "stats",
+        "residuals",
+        "tsim_runs",
+    ] {
+        assert!(runs[0].get(key).is_some(), "run lacks {key}");
+    }
+    assert_eq!(json["paper"]["table"], "Table 6 (S01)");
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3);
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("src=\"work_precision.svg\"") && !html.contains("<script"));
+    assert!(html.contains("overdetermined: solver needs a square system"));
+    let text = sweep::table::text_report(&report, &summary);
+    assert!(text.contains("Success matrix") && text.contains("Pareto front"));
+}
+
+#[test]
+fn sweep_without_reference_reports_residuals_not_errors() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/double_pendulum.toml");
+    let scene = Scene::load(&path).unwrap();
+    let opts = SweepOptions {
+        solvers: names(&["radau5"]),
+        formulations: names(&["rcd0"]),
+        tolerances: vec![1e-5],
+        repeats: 1,
+        progress: false,
+        ..SweepOptions::from_scene(&scene)
+    };
+    let report = sweep::run(&scene, &opts).unwrap();
+    assert!(!report.has_reference());
+    let r = &report.runs[0].record;
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    assert!(r.err.is_none() && r.err_sum.is_none());
+    assert!(r.residuals.level0.is_some() && r.residuals.level1.is_some());
+    assert!(r.invariant_drift.get("energy").is_some());
+    let summary = sweep::Summary::of(&report);
+    assert!(summary.pareto.is_empty() && summary.paper.is_none());
+    assert!(summary.targets.iter().all(|t| t.best.is_none()));
+    let dir = tempfile::tempdir().unwrap();
+    let written = sweep::write_outputs(&report, &summary, dir.path()).unwrap();
+    expect_files(
+        dir.path(),
+        &[
+            "results.csv",
+            "results.json",
+            "index.html",
+            "work_precision.png",
+            "residuals.png",
+        ],
+    );
+    assert!(!dir.path().join("error.svg").exists());
+    assert!(written.notes.iter().any(|n| n.contains("no reference")));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("results.json")).unwrap())
+            .unwrap();
+    assert!(json["runs"][0]["err"].is_null());
+    assert!(json["paper"].is_null());
+}
+
+#[test]
+fn bad_grids_are_refused() {
+    let scene = Scene::builtin("s01").unwrap();
+    let base = SweepOptions {
+        progress: false,
+        ..SweepOptions::from_scene(&scene)
+    };
+    let bad_solver = SweepOptions {
+        solvers: names(&["rk4"]),
+        ..base.clone()
+    };
+    assert!(matches!(
+        sweep::validate(&bad_solver),
+        Err(sweep::SweepError::UnknownSolver { .. })
+    ));
+    let bad_form = SweepOptions {
+        formulations: names(&["rcd7"]),
+        ..base.clone()
+    };
+    assert!(matches!(
+        sweep::validate(&bad_form),
+        Err(sweep::SweepError::UnknownFormulation { .. })
+    ));
+    let bad_tol = SweepOptions {
+        tolerances: vec![1e-6, -1.0],
+        ..base.clone()
+    };
+    assert!(matches!(
+        sweep::validate(&bad_tol),
+        Err(sweep::SweepError::BadTolerance { .. })
+    ));
+    let empty = SweepOptions {
+        tolerances: vec![],
+        ..base
+    };
+    assert!(matches!(
+        sweep::validate(&empty),
+        Err(sweep::SweepError::Empty { what: "tolerances" })
+    ));
+}
