@@ -1,0 +1,4 @@
+// An empty macro body is not a model.
+dae::dae! {}
+
+fn main() {}

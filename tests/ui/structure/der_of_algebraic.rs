@@ -1,0 +1,17 @@
+// Only differential unknowns have derivatives.
+dae::dae! {
+    pub Pendulum {
+        parameters { m = 1.0, l = 1.0, g = 9.81 }
+        differential { x, y, v, w }
+        algebraic { lambda }
+        equations {
+            der(x) = v;
+            der(y) = w;
+            m * der(v) = -2 * x * der(lambda);
+            m * der(w) = -2 * y * lambda - m * g;
+            0 = x^2 + y^2 - l^2;
+        }
+    }
+}
+
+fn main() {}
