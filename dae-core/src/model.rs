@@ -98,9 +98,13 @@ impl Model {
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
         let mut errors = Errors::default();
         let mut seen: Vec<(String, Span)> = Vec::new();
+        // Names declared twice: uses of them raise no further errors.
+        let mut dupes: Vec<String> = Vec::new();
         let mut declare = |n: &Name, errors: &mut Errors| {
-            if let Some((_, _first)) = seen.iter().find(|(s, _)| *s == n.name) {
+            if let Some((_, first)) = seen.iter().find(|(s, _)| *s == n.name) {
                 errors.push(n.span, format!("`{}` is declared twice", n.name));
+                errors.push(*first, format!("`{}` is first declared here", n.name));
+                dupes.push(n.name.clone());
                 return false;
             }
             if FUNCTIONS.contains(&n.name.as_str()) || n.name == "der" {
@@ -162,6 +166,7 @@ impl Model {
         let scope = Scope {
             params: &params,
             vars: &vars,
+            dupes: &dupes,
         };
         let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
         let mut constraints = Vec::new();
@@ -176,6 +181,8 @@ impl Model {
                 lowered_all = false;
                 continue;
             };
+            // Equation-level errors point at the equation's first token.
+            let eq_span = eq.lhs.span();
             let r = expr::sub(&lhs, &rhs);
             let ders: Vec<usize> = r
                 .symbols()
@@ -189,9 +196,9 @@ impl Model {
                 [] => {
                     let g = if lhs.is_zero() { rhs } else { expr::sub(&lhs, &rhs) };
                     if g.any_sym(&|s| matches!(s, Sym::Var(_))) {
-                        constraints.push(ConstraintDef { expr: g, span: eq.span });
+                        constraints.push(ConstraintDef { expr: g, span: eq_span });
                     } else {
-                        errors.push(eq.span, "this equation involves no unknown");
+                        errors.push(eq_span, "this equation involves no unknown");
                     }
                 }
                 [j] => {
@@ -207,13 +214,20 @@ impl Model {
                         continue;
                     }
                     let f = expr::neg(&expr::subs(&r, &|s| matches!(s, Sym::Der(_)).then(Expr::zero)));
+                    if coef.contains(Sym::Time) {
+                        errors.push(
+                            eq_span,
+                            format!("the coefficient of `der({})` may not depend on time `t`", vars[*j].name),
+                        );
+                        continue;
+                    }
                     if coef.is_zero() {
-                        errors.push(eq.span, format!("the coefficient of `der({})` vanishes", vars[*j].name));
+                        errors.push(eq_span, format!("the coefficient of `der({})` vanishes", vars[*j].name));
                         continue;
                     }
                     if dynamics[*j].is_some() {
                         errors.push(
-                            eq.span,
+                            eq_span,
                             format!("a second equation for `der({})`: each differential unknown has exactly one", vars[*j].name),
                         );
                         continue;
@@ -222,7 +236,7 @@ impl Model {
                         var: *j,
                         coef,
                         rhs: f,
-                        span: eq.span,
+                        span: eq_span,
                     });
                 }
                 _ => errors.push(
@@ -256,9 +270,10 @@ impl Model {
                 errors.push(
                     c.span,
                     format!(
-                        "too many equations: {} constraints for {} algebraic unknowns (a semi-explicit model has one constraint per algebraic unknown)",
+                        "too many equations: {} constraints for {} algebraic unknown{} (a semi-explicit model has one constraint per algebraic unknown)",
                         constraints.len(),
-                        n_alg
+                        n_alg,
+                        if n_alg == 1 { "" } else { "s" }
                     ),
                 );
             }
@@ -273,6 +288,19 @@ impl Model {
                         v.name
                     ),
                 );
+            }
+        }
+        if lowered_all {
+            for (a, v) in vars.iter().enumerate().skip(n_diff) {
+                let s = Sym::Var(a as u32);
+                let used = dyns.iter().any(|d| d.rhs.contains(s) || d.coef.contains(s))
+                    || constraints.iter().any(|c| c.expr.contains(s));
+                if !used {
+                    errors.push(
+                        v.span,
+                        format!("structurally singular: `{}` appears in no equation, so nothing determines it", v.name),
+                    );
+                }
             }
         }
         let mut invariants = Vec::new();
@@ -386,6 +414,7 @@ impl Model {
         let scope = Scope {
             params: &self.params,
             vars: &self.vars,
+            dupes: &[],
         };
         let e = ast.and_then(|a| scope.lower(&a, &mut errors));
         match e {
@@ -407,6 +436,8 @@ impl Model {
 struct Scope<'a> {
     params: &'a [ParamDef],
     vars: &'a [VarDef],
+    /// Names declared twice (already reported).
+    dupes: &'a [String],
 }
 
 impl Scope<'_> {
@@ -449,6 +480,7 @@ impl Scope<'_> {
                             Some(i) if self.vars[i].kind == VarKind::Differential => {
                                 Some(Expr::der(i))
                             }
+                            Some(_) if self.dupes.contains(v) => None,
                             Some(_) => {
                                 errors.push(
                                     *vspan,
@@ -456,6 +488,7 @@ impl Scope<'_> {
                                 );
                                 None
                             }
+                            None if self.dupes.contains(v) => None,
                             None => {
                                 errors.push(
                                     *vspan,
