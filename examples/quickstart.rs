@@ -21,11 +21,34 @@ dae! {
 }
 
 fn main() -> Result<(), SolveError> {
-    let sys = Pendulum { g: 13.75, ..Pendulum::default() }.ggl1();
-    println!("{}: d-index {:?}, rows {:?}", sys.info().name, sys.info().d_index, sys.info().rows[0].text);
-    let start = init::consistent(&sys, 0.0, &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], &Default::default())?;
-    let problem = Problem { system: &sys, t0: 0.0, y0: &start.y, t_end: 10.0 };
+    let sys = Pendulum {
+        g: 13.75,
+        ..Pendulum::default()
+    }
+    .ggl1();
+    println!(
+        "{}: d-index {:?}, rows {:?}",
+        sys.info().name,
+        sys.info().d_index,
+        sys.info().rows[0].text
+    );
+    let start = init::consistent(
+        &sys,
+        0.0,
+        &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        &Default::default(),
+    )?;
+    let problem = Problem {
+        system: &sys,
+        t0: 0.0,
+        y0: &start.y,
+        t_end: 10.0,
+    };
     let solution = Radau5.solve(&problem, &Options::with_tol(1e-10))?;
-    println!("y(10) = {:?} after {} steps", solution.last(), solution.stats.steps);
+    println!(
+        "y(10) = {:?} after {} steps",
+        solution.last(),
+        solution.stats.steps
+    );
     Ok(())
 }

@@ -38,8 +38,9 @@ pub mod prelude {
 #[doc(hidden)]
 pub mod __private {
     pub use dae_core::system::{
-        check_parameter, BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo, Model,
-        ModelInfo, ParamInfo, ParameterError, RowInfo, RowKind, StaticSize, VarInfo, VarKind,
+        check_parameter, BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo,
+        Model, ModelInfo, ParamInfo, ParameterError, RowInfo, RowKind, StaticSize, VarInfo,
+        VarKind,
     };
     pub use nalgebra::DMatrix;
     pub use std::boxed::Box;

@@ -6,7 +6,11 @@ use dae::cli::{self, derive::Format, Failure};
 use std::io::Write;
 
 #[derive(Parser)]
-#[command(name = "dae", version, about = "Constrained dynamics: every formulation, measured")]
+#[command(
+    name = "dae",
+    version,
+    about = "Constrained dynamics: every formulation, measured"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,

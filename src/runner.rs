@@ -196,7 +196,10 @@ pub enum RunError {
 const REF_NAMES: [&str; 5] = ["x", "y", "v", "w", "lambda"];
 
 /// Check that the reference can be used for this model and scene.
-pub fn pendulum_reference(model: &dyn Model, initial: &[(String, f64)]) -> Result<PendulumExact, RunError> {
+pub fn pendulum_reference(
+    model: &dyn Model,
+    initial: &[(String, f64)],
+) -> Result<PendulumExact, RunError> {
     let info = model.model_info();
     for n in REF_NAMES {
         if !info.variables.iter().any(|v| v.name == n) {
@@ -211,31 +214,48 @@ pub fn pendulum_reference(model: &dyn Model, initial: &[(String, f64)]) -> Resul
             .parameter(n)
             .ok_or_else(|| RunError::Reference(format!("pendulum-exact needs parameter `{n}`")))
     };
-    let value = |n: &str| initial.iter().find(|(k, _)| k == n).map(|(_, v)| *v).unwrap_or(0.0);
+    let value = |n: &str| {
+        initial
+            .iter()
+            .find(|(k, _)| k == n)
+            .map(|(_, v)| *v)
+            .unwrap_or(0.0)
+    };
     if value("v") != 0.0 || value("w") != 0.0 {
         return Err(RunError::Reference(
             "pendulum-exact describes a release at rest: [initial] v and w must be 0".into(),
         ));
     }
-    PendulumExact::from_start(value("x"), value("y"), param("l")?, param("g")?, param("m")?)
-        .map_err(|e| RunError::Reference(e.to_string()))
+    PendulumExact::from_start(
+        value("x"),
+        value("y"),
+        param("l")?,
+        param("g")?,
+        param("m")?,
+    )
+    .map_err(|e| RunError::Reference(e.to_string()))
 }
 
 /// Run one integration. `Err` only for bad input; solver failures are an
 /// `Ok` record with `status = "error"`.
 pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
-    let solver = dae_solvers::solver_by_name(spec.solver).ok_or_else(|| RunError::UnknownSolver(spec.solver.into()))?;
+    let solver = dae_solvers::solver_by_name(spec.solver)
+        .ok_or_else(|| RunError::UnknownSolver(spec.solver.into()))?;
     let sys = spec.model.formulation(spec.formulation)?;
     let info = sys.info().clone();
-    solver.accepts(&info).map_err(|why| RunError::NotApplicable {
-        solver: spec.solver.into(),
-        formulation: spec.formulation.into(),
-        why,
-    })?;
+    solver
+        .accepts(&info)
+        .map_err(|why| RunError::NotApplicable {
+            solver: spec.solver.into(),
+            formulation: spec.formulation.into(),
+            why,
+        })?;
     let n = info.unknowns();
     let mut y0 = vec![0.0; n];
     for (name, v) in spec.initial {
-        let i = info.variable(name).ok_or_else(|| RunError::UnknownVariable(name.clone()))?;
+        let i = info
+            .variable(name)
+            .ok_or_else(|| RunError::UnknownVariable(name.clone()))?;
         y0[i] = *v;
     }
     let mut record = RunRecord {
@@ -277,7 +297,14 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
     };
     if consistent.report.projected {
         record.init = Some(InitSummary {
-            projected: Named(consistent.report.changes.iter().map(|c| (c.name.clone(), c.after)).collect()),
+            projected: Named(
+                consistent
+                    .report
+                    .changes
+                    .iter()
+                    .map(|c| (c.name.clone(), c.after))
+                    .collect(),
+            ),
         });
     }
     let y0 = consistent.y;
@@ -314,21 +341,38 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
         }
     }
     let Some(sol) = solution else {
-        return Ok(fail(record, SolveError::InvalidInput { what: "no run".into() }));
+        return Ok(fail(
+            record,
+            SolveError::InvalidInput {
+                what: "no run".into(),
+            },
+        ));
     };
     times.sort_by(f64::total_cmp);
     record.tsim_s = times[times.len() / 2];
     record.stats = sol.stats;
     record.t_end = sol.t.last().copied().unwrap_or(spec.t_end);
     if let Some(last) = sol.last() {
-        record.final_values = Named(info.variables.iter().zip(last).map(|(v, x)| (v.name.clone(), *x)).collect());
+        record.final_values = Named(
+            info.variables
+                .iter()
+                .zip(last)
+                .map(|(v, x)| (v.name.clone(), *x))
+                .collect(),
+        );
     }
     measure(spec, &*sys, &y0, &sol, &mut record);
     Ok(record)
 }
 
 /// Errors, residuals and drift from the solution at the output times.
-fn measure(spec: &RunSpec<'_>, sys: &dyn DaeSystem, y0: &[f64], sol: &dae_solvers::Solution, record: &mut RunRecord) {
+fn measure(
+    spec: &RunSpec<'_>,
+    sys: &dyn DaeSystem,
+    y0: &[f64],
+    sol: &dae_solvers::Solution,
+    record: &mut RunRecord,
+) {
     let info = sys.info();
     let k = info.constraints.len();
     let n_inv = info.invariants.len();
@@ -337,7 +381,11 @@ fn measure(spec: &RunSpec<'_>, sys: &dyn DaeSystem, y0: &[f64], sol: &dae_solver
     let mut inv = vec![0.0; n_inv];
     sys.invariants(spec.t0, y0, &mut inv0);
     let ref_idx: Vec<Option<usize>> = REF_NAMES.iter().map(|n| info.variable(n)).collect();
-    let is_check = |t: f64| spec.check.iter().any(|c| (c - t).abs() <= 1e-12 * (1.0 + t.abs()));
+    let is_check = |t: f64| {
+        spec.check
+            .iter()
+            .any(|c| (c - t).abs() <= 1e-12 * (1.0 + t.abs()))
+    };
     let (mut err, mut err_sum, mut err_lambda) = (0.0f64, 0.0f64, 0.0f64);
     let mut res = [None::<f64>; 3];
     let mut drift = vec![0.0f64; n_inv];
@@ -389,7 +437,11 @@ fn measure(spec: &RunSpec<'_>, sys: &dyn DaeSystem, y0: &[f64], sol: &dae_solver
             traj.err.push(e_here);
         }
         traj.residuals.push(lev);
-        traj.drift.push(inv.first().zip(inv0.first()).map_or(0.0, |(a, b)| (a - b).abs()));
+        traj.drift.push(
+            inv.first()
+                .zip(inv0.first())
+                .map_or(0.0, |(a, b)| (a - b).abs()),
+        );
     }
     if spec.reference.is_some() {
         record.err = Some(err);

@@ -22,7 +22,10 @@ fn stderr(o: &Output) -> String {
 fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(name);
-    std::fs::File::create(&path).unwrap().write_all(text.as_bytes()).unwrap();
+    std::fs::File::create(&path)
+        .unwrap()
+        .write_all(text.as_bytes())
+        .unwrap();
     let p = path.display().to_string();
     (dir, p)
 }
@@ -35,7 +38,14 @@ fn derive_json_is_deterministic_and_has_the_contract_shape() {
     assert_eq!(a.stdout, b.stdout, "two runs must be byte-identical");
     let v: serde_json::Value = serde_json::from_slice(&a.stdout).unwrap();
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
-    for k in ["model", "variables", "parameters", "constraints", "invariants", "formulations"] {
+    for k in [
+        "model",
+        "variables",
+        "parameters",
+        "constraints",
+        "invariants",
+        "formulations",
+    ] {
         assert!(keys.contains(&k), "missing {k}");
     }
     assert_eq!(v["model"], "Pendulum");
@@ -44,7 +54,12 @@ fn derive_json_is_deterministic_and_has_the_contract_shape() {
     assert_eq!(v["constraints"][2]["level"], 2);
     let f = &v["formulations"];
     assert_eq!(f.as_array().unwrap().len(), 8);
-    let ovd0 = f.as_array().unwrap().iter().find(|x| x["name"] == "ovd0").unwrap();
+    let ovd0 = f
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["name"] == "ovd0")
+        .unwrap();
     assert_eq!(ovd0["equations"], 7);
     assert!(ovd0["d_index"].is_null());
     assert_eq!(ovd0["algebraic_equations"], 3);
@@ -80,7 +95,10 @@ fn bad_model_files_report_line_and_column_and_exit_2() {
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{text}: {err}");
         assert!(err.contains(msg), "{text}: expected `{msg}` in {err}");
-        assert!(err.contains(&format!("{path}:{at}")), "{text}: expected position {at} in {err}");
+        assert!(
+            err.contains(&format!("{path}:{at}")),
+            "{text}: expected position {at} in {err}"
+        );
         assert!(!err.contains("panicked"), "{err}");
     }
     let o = dae(&["derive", "no/such/file.dae"]);
@@ -106,12 +124,34 @@ fn garbage_never_panics() {
 
 #[test]
 fn run_honours_the_json_contract() {
-    let o = dae(&["run", "s01", "--solver", "radau5", "--formulation", "rcd0", "--tol", "1e-7"]);
+    let o = dae(&[
+        "run",
+        "s01",
+        "--solver",
+        "radau5",
+        "--formulation",
+        "rcd0",
+        "--tol",
+        "1e-7",
+    ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     for k in [
-        "scene", "solver", "formulation", "tol", "status", "error", "t_end", "final", "err", "err_sum", "err_lambda",
-        "tsim_s", "stats", "residuals", "invariant_drift",
+        "scene",
+        "solver",
+        "formulation",
+        "tol",
+        "status",
+        "error",
+        "t_end",
+        "final",
+        "err",
+        "err_sum",
+        "err_lambda",
+        "tsim_s",
+        "stats",
+        "residuals",
+        "invariant_drift",
     ] {
         assert!(v.get(k).is_some(), "missing {k}");
     }
@@ -119,7 +159,14 @@ fn run_honours_the_json_contract() {
     assert!(v["error"].is_null());
     assert_eq!(v["t_end"], 20.0);
     assert!(v["err"].as_f64().unwrap() < 1e-3);
-    for k in ["steps", "rejected", "residual_evals", "jacobian_evals", "factorizations", "newton_iterations"] {
+    for k in [
+        "steps",
+        "rejected",
+        "residual_evals",
+        "jacobian_evals",
+        "factorizations",
+        "newton_iterations",
+    ] {
         assert!(v["stats"][k].as_u64().is_some(), "stats.{k}");
     }
     for k in ["level0", "level1", "level2"] {
@@ -151,11 +198,26 @@ fn malformed_scene_files_exit_2_naming_the_field_and_line() {
     let good = "name = \"T\"\nmodel = \"pendulum\"\n[initial]\nx = 1.0\ny = 0.0\nv = 0.0\nw = 0.0\n[time]\nend = 1.0\n[reference]\nkind = \"none\"\n";
     let cases = [
         (good.replace("model = \"pendulum\"\n", ""), "model"),
-        (good.replace("[initial]\nx = 1.0", "[initial]\nq = 1.0"), "q"),
-        (good.replace("end = 1.0", "end = 1.0\n[sweep]\nsolvers = [\"euler\"]"), "euler"),
-        (good.replace("end = 1.0", "end = 1.0\n[sweep]\nformulations = [\"abc\"]"), "abc"),
-        (good.replace("end = 1.0", "end = 1.0\n[sweep]\ntolerances = [nan]"), "tolerances"),
-        (good.replace("end = 1.0", "end = 1.0\n[sweep]\ntolerances = [-1e-6]"), "tolerances"),
+        (
+            good.replace("[initial]\nx = 1.0", "[initial]\nq = 1.0"),
+            "q",
+        ),
+        (
+            good.replace("end = 1.0", "end = 1.0\n[sweep]\nsolvers = [\"euler\"]"),
+            "euler",
+        ),
+        (
+            good.replace("end = 1.0", "end = 1.0\n[sweep]\nformulations = [\"abc\"]"),
+            "abc",
+        ),
+        (
+            good.replace("end = 1.0", "end = 1.0\n[sweep]\ntolerances = [nan]"),
+            "tolerances",
+        ),
+        (
+            good.replace("end = 1.0", "end = 1.0\n[sweep]\ntolerances = [-1e-6]"),
+            "tolerances",
+        ),
         (good.replace("name = \"T\"", "name = \"T"), "TOML"),
     ];
     for (text, needle) in cases {

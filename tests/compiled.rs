@@ -18,16 +18,32 @@ mod spherical {
 
 fn models() -> Vec<(&'static str, Box<dyn Model>, &'static str)> {
     vec![
-        ("pendulum", Box::new(pendulum::Pendulum::default()), include_str!("../scenes/pendulum.dae")),
-        ("double", Box::new(double::DoublePendulum::default()), include_str!("../scenes/double_pendulum.dae")),
-        ("spherical", Box::new(spherical::SphericalPendulum::default()), include_str!("../scenes/spherical_pendulum.dae")),
+        (
+            "pendulum",
+            Box::new(pendulum::Pendulum::default()),
+            include_str!("../scenes/pendulum.dae"),
+        ),
+        (
+            "double",
+            Box::new(double::DoublePendulum::default()),
+            include_str!("../scenes/double_pendulum.dae"),
+        ),
+        (
+            "spherical",
+            Box::new(spherical::SphericalPendulum::default()),
+            include_str!("../scenes/spherical_pendulum.dae"),
+        ),
     ]
 }
 
 #[test]
 fn compiled_jacobians_match_central_differences() {
     for (label, model, _) in models() {
-        assert_eq!(model.model_info().formulations.len(), 8, "{label}: all eight formulations apply");
+        assert_eq!(
+            model.model_info().formulations.len(),
+            8,
+            "{label}: all eight formulations apply"
+        );
         for name in &model.model_info().formulations {
             let sys = model.formulation(name).unwrap();
             // Relative 1e-7, the bound (see dae_core::check).
@@ -55,7 +71,10 @@ fn compiled_and_interpreted_agree() {
             a.residual(0.3, &y, &yp, &mut ra);
             b.residual(0.3, &y, &yp, &mut rb);
             for (x, z) in ra.iter().zip(&rb) {
-                assert!((x - z).abs() <= 1e-13 * (1.0 + z.abs()), "{label}/{name}: {x} vs {z}");
+                assert!(
+                    (x - z).abs() <= 1e-13 * (1.0 + z.abs()),
+                    "{label}/{name}: {x} vs {z}"
+                );
             }
         }
     }

@@ -211,6 +211,7 @@ impl Model {
                                 vars[*j].name, vars[*j].name
                             ),
                         );
+                        lowered_all = false;
                         continue;
                     }
                     let f = expr::neg(&expr::subs(&r, &|s| matches!(s, Sym::Der(_)).then(Expr::zero)));
@@ -219,10 +220,12 @@ impl Model {
                             eq_span,
                             format!("the coefficient of `der({})` may not depend on time `t`", vars[*j].name),
                         );
+                        lowered_all = false;
                         continue;
                     }
                     if coef.is_zero() {
                         errors.push(eq_span, format!("the coefficient of `der({})` vanishes", vars[*j].name));
+                        lowered_all = false;
                         continue;
                     }
                     if dynamics[*j].is_some() {
@@ -230,6 +233,7 @@ impl Model {
                             eq_span,
                             format!("a second equation for `der({})`: each differential unknown has exactly one", vars[*j].name),
                         );
+                        lowered_all = false;
                         continue;
                     }
                     dynamics[*j] = Some(Dynamic {

@@ -50,11 +50,16 @@ pub fn load_model(scene: &Scene) -> Result<Box<dyn Model + Send + Sync>, Failure
     let info = model.model_info().clone();
     let vars: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
     let params: Vec<&str> = info.parameters.iter().map(|p| p.name.as_str()).collect();
-    scene.check_names(&vars, &params).map_err(|e| Failure::input(e.to_string()))?;
+    scene
+        .check_names(&vars, &params)
+        .map_err(|e| Failure::input(e.to_string()))?;
     for p in &scene.parameters {
-        model
-            .set_parameter(&p.name, p.value)
-            .map_err(|e| Failure::input(format!("{}:{}:{}: [parameters] {e}", scene.origin, p.line, p.column)))?;
+        model.set_parameter(&p.name, p.value).map_err(|e| {
+            Failure::input(format!(
+                "{}:{}:{}: [parameters] {e}",
+                scene.origin, p.line, p.column
+            ))
+        })?;
     }
     Ok(model)
 }
@@ -64,7 +69,9 @@ pub fn check_tol(tol: f64, flag: &str) -> Result<(), Failure> {
     if tol.is_finite() && tol > 0.0 {
         Ok(())
     } else {
-        Err(Failure::input(format!("{flag} {tol}: a tolerance must be positive and finite")))
+        Err(Failure::input(format!(
+            "{flag} {tol}: a tolerance must be positive and finite"
+        )))
     }
 }
 
@@ -73,7 +80,11 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
     check_tol(args.tol, "--tol")?;
     let scene = Scene::load(&args.scene).map_err(|e| Failure::input(e.to_string()))?;
     let model = load_model(&scene)?;
-    let solver = args.solver.clone().or_else(|| scene.sweep.solvers.first().cloned()).unwrap_or_else(|| "radau5".into());
+    let solver = args
+        .solver
+        .clone()
+        .or_else(|| scene.sweep.solvers.first().cloned())
+        .unwrap_or_else(|| "radau5".into());
     let Some(s) = dae_solvers::solver_by_name(&solver) else {
         return Err(Failure::input(format!(
             "--solver {solver}: unknown solver (known: {})",
@@ -86,15 +97,28 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
             .sweep
             .formulations
             .iter()
-            .find(|f| model.formulation(f).is_ok_and(|sys| s.accepts(sys.info()).is_ok()))
+            .find(|f| {
+                model
+                    .formulation(f)
+                    .is_ok_and(|sys| s.accepts(sys.info()).is_ok())
+            })
             .cloned()
-            .ok_or_else(|| Failure::input(format!("no formulation of the scene is accepted by `{solver}`")))?,
+            .ok_or_else(|| {
+                Failure::input(format!(
+                    "no formulation of the scene is accepted by `{solver}`"
+                ))
+            })?,
     };
-    let initial: Vec<(String, f64)> = scene.initial.iter().map(|v| (v.name.clone(), v.value)).collect();
+    let initial: Vec<(String, f64)> = scene
+        .initial
+        .iter()
+        .map(|v| (v.name.clone(), v.value))
+        .collect();
     let reference = match scene.reference {
-        ReferenceKind::PendulumExact => {
-            Some(runner::pendulum_reference(&*model, &initial).map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?)
-        }
+        ReferenceKind::PendulumExact => Some(
+            runner::pendulum_reference(&*model, &initial)
+                .map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?,
+        ),
         ReferenceKind::None => None,
     };
     let spec = RunSpec {
@@ -108,7 +132,11 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         solver: &solver,
         formulation: &formulation,
         tol: args.tol,
-        init_mode: if args.strict_init { InitMode::Strict } else { InitMode::Project },
+        init_mode: if args.strict_init {
+            InitMode::Strict
+        } else {
+            InitMode::Project
+        },
         samples: &[],
         repeats: 1,
     };
@@ -128,19 +156,39 @@ fn opt(v: Option<f64>) -> String {
 /// Human-readable summary of one run.
 pub fn text(r: &RunRecord) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "{} {}({}) tol {:e}: {}", r.scene, r.solver, r.formulation, r.tol, r.status);
+    let _ = writeln!(
+        s,
+        "{} {}({}) tol {:e}: {}",
+        r.scene, r.solver, r.formulation, r.tol, r.status
+    );
     if let Some(e) = &r.error {
         let _ = writeln!(s, "  error: {} ({})", e.message, e.kind);
     }
     let _ = writeln!(s, "  t_end {}  tsim {:.3e} s", r.t_end, r.tsim_s);
-    let vals: Vec<String> = r.final_values.0.iter().map(|(k, v)| format!("{k} = {v:.12e}")).collect();
+    let vals: Vec<String> = r
+        .final_values
+        .0
+        .iter()
+        .map(|(k, v)| format!("{k} = {v:.12e}"))
+        .collect();
     let _ = writeln!(s, "  final: {}", vals.join(", "));
-    let _ = writeln!(s, "  err {}  err_sum {}  err_lambda {}", opt(r.err), opt(r.err_sum), opt(r.err_lambda));
+    let _ = writeln!(
+        s,
+        "  err {}  err_sum {}  err_lambda {}",
+        opt(r.err),
+        opt(r.err_sum),
+        opt(r.err_lambda)
+    );
     let st = &r.stats;
     let _ = writeln!(
         s,
         "  steps {} rejected {} residual evals {} jacobians {} factorizations {} newton {}",
-        st.steps, st.rejected, st.residual_evals, st.jacobian_evals, st.factorizations, st.newton_iterations
+        st.steps,
+        st.rejected,
+        st.residual_evals,
+        st.jacobian_evals,
+        st.factorizations,
+        st.newton_iterations
     );
     let _ = writeln!(
         s,

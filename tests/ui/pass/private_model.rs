@@ -1,7 +1,7 @@
 //! A private model that nothing uses still builds without a warning: no
 //! dead code, no unused variables. It covers the less common code paths:
 //! no constraints and no invariants, a keyword as a parameter name, a
-//! leading matrix depending on `y` and `t`, every elementary function,
+//! leading matrix depending on `y`, time in the right-hand side, every elementary function,
 //! real and negative powers, and a negative default.
 #![deny(warnings)]
 
@@ -11,7 +11,7 @@ dae::dae! {
         differential { x, v }
         equations {
             (1 + x^2) * der(x) = v;
-            (2 + t) * der(v) = -type * sin(x) + cos(t) * exp(-c * v) + ln(2 + x^2)
+            (2 + v^2) * der(v) = -type * sin(x) + cos(t) * exp(-c * v) + ln(2 + x^2)
                 + sqrt(1 + v^2) + tan(k * x) + (3 + x^2)^1.5 + x^-2 - 2^x;
         }
     }
