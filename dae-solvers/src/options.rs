@@ -175,10 +175,16 @@ impl Options {
                 "time span [{t0}, {t_end}] must be finite with t_end > t0"
             )));
         }
-        for (name, v) in [("h0", self.h0), ("h_max", self.h_max), ("fixed_step", self.fixed_step)] {
+        for (name, v) in [
+            ("h0", self.h0),
+            ("h_max", self.h_max),
+            ("fixed_step", self.fixed_step),
+        ] {
             if let Some(h) = v {
                 if !h.is_finite() || h <= 0.0 {
-                    return Err(SolveError::invalid(format!("{name} = {h} must be positive")));
+                    return Err(SolveError::invalid(format!(
+                        "{name} = {h} must be positive"
+                    )));
                 }
             }
         }
@@ -193,7 +199,9 @@ impl Options {
         }
         if let Some(k) = self.fixed_order {
             if !(1..=5).contains(&k) {
-                return Err(SolveError::invalid(format!("fixed_order = {k} must be in 1..=5")));
+                return Err(SolveError::invalid(format!(
+                    "fixed_order = {k} must be in 1..=5"
+                )));
             }
         }
         if self.output_times.iter().any(|t| !t.is_finite()) {
