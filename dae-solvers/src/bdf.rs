@@ -116,15 +116,20 @@
 //!
 //! # Initial derivative
 //!
-//! `y'₀` is the minimum-norm least-squares solution of `E(y₀) y' = f(t₀, y₀)`
-//! (computed by SVD, so the derivatives of purely algebraic unknowns are
-//! zero), completed in the null space of `E(y₀)` by the time derivatives of
-//! the model's constraint chain, `G_y(t₀,y₀) y' + ∂g/∂t = 0` — again in the
-//! least-squares minimum-norm sense and without changing `E y'`. For the
-//! projected formulations this recovers the derivatives that `E` leaves
-//! undetermined, so the first predictor is right. The initial values are then
-//! checked: a row whose residual exceeds what a perturbation of every unknown
-//! by its tolerance could cause gives
+//! `y'₀` is computed as by [`crate::init::initial_derivative`]: the
+//! minimum-norm least-squares solution of `E(y₀) y' = f(t₀, y₀)` (by SVD, so
+//! the derivatives of purely algebraic unknowns are zero), completed in the
+//! null space of `E(y₀)` by the time derivatives of the model's constraint
+//! chain, `G_y(t₀,y₀) y' + ∂g/∂t = 0` — again in the least-squares
+//! minimum-norm sense and without changing `E y'`. For the projected
+//! formulations this recovers the derivatives that `E` leaves undetermined,
+//! so the first predictor is right. Two choices differ from that function:
+//! the rank of `E` is the numerical rank at round-off (`σ ≤ N ε σ_max` counts
+//! as zero), so that every nonsingular `E` is inverted however badly it is
+//! scaled, and a constraint chain that cannot be differentiated at `t₀` (not
+//! finite) leaves the null-space components at zero instead of failing. The
+//! initial values are then checked: a row whose residual exceeds what a
+//! perturbation of every unknown by its tolerance could cause gives
 //! [`SolveError::InconsistentInitialValues`].
 //!
 //! # Fixed step size (convergence studies)
@@ -149,10 +154,12 @@
 //! itself does not allocate, except to record every step when
 //! [`Options::record_steps`] asks for it.
 
+use crate::init::{initial_derivative_with, DerivativeRule};
+use crate::linalg::{DenseLu, Pivoting};
 use crate::options::Tolerances;
 use crate::{Options, Problem, Solution, SolveError, Solver, Stats};
 use dae_core::system::{DaeSystem, FormulationInfo};
-use nalgebra::{DMatrix, DVector, SVD};
+use nalgebra::DMatrix;
 
 /// Variable-order (1–5), variable-step BDF in fixed-leading-coefficient form
 /// (DASSL/DASPK). See the [module documentation](self).
@@ -164,10 +171,7 @@ impl Solver for Bdf {
     }
 
     fn accepts(&self, info: &FormulationInfo) -> Result<(), String> {
-        if info.is_overdetermined() {
-            return Err("overdetermined: solver needs a square system".into());
-        }
-        Ok(())
+        crate::accepts_square(info)
     }
 
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
@@ -217,20 +221,8 @@ fn solve(problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveErro
     if n == 0 {
         return Err(SolveError::invalid("the system has no unknowns"));
     }
+    problem.check(n, options)?;
     let (t0, t_end) = (problem.t0, problem.t_end);
-    options.validate(n, t0, t_end)?;
-    if problem.y0.len() != n {
-        return Err(SolveError::invalid(format!(
-            "y0 has {} components, the system has {n} unknowns",
-            problem.y0.len()
-        )));
-    }
-    if problem.y0.iter().any(|v| !v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            t: t0,
-            what: "initial values",
-        });
-    }
 
     // Components in the error test and the Newton norm.
     let in_test: Vec<bool> = info
@@ -245,7 +237,8 @@ fn solve(problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveErro
     };
 
     let mut stats = Stats::default();
-    let yp0 = initial_derivative(sys, t0, problem.y0, &mut stats)?;
+    let yp0 = initial_derivative_with(sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
+    stats.residual_evals += 1; // its f(t0, y0)
     check_consistency(sys, &options.tol, t0, problem.y0, &yp0, &mut stats)?;
 
     let mut out = Output::new(&options.output_times, t0, t_end, n);
@@ -592,7 +585,7 @@ struct Integrator<'a> {
     /// Error weights (zero for components out of the test).
     wt: Vec<f64>,
     /// Iteration matrix, factored in place.
-    lu: DenseLu,
+    lu: DenseLu<f64>,
     /// `E(y)`.
     lead: DMatrix<f64>,
     /// `∂(E(y) y')/∂y`.
@@ -641,7 +634,7 @@ impl<'a> Integrator<'a> {
             delta: vec![0.0; n],
             e: vec![0.0; n],
             wt: vec![0.0; n],
-            lu: DenseLu::new(n),
+            lu: DenseLu::new(n, Pivoting::Linpack),
             lead: DMatrix::zeros(n, n),
             lead_jac: DMatrix::zeros(n, n),
             stats: Stats::default(),
@@ -1035,14 +1028,14 @@ impl<'a> Integrator<'a> {
     /// factor it in place.
     fn form_iteration_matrix(&mut self) -> Result<(), NewtonFail> {
         let sys = self.sys;
-        sys.rhs_jacobian(self.t, &self.y, &mut self.lu.a);
+        sys.rhs_jacobian(self.t, &self.y, self.lu.matrix_mut());
         sys.leading(&self.y, &mut self.lead);
         if !self.constant_leading {
             sys.leading_jacobian(&self.y, &self.yp, &mut self.lead_jac);
         }
         self.stats.jacobian_evals += 1;
         let cj = self.cj;
-        let a = self.lu.a.as_mut_slice();
+        let a = self.lu.matrix_mut().as_mut_slice();
         for (g, e) in a.iter_mut().zip(self.lead.as_slice()) {
             *g = cj * e - *g;
         }
@@ -1058,11 +1051,7 @@ impl<'a> Integrator<'a> {
         self.s = 100.0;
         self.jac = JacState::Fresh;
         self.stats.factorizations += 1;
-        if self.lu.factor() {
-            Ok(())
-        } else {
-            Err(NewtonFail::Singular)
-        }
+        self.lu.factor().map_err(|_| NewtonFail::Singular)
     }
 
     /// Block 3: solve the corrector, re-evaluating the iteration matrix once
@@ -1319,176 +1308,6 @@ fn set_weights(tol: &Tolerances, in_test: &[bool], y: &[f64], wt: &mut [f64]) {
             *w = 0.0;
         }
     }
-}
-
-/// Dense LU factorisation with partial pivoting, in place on preallocated
-/// column-major storage (LINPACK's DGEFA/DGESL layout: negated multipliers
-/// below the diagonal, interchanges applied column by column).
-struct DenseLu {
-    n: usize,
-    a: DMatrix<f64>,
-    piv: Vec<usize>,
-}
-
-impl DenseLu {
-    fn new(n: usize) -> Self {
-        DenseLu {
-            n,
-            a: DMatrix::zeros(n, n),
-            piv: vec![0; n],
-        }
-    }
-
-    /// Factor `a` in place; `false` when a pivot is exactly zero.
-    fn factor(&mut self) -> bool {
-        let n = self.n;
-        let a = self.a.as_mut_slice();
-        for k in 0..n {
-            let ck = k * n;
-            let mut p = k;
-            let mut amax = a[ck + k].abs();
-            for i in k + 1..n {
-                let v = a[ck + i].abs();
-                if v > amax {
-                    amax = v;
-                    p = i;
-                }
-            }
-            self.piv[k] = p;
-            if amax == 0.0 {
-                return false;
-            }
-            a.swap(ck + p, ck + k);
-            let t = -1.0 / a[ck + k];
-            for v in &mut a[ck + k + 1..ck + n] {
-                *v *= t;
-            }
-            let (left, right) = a.split_at_mut(ck + n);
-            let lcol = &left[ck..ck + n];
-            for col in right.chunks_exact_mut(n) {
-                col.swap(p, k);
-                let t = col[k];
-                if t != 0.0 {
-                    for (c, l) in col[k + 1..].iter_mut().zip(&lcol[k + 1..]) {
-                        *c += t * l;
-                    }
-                }
-            }
-        }
-        true
-    }
-
-    /// Solve `A x = b` in place with the factors.
-    fn solve(&self, b: &mut [f64]) {
-        let n = self.n;
-        let a = self.a.as_slice();
-        for k in 0..n {
-            let p = self.piv[k];
-            b.swap(p, k);
-            let t = b[k];
-            if t != 0.0 {
-                for (bi, l) in b[k + 1..].iter_mut().zip(&a[k * n + k + 1..(k + 1) * n]) {
-                    *bi += t * l;
-                }
-            }
-        }
-        for k in (0..n).rev() {
-            b[k] /= a[k * n + k];
-            let t = -b[k];
-            for (bi, u) in b[..k].iter_mut().zip(&a[k * n..k * n + k]) {
-                *bi += t * u;
-            }
-        }
-    }
-}
-
-/// Minimum-norm least-squares solution of `A x = b` by SVD (singular values
-/// at most `max(m, n) ε σ_max` count as zero), and the right singular vectors
-/// of the neglected singular values as columns — for `m ≥ n` an orthonormal
-/// basis of the numerical null space of `A`. `None` if the SVD fails.
-fn min_norm_solve(a: &DMatrix<f64>, b: &[f64]) -> Option<(Vec<f64>, DMatrix<f64>)> {
-    let (m, n) = a.shape();
-    let svd = SVD::try_new(a.clone(), true, true, EPS, 1000)?;
-    let u = svd.u.as_ref()?;
-    let vt = svd.v_t.as_ref()?;
-    let s = &svd.singular_values;
-    let smax = s.iter().fold(0.0_f64, |acc, &v| acc.max(v));
-    let thresh = m.max(n) as f64 * EPS * smax;
-    let mut x = vec![0.0; n];
-    let mut null = Vec::new();
-    for (i, &si) in s.iter().enumerate() {
-        if si > thresh {
-            let c = u.column(i).dot(&DVector::from_column_slice(b)) / si;
-            for (xj, v) in x.iter_mut().zip(vt.row(i).iter()) {
-                *xj += c * v;
-            }
-        } else {
-            null.push(vt.row(i).transpose());
-        }
-    }
-    let null = if null.is_empty() {
-        DMatrix::zeros(n, 0)
-    } else {
-        DMatrix::from_columns(&null)
-    };
-    Some((x, null))
-}
-
-/// `y'₀`: minimum-norm solution of `E(y₀) y' = f(t₀, y₀)`, completed in the
-/// null space of `E(y₀)` by the differentiated constraint chain
-/// `G_y y' = −∂g/∂t` (see the module documentation).
-fn initial_derivative(
-    sys: &dyn DaeSystem,
-    t0: f64,
-    y0: &[f64],
-    stats: &mut Stats,
-) -> Result<Vec<f64>, SolveError> {
-    let n = y0.len();
-    let mut lead = DMatrix::zeros(n, n);
-    sys.leading(y0, &mut lead);
-    let mut f = vec![0.0; n];
-    sys.rhs(t0, y0, &mut f);
-    stats.residual_evals += 1;
-    if !lead.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            t: t0,
-            what: "leading matrix",
-        });
-    }
-    if !f.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            t: t0,
-            what: "right-hand side",
-        });
-    }
-    let svd_failed = || SolveError::invalid("initial derivative: SVD of E(y0) did not converge");
-    let (mut yp, null) = min_norm_solve(&lead, &f).ok_or_else(svd_failed)?;
-
-    let kc = sys.info().constraints.len();
-    if kc > 0 && null.ncols() > 0 {
-        let mut gy = DMatrix::zeros(kc, n);
-        sys.constraints_jacobian(t0, y0, &mut gy);
-        // ∂g/∂t by central differences (exactly zero when g is autonomous).
-        let dt = EPS.cbrt() * t0.abs().max(1.0);
-        let mut gp = vec![0.0; kc];
-        let mut gm = vec![0.0; kc];
-        sys.constraints(t0 + dt, y0, &mut gp);
-        sys.constraints(t0 - dt, y0, &mut gm);
-        let gyv = &gy * DVector::from_column_slice(&yp);
-        let rhs: Vec<f64> = (0..kc)
-            .map(|i| -((gp[i] - gm[i]) / (2.0 * dt) + gyv[i]))
-            .collect();
-        let a = &gy * &null;
-        if a.iter().all(|v| v.is_finite()) && rhs.iter().all(|v| v.is_finite()) {
-            if let Some((c, _)) = min_norm_solve(&a, &rhs) {
-                let dyp = &null * DVector::from_vec(c);
-                for (y, d) in yp.iter_mut().zip(dyp.iter()) {
-                    *y += d;
-                }
-            }
-        }
-    }
-    Ok(yp)
 }
 
 /// Reject initial values that violate a row by more than a perturbation of

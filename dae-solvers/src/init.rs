@@ -104,14 +104,17 @@
 
 use crate::error::SolveError;
 use dae_core::system::{DaeSystem, VarKind};
-use nalgebra::{linalg::SVD, DMatrix};
+use nalgebra::{linalg::SVD, DMatrix, Dyn};
 use serde::Serialize;
 
-/// Relative threshold below which a singular value counts as zero.
+/// Relative threshold below which a singular value counts as zero
+/// ([`Rank::Relative`]).
 const RCOND: f64 = 1e-12;
 /// Iteration limit handed to the SVD (it never needs more than a few dozen
 /// sweeps on finite input; the limit turns a pathology into an error).
 const SVD_MAX_ITER: usize = 10_000;
+/// The same for [`Rank::RoundOff`] (DASSL's start in the BDF solver).
+const SVD_MAX_ITER_ROUND_OFF: usize = 1000;
 /// Number of perturbed points used to detect the chain's structure.
 const STRUCTURE_PROBES: usize = 2;
 /// Step halvings tried when a correction leads to non-finite values.
@@ -387,6 +390,47 @@ fn structure(chain: &mut Chain<'_>, y: &[f64]) -> Result<Vec<Vec<bool>>, SolveEr
     Ok(pattern)
 }
 
+/// How the singular value decompositions of this module decide the rank of
+/// a matrix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Rank {
+    /// Singular values up to `RCOND σ_max` (`RCOND = 10⁻¹²`) count as zero;
+    /// the SVD converges to `5 ε`. The convention of [`consistent`] and
+    /// [`initial_derivative`].
+    Relative,
+    /// Singular values up to `max(rows, cols) ε σ_max` count as zero, with an
+    /// SVD converged to `ε`: the numerical rank at round-off level, so that
+    /// any nonsingular matrix, however badly scaled, is inverted (the BDF
+    /// solver's start).
+    RoundOff,
+}
+
+impl Rank {
+    /// The SVD of `a` with `U` and `Vᵀ` (singular values descending).
+    fn svd(self, a: DMatrix<f64>) -> Option<SVD<f64, Dyn, Dyn>> {
+        let (eps, max_iter) = match self {
+            Rank::Relative => (f64::EPSILON * 5.0, SVD_MAX_ITER),
+            Rank::RoundOff => (f64::EPSILON, SVD_MAX_ITER_ROUND_OFF),
+        };
+        SVD::try_new(a, true, true, eps, max_iter)
+    }
+
+    /// The number of singular values `s` of a `rows × cols` matrix that do
+    /// not count as zero.
+    fn of(self, s: &[f64], rows: usize, cols: usize) -> usize {
+        let smax = s.iter().fold(0.0_f64, |m, &v| m.max(v));
+        let cutoff = match self {
+            Rank::Relative => smax * RCOND,
+            Rank::RoundOff => rows.max(cols) as f64 * f64::EPSILON * smax,
+        };
+        if smax > 0.0 {
+            s.iter().filter(|&&v| v > cutoff).count()
+        } else {
+            0
+        }
+    }
+}
+
 /// One linearised least-change step.
 struct Step {
     /// `Δ = −J⁺g − (I − J⁺J) d`.
@@ -400,9 +444,9 @@ struct Step {
 
 /// `Δ = −J⁺ g − (I − J⁺J) d` for `J` (r×c) by the SVD: the solution of
 /// `min ‖d + Δ‖ s.t. J Δ = −g` (least squares in `J Δ = −g` when that has
-/// no solution). `None` when the SVD does not converge (not seen on finite
-/// input).
-fn min_change_step(j: &DMatrix<f64>, g: &[f64], d: &[f64]) -> Option<Step> {
+/// no solution), with the rank of `J` decided by `rank`. `None` when the
+/// SVD does not converge (not seen on finite input).
+fn min_change_step(j: &DMatrix<f64>, g: &[f64], d: &[f64], rank: Rank) -> Option<Step> {
     let (r, c) = j.shape();
     if r == 0 {
         return Some(Step {
@@ -428,17 +472,11 @@ fn min_change_step(j: &DMatrix<f64>, g: &[f64], d: &[f64]) -> Option<Step> {
     let cols = c.max(r);
     let mut a = DMatrix::zeros(r, cols);
     a.view_mut((0, 0), (r, c)).copy_from(j);
-    let svd = SVD::try_new(a, true, true, f64::EPSILON * 5.0, SVD_MAX_ITER)?;
+    let svd = rank.svd(a)?;
     let u = svd.u.as_ref()?;
     let vt = svd.v_t.as_ref()?;
     let s = &svd.singular_values; // descending, length r
-    let smax = s.iter().fold(0.0_f64, |m, &v| m.max(v));
-    let threshold = smax * RCOND;
-    let rank = if smax > 0.0 {
-        s.iter().filter(|&&v| v > threshold).count()
-    } else {
-        0
-    };
+    let rank = rank.of(s.as_slice(), r, cols);
     let mut delta: Vec<f64> = d.iter().map(|v| -v).collect();
     for i in 0..rank {
         let ug: f64 = (0..r).map(|k| u[(k, i)] * g[k]).sum();
@@ -517,7 +555,7 @@ fn closest_point_newton_step(
     let (rows, cols) = (block.rows, block.cols);
     let (r, c) = (rows.len(), cols.len());
     let jt = jac.transpose();
-    let mu = min_change_step(&jt, d, &vec![0.0; r])?.delta;
+    let mu = min_change_step(&jt, d, &vec![0.0; r], Rank::Relative)?.delta;
     if mu.iter().all(|&m| m == 0.0) {
         return None;
     }
@@ -549,7 +587,7 @@ fn closest_point_newton_step(
     kkt.view_mut((0, c), (c, r)).copy_from(&jt);
     kkt.view_mut((c, 0), (r, c)).copy_from(jac);
     let rhs: Vec<f64> = d.iter().chain(g).copied().collect();
-    let sol = min_change_step(&kkt, &rhs, &vec![0.0; c + r])?;
+    let sol = min_change_step(&kkt, &rhs, &vec![0.0; c + r], Rank::Relative)?;
     let delta = sol.delta[..c].to_vec();
     delta.iter().all(|v| v.is_finite()).then_some(delta)
 }
@@ -595,7 +633,7 @@ fn gauss_newton(
         for (b, &c) in cols.iter().enumerate() {
             d[b] = y[c] - block.anchor[c];
         }
-        let step = min_change_step(&jac, &g, &d).ok_or_else(|| {
+        let step = min_change_step(&jac, &g, &d, Rank::Relative).ok_or_else(|| {
             SolveError::invalid(
                 "singular value decomposition of the constraint Jacobian did not converge",
             )
@@ -1068,6 +1106,51 @@ pub fn initial_derivative(
     y0: &[f64],
 ) -> Result<Vec<f64>, SolveError> {
     validate_point(sys, t0, y0)?;
+    initial_derivative_with(sys, t0, y0, &DerivativeRule::STRICT)
+}
+
+/// The choices in which the users of [`initial_derivative_with`] differ.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DerivativeRule {
+    /// Rank of `E` and of `G Z`.
+    rank: Rank,
+    /// `true`: a constraint chain that cannot fix the kernel directions (a
+    /// non-finite value, an SVD that does not converge) leaves them at their
+    /// least-squares value and `y'` unchecked, for the caller to judge;
+    /// `false`: either is an error.
+    lenient: bool,
+    /// `what` of the [`SolveError::NonFinite`] for a non-finite `E(y0)` and
+    /// `f(t0, y0)`.
+    non_finite: [&'static str; 2],
+}
+
+impl DerivativeRule {
+    /// [`initial_derivative`].
+    pub(crate) const STRICT: DerivativeRule = DerivativeRule {
+        rank: Rank::Relative,
+        lenient: false,
+        non_finite: [
+            "leading matrix at the initial values",
+            "right-hand side at the initial values",
+        ],
+    };
+    /// The start of the BDF solver (DASSL): every nonsingular `E` is solved
+    /// exactly, and the solver's consistency test judges the result.
+    pub(crate) const SOLVER: DerivativeRule = DerivativeRule {
+        rank: Rank::RoundOff,
+        lenient: true,
+        non_finite: ["leading matrix", "right-hand side"],
+    };
+}
+
+/// [`initial_derivative`] by `rule`, for `y0` of the system's length and
+/// finite (not checked here).
+pub(crate) fn initial_derivative_with(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    y0: &[f64],
+    rule: &DerivativeRule,
+) -> Result<Vec<f64>, SolveError> {
     let info = sys.info();
     let (m, n) = (info.equations(), info.unknowns());
     if n == 0 {
@@ -1080,13 +1163,13 @@ pub fn initial_derivative(
     if !e.iter().all(|v| v.is_finite()) {
         return Err(SolveError::NonFinite {
             t: t0,
-            what: "leading matrix at the initial values",
+            what: rule.non_finite[0],
         });
     }
     if !f.iter().all(|v| v.is_finite()) {
         return Err(SolveError::NonFinite {
             t: t0,
-            what: "right-hand side at the initial values",
+            what: rule.non_finite[1],
         });
     }
     // Zero rows padded below so that V is N×N and carries ker E.
@@ -1096,19 +1179,13 @@ pub fn initial_derivative(
     let svd_failed = || {
         SolveError::invalid("singular value decomposition of the leading matrix did not converge")
     };
-    let svd =
-        SVD::try_new(a, true, true, f64::EPSILON * 5.0, SVD_MAX_ITER).ok_or_else(svd_failed)?;
+    let svd = rule.rank.svd(a).ok_or_else(svd_failed)?;
     let (u, vt) = match (svd.u.as_ref(), svd.v_t.as_ref()) {
         (Some(u), Some(vt)) => (u, vt),
         _ => return Err(svd_failed()),
     };
     let s = &svd.singular_values; // descending, length n
-    let smax = s.iter().fold(0.0_f64, |acc, &v| acc.max(v));
-    let rank = if smax > 0.0 {
-        s.iter().filter(|&&v| v > smax * RCOND).count()
-    } else {
-        0
-    };
+    let rank = rule.rank.of(s.as_slice(), rows, n);
     let mut yp = vec![0.0; n];
     for i in 0..rank {
         let uf: f64 = (0..m).map(|r| u[(r, i)] * f[r]).sum();
@@ -1118,53 +1195,85 @@ pub fn initial_derivative(
         }
     }
 
-    let k = info.constraints.len();
     let nz = n - rank;
-    if nz > 0 && k > 0 {
-        let mut chain = Chain::new(sys, t0);
-        chain.eval_or_err(y0, "constraint chain at the initial values")?;
-        // g_t by a central difference in t.
-        let dt = f64::EPSILON.cbrt() * t0.abs().max(1.0);
-        let mut gp = vec![0.0; k];
-        let mut gm = vec![0.0; k];
-        sys.constraints(t0 + dt, y0, &mut gp);
-        sys.constraints(t0 - dt, y0, &mut gm);
-        // rhs of the kernel problem: (G Z) ζ = −(G E⁺f + g_t); passed to
-        // `min_change_step` as the residual g = G E⁺f + g_t.
-        let mut resid = vec![0.0; k];
-        for (r, res) in resid.iter_mut().enumerate() {
-            let gy: f64 = (0..n).map(|c| chain.jac[(r, c)] * yp[c]).sum();
-            *res = gy + (gp[r] - gm[r]) / (2.0 * dt);
-        }
-        if !resid.iter().all(|v| v.is_finite()) {
-            return Err(SolveError::NonFinite {
-                t: t0,
-                what: "time derivative of the constraint chain",
-            });
-        }
-        let mut gz = DMatrix::zeros(k, nz);
-        for r in 0..k {
-            for z in 0..nz {
-                gz[(r, z)] = (0..n).map(|c| chain.jac[(r, c)] * vt[(rank + z, c)]).sum();
-            }
-        }
-        let zeros = vec![0.0; nz];
-        let step = min_change_step(&gz, &resid, &zeros).ok_or_else(|| {
-            SolveError::invalid(
-                "singular value decomposition of the constraint Jacobian did not converge",
-            )
-        })?;
-        for (z, zeta) in step.delta.iter().enumerate() {
-            for (c, ypc) in yp.iter_mut().enumerate() {
-                *ypc += zeta * vt[(rank + z, c)];
+    if nz > 0 && !info.constraints.is_empty() {
+        let z = vt.rows(rank, nz).transpose();
+        if let Some(zeta) = kernel_from_chain(sys, t0, y0, &yp, &z, rule)? {
+            for (k, zeta_k) in zeta.iter().enumerate() {
+                for (c, ypc) in yp.iter_mut().enumerate() {
+                    *ypc += zeta_k * z[(c, k)];
+                }
             }
         }
     }
-    if !yp.iter().all(|v| v.is_finite()) {
+    if !rule.lenient && !yp.iter().all(|v| v.is_finite()) {
         return Err(SolveError::NonFinite {
             t: t0,
             what: "initial derivative",
         });
     }
     Ok(yp)
+}
+
+/// `ζ = −(G Z)⁺ (G y'_E + g_t)`: the kernel part of `y' = y'_E + Z ζ` (`Z`
+/// an orthonormal basis of `ker E` as columns, `y'_E = E⁺f`) that the
+/// differentiated constraint chain implies. `Ok(None)` where the chain
+/// cannot give it and `rule.lenient`.
+fn kernel_from_chain(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    y0: &[f64],
+    yp: &[f64],
+    z: &DMatrix<f64>,
+    rule: &DerivativeRule,
+) -> Result<Option<Vec<f64>>, SolveError> {
+    let give_up = |err: SolveError| if rule.lenient { Ok(None) } else { Err(err) };
+    let (n, nz) = z.shape();
+    let mut chain = Chain::new(sys, t0);
+    // Only G enters: a lenient caller does without a finite g(t0, y0).
+    let finite = chain.eval(y0);
+    if !(finite || rule.lenient && chain.jac.iter().all(|v| v.is_finite())) {
+        return give_up(SolveError::NonFinite {
+            t: t0,
+            what: "constraint chain at the initial values",
+        });
+    }
+    let k = chain.g.len();
+    // g_t by a central difference in t.
+    let dt = f64::EPSILON.cbrt() * t0.abs().max(1.0);
+    let mut gp = vec![0.0; k];
+    let mut gm = vec![0.0; k];
+    sys.constraints(t0 + dt, y0, &mut gp);
+    sys.constraints(t0 - dt, y0, &mut gm);
+    // rhs of the kernel problem: (G Z) ζ = −(G E⁺f + g_t); passed to
+    // `min_change_step` as the residual g = G E⁺f + g_t.
+    let mut resid = vec![0.0; k];
+    for (r, res) in resid.iter_mut().enumerate() {
+        let gy: f64 = (0..n).map(|c| chain.jac[(r, c)] * yp[c]).sum();
+        *res = gy + (gp[r] - gm[r]) / (2.0 * dt);
+    }
+    if !resid.iter().all(|v| v.is_finite()) {
+        return give_up(SolveError::NonFinite {
+            t: t0,
+            what: "time derivative of the constraint chain",
+        });
+    }
+    let mut gz: DMatrix<f64> = DMatrix::zeros(k, nz);
+    for r in 0..k {
+        for c in 0..nz {
+            gz[(r, c)] = (0..n).map(|j| chain.jac[(r, j)] * z[(j, c)]).sum();
+        }
+    }
+    if !gz.iter().all(|v| v.is_finite()) {
+        return give_up(SolveError::NonFinite {
+            t: t0,
+            what: "constraint chain at the initial values",
+        });
+    }
+    match min_change_step(&gz, &resid, &vec![0.0; nz], rule.rank) {
+        Some(step) => Ok(Some(step.delta)),
+        None => give_up(SolveError::invalid(
+            "singular value decomposition of the constraint Jacobian did not converge",
+        )),
+    }
 }

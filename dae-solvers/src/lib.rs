@@ -1,11 +1,13 @@
 //! DAE integrators over the [`dae_core::system::DaeSystem`] trait.
 //!
 //! Shared pieces live in their own modules — [`options`] (tolerances and
-//! error weights), [`stats`], [`solution`], [`error`] — and each method
-//! family in one module: [`radau5`] (Radau IIA, order 5, after RADAU5 of
-//! Hairer & Wanner) and [`bdf`] (variable order BDF in fixed-leading-
+//! error weights), [`stats`], [`solution`], [`error`], and the dense LU
+//! factorisation both solvers use (`linalg`, crate-private) — and each
+//! method family in one module: [`radau5`] (Radau IIA, order 5, after RADAU5
+//! of Hairer & Wanner) and [`bdf`] (variable order BDF in fixed-leading-
 //! coefficient form, after DASSL/DASPK). [`init`] computes consistent initial
-//! values from the model's constraint chain.
+//! values from the model's constraint chain, and the initial derivative the
+//! BDF solver starts from.
 //!
 //! Every solver returns `Result<Solution, SolveError>` and never panics on a
 //! user's problem; no allocation happens inside the step loop.
@@ -13,6 +15,7 @@
 pub mod bdf;
 pub mod error;
 pub mod init;
+mod linalg;
 pub mod options;
 pub mod radau5;
 pub mod solution;
@@ -37,6 +40,36 @@ pub struct Problem<'a> {
     pub y0: &'a [f64],
     /// End of the horizon (`t_end > t0`).
     pub t_end: f64,
+}
+
+impl Problem<'_> {
+    /// `options` valid for `n` unknowns over this horizon, and `y0` `n`
+    /// finite values.
+    pub(crate) fn check(&self, n: usize, options: &Options) -> Result<(), SolveError> {
+        options.validate(n, self.t0, self.t_end)?;
+        if self.y0.len() != n {
+            return Err(SolveError::invalid(format!(
+                "y0 has {} components, the system has {n} unknowns",
+                self.y0.len()
+            )));
+        }
+        if self.y0.iter().any(|v| !v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                t: self.t0,
+                what: "initial values",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// [`Solver::accepts`] of a solver for square systems only (all of this
+/// crate's).
+fn accepts_square(info: &FormulationInfo) -> Result<(), String> {
+    if info.is_overdetermined() {
+        return Err("overdetermined: solver needs a square system".into());
+    }
+    Ok(())
 }
 
 /// A DAE integrator.

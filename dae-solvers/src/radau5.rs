@@ -141,10 +141,11 @@
 //! `10 u max(|t|, |t_end|)` give [`SolveError::StepSizeTooSmall`], and
 //! [`crate::Options::max_steps`] attempted steps [`SolveError::StepLimit`].
 
+use crate::linalg::{DenseLu, Pivoting, Singular};
 use crate::options::Options;
 use crate::{Problem, Solution, SolveError, Solver, Stats};
 use dae_core::system::{DaeSystem, FormulationInfo};
-use nalgebra::{Complex, ComplexField, DMatrix};
+use nalgebra::{Complex, DMatrix};
 
 /// 3-stage Radau IIA of order 5 (see the [module documentation](self)).
 pub struct Radau5;
@@ -155,10 +156,7 @@ impl Solver for Radau5 {
     }
 
     fn accepts(&self, info: &FormulationInfo) -> Result<(), String> {
-        if info.is_overdetermined() {
-            return Err("overdetermined: solver needs a square system".into());
-        }
-        Ok(())
+        crate::accepts_square(info)
     }
 
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
@@ -174,19 +172,7 @@ impl Solver for Radau5 {
                 info.equations()
             )));
         }
-        options.validate(n, problem.t0, problem.t_end)?;
-        if problem.y0.len() != n {
-            return Err(SolveError::invalid(format!(
-                "y0 has {} components, the system has {n} unknowns",
-                problem.y0.len()
-            )));
-        }
-        if problem.y0.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFinite {
-                t: problem.t0,
-                what: "initial values",
-            });
-        }
+        problem.check(n, options)?;
         Integrator::new(problem, options).run()
     }
 }
@@ -313,100 +299,6 @@ fn tolerance_factor(options: &Options, i: usize) -> f64 {
 }
 
 // ---------------------------------------------------------------------------
-// Dense LU in preallocated storage
-// ---------------------------------------------------------------------------
-
-/// A zero (or non-finite) pivot.
-#[derive(Debug)]
-struct Singular;
-
-/// LU factorisation with partial pivoting of an `N × N` matrix, computed in
-/// place in column-major storage allocated once (`nalgebra::LU::new`
-/// allocates on every call, which the step loop must not). Generic over the
-/// field: `f64` for the real system, `Complex<f64>` for the complex one,
-/// pivoting on `|re| + |im|` as LINPACK's complex routines do.
-struct DenseLu<F> {
-    a: DMatrix<F>,
-    piv: Vec<usize>,
-}
-
-impl<F: ComplexField<RealField = f64> + Copy> DenseLu<F> {
-    fn new(n: usize) -> Self {
-        DenseLu {
-            a: DMatrix::from_element(n, n, F::zero()),
-            piv: vec![0; n],
-        }
-    }
-
-    /// Overwrite the storage with the matrix `entry(i, j)` and factorise it,
-    /// `P A = L U` with unit lower `L`.
-    fn factor(&mut self, mut entry: impl FnMut(usize, usize) -> F) -> Result<(), Singular> {
-        let n = self.piv.len();
-        let a = self.a.as_mut_slice();
-        for j in 0..n {
-            for i in 0..n {
-                a[i + j * n] = entry(i, j);
-            }
-        }
-        for k in 0..n {
-            let mut p = k;
-            let mut pmax = a[k + k * n].norm1();
-            for i in k + 1..n {
-                let v = a[i + k * n].norm1();
-                if v > pmax {
-                    pmax = v;
-                    p = i;
-                }
-            }
-            self.piv[k] = p;
-            let regular = pmax > 0.0 && pmax.is_finite();
-            if !regular {
-                return Err(Singular);
-            }
-            if p != k {
-                for j in 0..n {
-                    a.swap(k + j * n, p + j * n);
-                }
-            }
-            let inv = F::one() / a[k + k * n];
-            for i in k + 1..n {
-                a[i + k * n] *= inv;
-            }
-            for j in k + 1..n {
-                let akj = a[k + j * n];
-                for i in k + 1..n {
-                    let lik = a[i + k * n];
-                    a[i + j * n] -= lik * akj;
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Solve `A x = b` in place with the factors of [`DenseLu::factor`].
-    fn solve(&self, b: &mut [F]) {
-        let n = self.piv.len();
-        let a = self.a.as_slice();
-        for k in 0..n {
-            b.swap(k, self.piv[k]);
-        }
-        for k in 0..n {
-            let bk = b[k];
-            for i in k + 1..n {
-                b[i] -= a[i + k * n] * bk;
-            }
-        }
-        for k in (0..n).rev() {
-            b[k] /= a[k + k * n];
-            let bk = b[k];
-            for i in 0..k {
-                b[i] -= a[i + k * n] * bk;
-            }
-        }
-    }
-}
-
-// ---------------------------------------------------------------------------
 // The integrator
 // ---------------------------------------------------------------------------
 
@@ -494,8 +386,8 @@ impl Work {
             ljac: m(),
             e_jac: m(),
             e_n: m(),
-            lu_real: DenseLu::new(n),
-            lu_complex: DenseLu::new(n),
+            lu_real: DenseLu::new(n, Pivoting::Checked),
+            lu_complex: DenseLu::new(n, Pivoting::Checked),
         }
     }
 }
@@ -904,9 +796,9 @@ impl<'a> Integrator<'a> {
         let (e, j) = (&w.e_jac, &w.jac);
         let fac1 = GAMMA / h;
         let (alphn, betan) = (ALPHA / h, BETA / h);
-        w.lu_real.factor(|r, c| fac1 * e[(r, c)] - j[(r, c)])?;
+        w.lu_real.factor_from(|r, c| fac1 * e[(r, c)] - j[(r, c)])?;
         w.lu_complex
-            .factor(|r, c| Complex::new(alphn * e[(r, c)] - j[(r, c)], betan * e[(r, c)]))
+            .factor_from(|r, c| Complex::new(alphn * e[(r, c)] - j[(r, c)], betan * e[(r, c)]))
     }
 
     /// `sc_i = (atol_i + rtol_i |y_n,i|) / h^(k_i − 1)`.
@@ -1243,42 +1135,6 @@ mod tests {
         // Global-error proportionality: tol'^(5/4) ∝ tol.
         let ratio = (internal_tolerance(1e-5) / internal_tolerance(1e-10)).powf(1.25);
         assert!((ratio / 1e5 - 1.0).abs() < 1e-9);
-    }
-
-    #[test]
-    fn lu_solves_real_and_complex_systems() {
-        let n = 4;
-        let entry = |i: usize, j: usize| {
-            ((i * 7 + j * 3) % 5) as f64 - 2.0 + if i == j { 0.5 } else { 0.0 }
-        };
-        let mut lu = DenseLu::<f64>::new(n);
-        lu.factor(entry).unwrap();
-        let x: Vec<f64> = (0..n).map(|i| i as f64 - 1.5).collect();
-        let mut b: Vec<f64> = (0..n)
-            .map(|i| (0..n).map(|j| entry(i, j) * x[j]).sum())
-            .collect();
-        lu.solve(&mut b);
-        for (u, v) in b.iter().zip(&x) {
-            assert!((u - v).abs() < 1e-12);
-        }
-
-        let centry = |i: usize, j: usize| Complex::new(entry(i, j), (i as f64) - (j as f64) * 0.3);
-        let mut clu = DenseLu::<Complex<f64>>::new(n);
-        clu.factor(centry).unwrap();
-        let cx: Vec<Complex<f64>> = (0..n)
-            .map(|i| Complex::new(1.0 - i as f64, 0.25 * i as f64))
-            .collect();
-        let mut cb: Vec<Complex<f64>> = (0..n)
-            .map(|i| (0..n).map(|j| centry(i, j) * cx[j]).sum())
-            .collect();
-        clu.solve(&mut cb);
-        for (u, v) in cb.iter().zip(&cx) {
-            assert!((u - v).norm() < 1e-12);
-        }
-
-        let mut singular = DenseLu::<f64>::new(2);
-        assert!(singular.factor(|i, _| i as f64).is_err());
-        assert!(singular.factor(|_, _| f64::NAN).is_err());
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! Consistent initial values: `dae_solvers::init`.
 
-mod common_init;
+mod common;
 
-use common_init::{
+use common::{
     pendulum_lambda, DoublePendulum, Form, Idec, Pendulum, Sys, Toy, DP_A0, DP_B0, G, IDEC_C0,
     IDEC_C1, PENDULUM_L0, PENDULUM_L1, PENDULUM_L2,
 };
@@ -13,8 +13,8 @@ use dae_solvers::init::{
 use dae_solvers::SolveError;
 use nalgebra::{DMatrix, DVector};
 
-fn pendulum(form: Form) -> Sys<Pendulum> {
-    Sys(Pendulum::new(form))
+fn pendulum(form: Form) -> Pendulum {
+    Pendulum::new(form)
 }
 
 fn project(sys: &dyn DaeSystem, y0: &[f64]) -> Consistent {
@@ -206,7 +206,7 @@ fn consistent_start_gives_exact_multiplier() {
     let p = Pendulum::new(Form::Rcd0);
     let expected = pendulum_lambda(&p, &[0.6, -0.8, 1.0, 0.75]);
     assert!((expected - (1.5625 + 0.8 * G) / 2.0).abs() < 1e-14);
-    let sys = Sys(p);
+    let sys = p;
     let y0 = [0.6, -0.8, 1.0, 0.75, 0.0];
     let c = project(&sys, &y0);
     assert_eq!(&c.y[..4], &y0[..4], "differential values untouched");
@@ -298,9 +298,9 @@ fn far_and_badly_scaled_starts_are_projected() {
     let s = 0.5_f64.sqrt();
     assert!((c.y[0] - s).abs() < 1e-12 && (c.y[1] - s).abs() < 1e-12);
     // A long pendulum (L = 1000): the tolerance is relative.
-    let p = Pendulum::with(Form::Rcd0, 2.0, 1000.0, G);
+    let p = Pendulum::with_parameters(Form::Rcd0, 2.0, 1000.0, G);
     let lam_of = |y: &[f64]| 2.0 * (y[2] * y[2] + y[3] * y[3] - G * y[1]) / (2.0 * 1e6);
-    let sys = Sys(p);
+    let sys = p;
     let c = project(&sys, &[600.0, -800.0, 8.0, 6.0, 0.0]);
     assert!(!c.report.projected, "{:?}", c.report);
     assert!((c.y[4] - lam_of(&c.y)).abs() < 1e-13 * lam_of(&c.y).abs());
@@ -684,11 +684,11 @@ fn non_finite_and_malformed_inputs_are_typed_errors() {
 
 #[test]
 fn model_producing_nan_is_non_finite() {
-    let sys = Sys(Pendulum::with(Form::Rcd0, 1.0, f64::NAN, G));
+    let sys = Pendulum::with_parameters(Form::Rcd0, 1.0, f64::NAN, G);
     let y0 = [1.0, 0.0, 0.0, 0.0, 0.0];
     let err = consistent(&sys, 0.0, &y0, &InitOptions::default()).expect_err("NaN model");
     assert_eq!(err.kind(), "non_finite", "{err:?}");
-    let sys = Sys(Pendulum::with(Form::Rcd0, f64::NAN, 1.0, G));
+    let sys = Pendulum::with_parameters(Form::Rcd0, f64::NAN, 1.0, G);
     assert!(matches!(
         initial_derivative(&sys, 0.0, &y0),
         Err(SolveError::NonFinite { .. })
@@ -716,7 +716,7 @@ fn rank_zero_constraint_jacobian_is_reported() {
 fn singular_multiplier_block_is_reported() {
     // L = 0: the pivot is consistent, but λ's coefficient −(4/m)(x² + y²)
     // vanishes there.
-    let sys = Sys(Pendulum::with(Form::Rcd0, 1.0, 0.0, G));
+    let sys = Pendulum::with_parameters(Form::Rcd0, 1.0, 0.0, G);
     let err = consistent(&sys, 0.0, &[0.0; 5], &InitOptions::default()).expect_err("singular");
     match err {
         SolveError::InvalidInput { what } => {
@@ -750,7 +750,7 @@ fn check_differential_rows(sys: &dyn DaeSystem, y: &[f64], yp: &[f64]) {
 fn initial_derivative_solves_the_differential_rows() {
     let p = Pendulum::new(Form::Rcd0);
     let (m, l) = (p.m, p.l);
-    let base = project(&Sys(p), &[0.6, -0.8, 1.0, 0.75, 0.0]).y;
+    let base = project(&p, &[0.6, -0.8, 1.0, 0.75, 0.0]).y;
     let (x, y, v, w, lam) = (base[0], base[1], base[2], base[3], base[4]);
     let exact = [
         v,
