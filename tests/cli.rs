@@ -233,3 +233,72 @@ fn malformed_scene_files_exit_2_naming_the_field_and_line() {
     let o = dae(&["run", &path, "--solver", "radau5", "--formulation", "rcd0"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
+
+#[test]
+fn solver_failure_prints_json_and_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("blowup.dae"),
+        "pub Blowup {\n  differential { x }\n  equations { der(x) = x^2; }\n}\n",
+    )
+    .unwrap();
+    let scene = dir.path().join("blowup.toml");
+    std::fs::write(
+        &scene,
+        "name = \"blowup\"\nmodel = \"blowup.dae\"\n[initial]\nx = 1.0\n[time]\nend = 2.0\n[reference]\nkind = \"none\"\n",
+    )
+    .unwrap();
+    for solver in ["radau5", "bdf"] {
+        let o = dae(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--solver",
+            solver,
+            "--formulation",
+            "ori2",
+        ]);
+        assert_eq!(o.status.code(), Some(3), "{solver}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["status"], "error");
+        assert_eq!(v["error"]["kind"], "step_size_too_small", "{solver}: {v}");
+        let t = v["error"]["t"].as_f64().unwrap();
+        assert!(
+            (0.9..1.01).contains(&t),
+            "{solver}: blow-up at t = 1, stopped at {t}"
+        );
+        assert!(v["err"].is_null());
+    }
+}
+
+#[test]
+fn inconsistent_start_is_projected_or_refused() {
+    let scene = "name = \"off\"\nmodel = \"pendulum\"\n[initial]\nx = 1.1\ny = 0.0\nv = 0.0\nw = 0.0\n[time]\nend = 1.0\n[reference]\nkind = \"none\"\n";
+    let (_dir, path) = temp_file("off.toml", scene);
+    let o = dae(&["run", &path, "--solver", "radau5", "--formulation", "rcd0"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let x = v["init"]["projected"]["x"].as_f64().unwrap();
+    assert!(
+        (x - 1.0).abs() < 1e-12,
+        "projected onto the circle: x = {x}"
+    );
+    let o = dae(&[
+        "run",
+        &path,
+        "--solver",
+        "radau5",
+        "--formulation",
+        "rcd0",
+        "--strict-init",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["error"]["kind"], "inconsistent_initial_values");
+    assert!(
+        v["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("x^2 + y^2 - l^2"),
+        "{v}"
+    );
+}
