@@ -22,10 +22,14 @@
 //! with `G = [G_F | G_P]` split into free and pivot columns (`G_P` square and
 //! structurally nonsingular, pivots chosen from the last positions),
 //! `S = [det(G_P) I | −(adj(G_P) G_F)ᵀ]`, each row divided by its numeric
-//! content. For the pendulum this is exactly the paper's `S = [y, −x]`. The
-//! selector is valid where `det(G_P) ≠ 0` (for the pendulum: `y ≠ 0`, i.e.
-//! away from the horizontal); a solver meeting such a configuration reports a
-//! singular iteration matrix.
+//! content. For the pendulum this is exactly the paper's `S = [y, −x]`.
+//! `S Gᵀ = 0` holds everywhere; the selector is valid where `S` has full row
+//! rank, which it has wherever `det(G_P) ≠ 0`. With one constraint in the
+//! plane (the pendulum) `S` never vanishes on the constraint manifold; in
+//! general it can lose rank where `det(G_P) = 0` — the spherical pendulum's
+//! `[[z, 0, −x], [0, z, −y]]` at `z = 0`, the double pendulum's at `y1 = 0` or
+//! `y2 = y1` — and a solver meeting such a configuration reports a singular
+//! iteration matrix.
 
 use crate::expr::{self, Expr, Sym};
 use crate::index::{max_matching, Analysis};
