@@ -180,8 +180,7 @@ pub fn index(
     let _ = writeln!(
         s,
         "<p>Scene <code>{}</code>: model <code>{}</code>, t ∈ [{}, {}] s, {} check time(s), reference \
-         <code>{}</code>. {} solver(s) × {} formulation(s) × {} tolerance(s) (RTOL = ATOL): {} runs in {:.1} s. \
-         tsim = median of up to {} timed integrations per run (fewer once they took {} s){}. Data: <a href=\"results.csv\">results.csv</a>, \
+         <code>{}</code>. {} (RTOL = ATOL). Data: <a href=\"results.csv\">results.csv</a>, \
          <a href=\"results.json\">results.json</a>.</p>",
         esc(&sc.origin),
         esc(&sc.model),
@@ -189,18 +188,7 @@ pub fn index(
         sc.t_end,
         sc.checks,
         esc(sc.reference),
-        report.solvers.len(),
-        report.formulations.len(),
-        report.tolerances.len(),
-        report.runs.len(),
-        report.wall_s,
-        report.repeats,
-        super::REPEAT_BUDGET_S,
-        if report.jobs > 1 {
-            format!(" (accuracy pass on {} threads, timing pass sequential)", report.jobs)
-        } else {
-            " (one sequential pass)".to_string()
-        }
+        esc(&report.scale_line())
     );
     for n in notes {
         let _ = writeln!(s, "<p class=\"note\">{}</p>", esc(n));

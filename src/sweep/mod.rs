@@ -233,6 +233,27 @@ pub struct SweepReport {
 }
 
 impl SweepReport {
+    /// One line on the size of the sweep and how it was timed (shared by the
+    /// terminal report and index.html).
+    pub fn scale_line(&self) -> String {
+        format!(
+            "{} solver(s) × {} formulation(s) × {} tolerance(s): {} runs in {:.1} s (tsim = median of up to {} timed \
+             integration(s), fewer once they took {} s; {})",
+            self.solvers.len(),
+            self.formulations.len(),
+            self.tolerances.len(),
+            self.runs.len(),
+            self.wall_s,
+            self.repeats,
+            REPEAT_BUDGET_S,
+            if self.jobs > 1 {
+                format!("accuracy pass on {} threads, timing pass sequential", self.jobs)
+            } else {
+                "one sequential pass".to_string()
+            }
+        )
+    }
+
     /// Whether the scene has a reference (errors are measured).
     pub fn has_reference(&self) -> bool {
         self.scene.reference != ReferenceKind::None.as_str()

@@ -433,23 +433,7 @@ pub fn text_report(report: &SweepReport, summary: &Summary) -> String {
         "Sweep {} ({}): model {}, t in [{}, {}], {} check time(s), reference {}",
         sc.name, sc.origin, sc.model, sc.t0, sc.t_end, sc.checks, sc.reference
     );
-    let _ = writeln!(
-        s,
-        "{} solver(s) × {} formulation(s) × {} tolerance(s): {} runs in {:.1} s (tsim = median of up to {} timed \
-         integration(s), fewer once they took {} s{})\n",
-        report.solvers.len(),
-        report.formulations.len(),
-        report.tolerances.len(),
-        report.runs.len(),
-        report.wall_s,
-        report.repeats,
-        super::REPEAT_BUDGET_S,
-        if report.jobs > 1 {
-            format!("; accuracy pass on {} threads, timing pass sequential", report.jobs)
-        } else {
-            String::new()
-        }
-    );
+    let _ = writeln!(s, "{}\n", report.scale_line());
     let _ = writeln!(s, "Success matrix");
     s.push_str(&success_text(&summary.success));
     let _ = writeln!(s, "\nEfficiency (err: max pointwise error of the differential unknowns over the check times; err_sum: sum over check times of all unknowns' errors; |gk|: largest constraint residual of level k; drift: |{}(t) - {}(t0)|)",
