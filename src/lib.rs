@@ -1,16 +1,5 @@
-//! # dae — constrained dynamics, every formulation, measured
-//!
-//! Write a constrained mechanical model once in a `dae! { … }` block; at
-//! compile time the toolkit differentiates the constraints symbolically,
-//! derives the hidden constraints, and emits every standard regularised
-//! formulation of the DAE (`ori2`, `rcd1`, `rcd0`, `ovd1`, `ovd0`, `ggl1`,
-//! `psi1`, `psi0`) with analytic Jacobians; the solvers of
-//! [`dae_solvers`] integrate them.
-//!
-//! Crates: [`dae_core`] (model language, symbolic engine, index analysis,
-//! formulations, the runtime trait), `dae-macros` (the [`dae!`] macro),
-//! [`dae_solvers`] (integrators). This facade re-exports them and holds the
-//! scene, reference and report code of the `dae` binary.
+// The crate docs are the README, so its example is compiled and run as a doctest.
+#![doc = include_str!("../README.md")]
 
 extern crate self as dae;
 
