@@ -39,8 +39,6 @@ pub struct ModelSource {
     pub label: String,
     /// The model text.
     pub text: String,
-    /// `Some` for a built-in model.
-    pub builtin: Option<&'static str>,
 }
 
 /// Resolve a built-in name (`pendulum`) or read a `.dae` file.
@@ -49,7 +47,6 @@ pub fn source(spec: &str) -> Result<ModelSource, ModelError> {
         return Ok(ModelSource {
             label: name.to_string(),
             text: PENDULUM_SOURCE.to_string(),
-            builtin: Some(name),
         });
     }
     let text = std::fs::read_to_string(Path::new(spec)).map_err(|source| ModelError::Io {
@@ -59,7 +56,6 @@ pub fn source(spec: &str) -> Result<ModelSource, ModelError> {
     Ok(ModelSource {
         label: spec.to_string(),
         text,
-        builtin: None,
     })
 }
 

@@ -6,6 +6,7 @@
 //! `InterpretedModel` at pseudo-random points: every method to 1e-13
 //! relative, `info()` equal, buffers overwritten whole.
 
+use dae::dae_core::check::Lcg;
 use dae_core::interp::InterpretedModel;
 use dae_core::system::{DaeSystem, FormulationError, Model, ParameterError, StaticSize};
 use nalgebra::DMatrix;
@@ -74,22 +75,9 @@ mod rcd0_only {
     }
 }
 
-/// A small deterministic generator (Knuth's MMIX LCG).
-struct Lcg(u64);
-
-impl Lcg {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        let u = (self.0 >> 11) as f64 / (1u64 << 53) as f64;
-        lo + (hi - lo) * u
-    }
-
-    fn vector(&mut self, n: usize) -> Vec<f64> {
-        (0..n).map(|_| self.uniform(-1.5, 1.5)).collect()
-    }
+/// `n` uniform numbers in `[-1.5, 1.5)`.
+fn vector(rng: &mut Lcg, n: usize) -> Vec<f64> {
+    (0..n).map(|_| rng.range(-1.5, 1.5)).collect()
 }
 
 fn close(what: &str, a: f64, b: f64) {
@@ -142,8 +130,8 @@ fn agree(compiled: &dyn DaeSystem, interpreted: &dyn DaeSystem, rng: &mut Lcg, p
         )
     };
     for _ in 0..points {
-        let t = rng.uniform(-2.0, 2.0);
-        let (y, yp, z) = (rng.vector(n), rng.vector(n), rng.vector(n));
+        let t = rng.range(-2.0, 2.0);
+        let (y, yp, z) = (vector(rng, n), vector(rng, n), vector(rng, n));
 
         let (mut a, mut b) = dense(m);
         compiled.rhs(t, &y, &mut a);

@@ -255,17 +255,6 @@ impl Expr {
             Expr::Func(f, a) => f.apply(a.eval(env)),
         }
     }
-
-    /// Number of nodes (a measure of size; shared subtrees count each time).
-    pub fn size(&self) -> usize {
-        match self {
-            Expr::Num(_) | Expr::Sym(_) => 1,
-            Expr::Sum(s) => 1 + s.terms.iter().map(|(t, _)| t.size()).sum::<usize>(),
-            Expr::Prod(p) => 1 + p.factors.iter().map(|(b, _)| b.size()).sum::<usize>(),
-            Expr::Pow(be) => 1 + be.0.size() + be.1.size(),
-            Expr::Func(_, a) => 1 + a.size(),
-        }
-    }
 }
 
 /// Nearest `f64` of a rational.

@@ -7,7 +7,7 @@
 //! Jacobian, say — are computed once. Node order is the depth-first order of
 //! the canonical expressions, hence deterministic.
 
-use crate::expr::{pow_f64, q_to_f64, Expr, Func, Sym};
+use crate::expr::{q_to_f64, Expr, Func, Sym};
 use num_traits::{One, Signed, ToPrimitive};
 use std::collections::HashMap;
 
@@ -242,9 +242,4 @@ impl Tape {
     pub fn output(&self, scratch: &[f64], k: usize) -> f64 {
         scratch[self.outputs[k] as usize]
     }
-}
-
-/// `x^e` helper re-exported for generated code paths that need it.
-pub fn powq(x: f64, e: &crate::expr::Q) -> f64 {
-    pow_f64(x, e)
 }
