@@ -248,7 +248,7 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
         .map_err(|why| RunError::NotApplicable {
             solver: spec.solver.into(),
             formulation: spec.formulation.into(),
-            why,
+            why: why.to_string(),
         })?;
     let n = info.unknowns();
     let mut y0 = vec![0.0; n];
@@ -313,11 +313,6 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
     output_times.dedup();
     let options = Options {
         output_times,
-        // BDF leaves index-2 unknowns out of its error test (DASPK's
-        // option): with them in, index-2 formulations fail or crawl (the
-        // multiplier's BDF error estimate does not shrink with h). Radau
-        // scales them by h instead and ignores this flag.
-        index2_in_error_test: false,
         ..Options::with_tol(spec.tol)
     };
     let problem = Problem {

@@ -86,7 +86,7 @@ fn main() {
         for (col, i) in (5..=12).enumerate() {
             let tol = 10f64.powi(-i);
             let mut options = Options::with_tol(tol);
-            options.index2_in_error_test = !form.has_index2();
+            options.index2_in_error_test = Some(!form.has_index2());
             options.output_times = times.clone();
             let problem = Problem {
                 system: &sys,

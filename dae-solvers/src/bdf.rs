@@ -154,10 +154,15 @@
 //! itself does not allocate, except to record every step when
 //! [`Options::record_steps`] asks for it.
 
+use crate::core::control::{self, Budget, Failure as Fail};
+use crate::core::matrix::{Corrector, Rows, SquareLu};
+use crate::core::newton::{Contraction, Rule, Verdict};
+use crate::core::output::OutputGrid;
+use crate::core::policy;
+use crate::core::weights::Weights;
 use crate::init::{initial_derivative_with, DerivativeRule};
-use crate::linalg::{DenseLu, Pivoting};
 use crate::options::Tolerances;
-use crate::{Options, Problem, Solution, SolveError, Solver, Stats};
+use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver, Stats};
 use dae_core::system::{DaeSystem, FormulationInfo};
 use nalgebra::DMatrix;
 
@@ -170,12 +175,13 @@ impl Solver for Bdf {
         "bdf"
     }
 
-    fn accepts(&self, info: &FormulationInfo) -> Result<(), String> {
-        crate::accepts_square(info)
+    fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable> {
+        policy::square(info)
     }
 
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
-        solve(problem, options)
+        self.accepts(problem.system.info())?;
+        integrate::<SquareLu>(problem, options)
     }
 }
 
@@ -191,58 +197,35 @@ const MAX_NEWTON_ITERATIONS: usize = 4;
 const MAX_NEWTON_ITERATIONS_FIXED_STEP: usize = 20;
 /// Convergence test `ρ/(1−ρ)·‖δ‖ ≤ NEWTON_TOL` (DASSL's 0.33).
 const NEWTON_TOL: f64 = 0.33;
-/// Largest acceptable Newton contraction rate.
-const MAX_RATE: f64 = 0.9;
 /// Re-evaluate the iteration matrix when `c_J/c_J^old` leaves
 /// `[(1−XRATE)/(1+XRATE), (1+XRATE)/(1−XRATE)]`.
 const XRATE: f64 = 0.25;
-/// Newton failures (with a current matrix) tolerated on one step.
-const MAX_CONVERGENCE_FAILURES: usize = 10;
-/// Singular iteration matrices tolerated on one step.
-const MAX_SINGULAR_FAILURES: usize = 3;
-/// Non-finite residuals tolerated on one step.
-const MAX_NONFINITE_FAILURES: usize = 10;
 /// Unit round-off.
 const EPS: f64 = f64::EPSILON;
 
-/// Integrate `problem` with the BDF method.
-fn solve(problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+/// Integrate `problem` with the BDF method, the corrector solved by `L`
+/// (square LU, or least squares for [`crate::odbdf`]); the caller has
+/// checked that the solver accepts the formulation.
+pub(crate) fn integrate<L: Corrector>(
+    problem: &Problem<'_>,
+    options: &Options,
+) -> Result<Solution, SolveError> {
     let sys = problem.system;
     let info = sys.info();
     let n = info.unknowns();
-    if info.equations() != n {
-        return Err(SolveError::invalid(format!(
-            "bdf needs a square system, `{}` has {} equations for {} unknowns",
-            info.name,
-            info.equations(),
-            n
-        )));
-    }
-    if n == 0 {
-        return Err(SolveError::invalid("the system has no unknowns"));
-    }
     problem.check(n, options)?;
     let (t0, t_end) = (problem.t0, problem.t_end);
 
     // Components in the error test and the Newton norm.
-    let in_test: Vec<bool> = info
-        .variables
-        .iter()
-        .map(|v| options.index2_in_error_test || v.index < 2)
-        .collect();
-    let in_test = if in_test.iter().any(|&b| b) {
-        in_test
-    } else {
-        vec![true; n]
-    };
+    let in_test = policy::bdf_error_test(info, options);
 
     let mut stats = Stats::default();
     let yp0 = initial_derivative_with(sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
     stats.residual_evals += 1; // its f(t0, y0)
     check_consistency(sys, &options.tol, t0, problem.y0, &yp0, &mut stats)?;
 
-    let mut out = Output::new(&options.output_times, t0, t_end, n);
-    out.emit_start(t0, problem.y0);
+    let mut out = OutputGrid::new(&options.output_times, t0, t_end, n);
+    out.start(t0, problem.y0);
     let mut steps = Vec::new();
 
     let run = Run {
@@ -255,15 +238,11 @@ fn solve(problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveErro
         yp0: &yp0,
     };
     match options.fixed_step {
-        Some(h) => run.fixed(h, &mut out, &mut steps, &mut stats)?,
-        None => run.adaptive(&mut out, &mut steps, &mut stats)?,
+        Some(h) => run.fixed::<L>(h, &mut out, &mut steps, &mut stats)?,
+        None => run.adaptive::<L>(&mut out, &mut steps, &mut stats)?,
     }
-    Ok(Solution {
-        t: out.times,
-        y: out.values,
-        steps,
-        stats,
-    })
+    let (t, y) = out.finish();
+    Ok(Solution { t, y, steps, stats })
 }
 
 /// Everything a run needs besides its outputs.
@@ -279,9 +258,9 @@ struct Run<'a> {
 
 impl Run<'_> {
     /// Error-controlled integration over `[t0, t_end]`.
-    fn adaptive(
+    fn adaptive<L: Corrector>(
         &self,
-        out: &mut Output,
+        out: &mut OutputGrid,
         steps: &mut Vec<(f64, Vec<f64>)>,
         stats: &mut Stats,
     ) -> Result<(), SolveError> {
@@ -300,7 +279,7 @@ impl Run<'_> {
             t_end: self.t_end,
             span,
         };
-        let mut integ = Integrator::new(self.sys, &opts.tol, self.in_test, cfg);
+        let mut integ = Integrator::<L>::new(self.sys, &opts.tol, self.in_test, cfg);
         let h0 = match opts.h0 {
             // Clipped before φ_2 = h y'₀ is formed, which could overflow.
             Some(h) => h.min(cfg.hmax).min(span),
@@ -314,10 +293,10 @@ impl Run<'_> {
 
     /// Constant step size, order `k`, no error control; the `k−1` starting
     /// values come from an adaptive run at the caller's tolerances.
-    fn fixed(
+    fn fixed<L: Corrector>(
         &self,
         h_request: f64,
-        out: &mut Output,
+        out: &mut OutputGrid,
         steps: &mut Vec<(f64, Vec<f64>)>,
         stats: &mut Stats,
     ) -> Result<(), SolveError> {
@@ -349,7 +328,8 @@ impl Run<'_> {
 
         // Starting values y(t0 + j h), j = 0 … m.
         let m = (k - 1).min(nsteps);
-        let mut start = Output::grid(n, (1..=m).map(grid));
+        let mut start = OutputGrid::at(n, (1..=m).map(grid));
+        let start_times: Vec<f64> = start.times().to_vec();
         if m > 0 {
             let cfg = Config {
                 maxord: MAX_ORDER,
@@ -360,17 +340,17 @@ impl Run<'_> {
                 t_end: grid(m),
                 span,
             };
-            let mut integ = Integrator::new(self.sys, &opts.tol, self.in_test, cfg);
+            let mut integ = Integrator::<L>::new(self.sys, &opts.tol, self.in_test, cfg);
             let h0 = integ.initial_step(self.y0, self.yp0).min(h);
             integ.start(self.t0, self.y0, self.yp0, h0);
             let result = integ.run_with(|it| {
-                start.emit(it);
-                out.emit(it);
+                start.emit(it.t, |tau, o| it.interpolate(tau, o));
+                out.emit(it.t, |tau, o| it.interpolate(tau, o));
             });
             add_stats(stats, &integ.stats);
             result?;
             if opts.record_steps {
-                for (t, y) in start.times.iter().zip(&start.values) {
+                for (t, y) in start_times.iter().zip(start.values()) {
                     steps.push((*t, y.clone()));
                 }
             }
@@ -388,14 +368,14 @@ impl Run<'_> {
             t_end: self.t_end,
             span,
         };
-        let mut integ = Integrator::new(self.sys, &opts.tol, self.in_test, cfg);
+        let mut integ = Integrator::<L>::new(self.sys, &opts.tol, self.in_test, cfg);
         if k == 1 {
             integ.start(self.t0, self.y0, self.yp0, h);
         } else {
             // Values at t0, …, t0 + (k−1) h, oldest first.
             let mut history: Vec<&[f64]> = Vec::with_capacity(k);
             history.push(self.y0);
-            history.extend(start.values.iter().map(|v| v.as_slice()));
+            history.extend(start.values().iter().map(|v| v.as_slice()));
             integ.start_from_history(grid(k - 1), &history, h);
         }
         let result = integ.run(out, steps, opts.record_steps);
@@ -412,54 +392,6 @@ fn add_stats(total: &mut Stats, part: &Stats) {
     total.jacobian_evals += part.jacobian_evals;
     total.factorizations += part.factorizations;
     total.newton_iterations += part.newton_iterations;
-}
-
-/// Solution values at requested times, filled by dense output.
-struct Output {
-    times: Vec<f64>,
-    values: Vec<Vec<f64>>,
-    next: usize,
-}
-
-impl Output {
-    /// The requested times inside `[t0, t_end)`, ascending, then `t_end`.
-    fn new(requested: &[f64], t0: f64, t_end: f64, n: usize) -> Self {
-        let mut times: Vec<f64> = requested
-            .iter()
-            .copied()
-            .filter(|&t| t >= t0 && t < t_end)
-            .collect();
-        times.sort_by(f64::total_cmp);
-        times.push(t_end);
-        Self::grid(n, times)
-    }
-
-    /// Output at the given (ascending) times.
-    fn grid(n: usize, times: impl IntoIterator<Item = f64>) -> Self {
-        let times: Vec<f64> = times.into_iter().collect();
-        let values = vec![vec![0.0; n]; times.len()];
-        Output {
-            times,
-            values,
-            next: 0,
-        }
-    }
-
-    /// Report `y0` at every requested time equal to `t0`.
-    fn emit_start(&mut self, t0: f64, y0: &[f64]) {
-        while self.next < self.times.len() && self.times[self.next] <= t0 {
-            self.values[self.next].copy_from_slice(y0);
-            self.next += 1;
-        }
-    }
-
-    /// Interpolate at every pending time up to the integrator's `t`.
-    fn emit(&mut self, integ: &Integrator<'_>) {
-        while self.next < self.times.len() && self.times[self.next] <= integ.t {
-            integ.interpolate(self.times[self.next], &mut self.values[self.next]);
-            self.next += 1;
-        }
-    }
 }
 
 /// Settings of one integrator.
@@ -503,6 +435,16 @@ enum NewtonFail {
     NonFinite(&'static str),
 }
 
+impl From<NewtonFail> for Fail {
+    fn from(fail: NewtonFail) -> Fail {
+        match fail {
+            NewtonFail::Singular => Fail::Singular,
+            NewtonFail::NonFinite(what) => Fail::NonFinite(what),
+            NewtonFail::Divergence => Fail::Newton,
+        }
+    }
+}
+
 /// Why a step attempt was rejected.
 #[derive(Clone, Copy, Debug)]
 enum Failure {
@@ -529,17 +471,14 @@ struct ErrorTest {
     erkm1: f64,
 }
 
-/// State and workspace of the DASSL step.
-struct Integrator<'a> {
+/// State and workspace of the DASSL step (`N` unknowns, `M ≥ N` rows).
+struct Integrator<'a, L> {
     sys: &'a dyn DaeSystem,
-    tol: &'a Tolerances,
     cfg: Config,
     n: usize,
     constant_leading: bool,
-    /// `true` for components in the error test and the Newton norm.
-    in_test: &'a [bool],
-    /// `1 / (number of components in the test)`.
-    inv_count: f64,
+    /// Error weights (zero for components out of the test).
+    weights: Weights,
 
     /// Current time `t_n` (after a step: `t_{n+1}`).
     t: f64,
@@ -579,36 +518,35 @@ struct Integrator<'a> {
     phi: Vec<f64>,
     y: Vec<f64>,
     yp: Vec<f64>,
+    /// Residual (`M`), then Newton update (`N`); scratch of length `N`.
     delta: Vec<f64>,
     /// Accumulated corrections `y − y⁽⁰⁾`.
     e: Vec<f64>,
-    /// Error weights (zero for components out of the test).
-    wt: Vec<f64>,
     /// Iteration matrix, factored in place.
-    lu: DenseLu<f64>,
+    lu: L,
+    /// Row classes of a least-squares corrector.
+    rows: Rows,
     /// `E(y)`.
     lead: DMatrix<f64>,
     /// `∂(E(y) y')/∂y`.
     lead_jac: DMatrix<f64>,
 
     stats: Stats,
-    /// Step attempts so far (accepted + rejected).
-    attempts: usize,
+    /// Step attempts (accepted + rejected) and failures on this step.
+    budget: Budget,
 }
 
-impl<'a> Integrator<'a> {
+impl<'a, L: Corrector> Integrator<'a, L> {
     /// Allocate every buffer of the step loop.
-    fn new(sys: &'a dyn DaeSystem, tol: &'a Tolerances, in_test: &'a [bool], cfg: Config) -> Self {
-        let n = in_test.len();
-        let count = in_test.iter().filter(|&&b| b).count().max(1);
+    fn new(sys: &'a dyn DaeSystem, tol: &Tolerances, in_test: &[bool], cfg: Config) -> Self {
+        let info = sys.info();
+        let (m, n) = (info.equations(), info.unknowns());
         Integrator {
             sys,
-            tol,
             cfg,
             n,
-            constant_leading: sys.info().constant_leading,
-            in_test,
-            inv_count: 1.0 / count as f64,
+            constant_leading: info.constant_leading,
+            weights: Weights::new(tol, |_| 1.0, in_test.to_vec(), vec![0; n]),
             t: 0.0,
             h: 0.0,
             hold: 0.0,
@@ -631,21 +569,21 @@ impl<'a> Integrator<'a> {
             phi: vec![0.0; n * NCOL],
             y: vec![0.0; n],
             yp: vec![0.0; n],
-            delta: vec![0.0; n],
+            delta: vec![0.0; m],
             e: vec![0.0; n],
-            wt: vec![0.0; n],
-            lu: DenseLu::new(n, Pivoting::Linpack),
-            lead: DMatrix::zeros(n, n),
-            lead_jac: DMatrix::zeros(n, n),
+            lu: L::new(m, n),
+            rows: Rows::new(info),
+            lead: DMatrix::zeros(m, n),
+            lead_jac: DMatrix::zeros(m, n),
             stats: Stats::default(),
-            attempts: 0,
+            budget: Budget::new(cfg.max_steps),
         }
     }
 
     /// DASSL's initial step: `0.001·(t_end − t₀)`, reduced so that
     /// `h ‖y'₀‖ ≤ 0.5`, and at most `h_max`.
     fn initial_step(&mut self, y0: &[f64], yp0: &[f64]) -> f64 {
-        set_weights(self.tol, self.in_test, y0, &mut self.wt);
+        self.weights.update(y0);
         let mut h = 0.001 * self.cfg.span;
         let ypnorm = self.norm(yp0);
         if ypnorm > 0.5 / h {
@@ -717,12 +655,12 @@ impl<'a> Integrator<'a> {
     /// Step until `t_end`, reporting into `out` (and `steps`).
     fn run(
         &mut self,
-        out: &mut Output,
+        out: &mut OutputGrid,
         steps: &mut Vec<(f64, Vec<f64>)>,
         record: bool,
     ) -> Result<(), SolveError> {
         self.run_with(|it| {
-            out.emit(it);
+            out.emit(it.t, |tau, o| it.interpolate(tau, o));
             if record {
                 steps.push((it.t, it.phi[..it.n].to_vec()));
             }
@@ -738,39 +676,19 @@ impl<'a> Integrator<'a> {
         Ok(())
     }
 
-    /// Weighted RMS norm over the components in the test (DASSL's DDANRM,
-    /// scaled against overflow). NaN in → NaN out.
+    /// The weighted RMS norm over the components in the test.
     fn norm(&self, v: &[f64]) -> f64 {
-        let mut vmax = 0.0_f64;
-        for (a, w) in v.iter().zip(&self.wt) {
-            let x = (a * w).abs();
-            if x.is_nan() {
-                return f64::NAN;
-            }
-            vmax = vmax.max(x);
-        }
-        if vmax == 0.0 || !vmax.is_finite() {
-            return vmax;
-        }
-        let sum: f64 = v
-            .iter()
-            .zip(&self.wt)
-            .map(|(a, w)| {
-                let x = a * w / vmax;
-                x * x
-            })
-            .sum();
-        vmax * (sum * self.inv_count).sqrt()
+        self.weights.norm(v)
     }
 
-    /// Smallest step allowed at `t`: `4 ε max(|t|, ε (t_end − t₀))`.
+    /// Smallest step allowed at `t`.
     fn hmin(&self) -> f64 {
-        4.0 * EPS * self.t.abs().max(EPS * self.cfg.span)
+        control::h_min(self.t, self.cfg.span)
     }
 
     /// Take one step (retrying with smaller steps or lower order as needed).
     fn step(&mut self) -> Result<(), SolveError> {
-        set_weights(self.tol, self.in_test, &self.phi[..self.n], &mut self.wt);
+        self.weights.update(&self.phi[..self.n]);
 
         // Step size limits and the end of the horizon.
         let remaining = self.cfg.t_end - self.t;
@@ -803,15 +721,9 @@ impl<'a> Integrator<'a> {
             });
         }
 
-        let (mut nef, mut ncf, mut nsf, mut nnf) = (0usize, 0usize, 0usize, 0usize);
+        let mut nef = 0usize;
         loop {
-            if self.attempts >= self.cfg.max_steps {
-                return Err(SolveError::StepLimit {
-                    t: self.t,
-                    max_steps: self.cfg.max_steps,
-                });
-            }
-            self.attempts += 1;
+            self.budget.attempt(self.t)?;
             let t_old = self.t;
             self.set_coefficients();
             self.t = if self.last {
@@ -823,12 +735,14 @@ impl<'a> Integrator<'a> {
             let failure = match self.corrector() {
                 Ok(()) if self.cfg.fixed_step => {
                     self.accept(None);
+                    self.budget.accepted();
                     return Ok(());
                 }
                 Ok(()) => {
                     let test = self.error_test();
                     if test.err <= 1.0 {
                         self.accept(Some(test));
+                        self.budget.accepted();
                         return Ok(());
                     }
                     Failure::ErrorTest(test)
@@ -849,20 +763,7 @@ impl<'a> Integrator<'a> {
                         return Err(self.newton_error(fail, h_failed));
                     }
                     self.h *= 0.25;
-                    let limit_hit = match fail {
-                        NewtonFail::Singular => {
-                            nsf += 1;
-                            nsf >= MAX_SINGULAR_FAILURES
-                        }
-                        NewtonFail::NonFinite(_) => {
-                            nnf += 1;
-                            nnf >= MAX_NONFINITE_FAILURES
-                        }
-                        NewtonFail::Divergence => {
-                            ncf += 1;
-                            ncf >= MAX_CONVERGENCE_FAILURES
-                        }
-                    };
+                    let limit_hit = self.budget.failed(fail.into());
                     if limit_hit || self.h < hmin {
                         return Err(self.newton_error(fail, h_failed));
                     }
@@ -909,15 +810,7 @@ impl<'a> Integrator<'a> {
     /// The typed error for a Newton failure at the current time with step
     /// size `h`.
     fn newton_error(&self, fail: NewtonFail, h: f64) -> SolveError {
-        match fail {
-            NewtonFail::Singular => SolveError::SingularMatrix { t: self.t, h },
-            NewtonFail::NonFinite(what) => SolveError::NonFinite { t: self.t, what },
-            NewtonFail::Divergence => SolveError::NewtonFailure {
-                t: self.t,
-                h,
-                iterations: self.last_iterations,
-            },
-        }
+        Budget::error(fail.into(), self.t, h, self.last_iterations)
     }
 
     /// Block 1: coefficients `ψ, α, β, γ, σ` of the new step, `c_J`, `C_k`,
@@ -1051,7 +944,10 @@ impl<'a> Integrator<'a> {
         self.s = 100.0;
         self.jac = JacState::Fresh;
         self.stats.factorizations += 1;
-        self.lu.factor().map_err(|_| NewtonFail::Singular)
+        if L::LEAST_SQUARES {
+            self.rows.update(&self.lead, self.weights.get());
+        }
+        self.lu.factor(&self.rows).map_err(|_| NewtonFail::Singular)
     }
 
     /// Block 3: solve the corrector, re-evaluating the iteration matrix once
@@ -1094,8 +990,12 @@ impl<'a> Integrator<'a> {
         } else {
             1.0
         };
-        let mut oldnrm = 0.0;
-        let mut m = 0;
+        let maxit = if self.cfg.fixed_step {
+            MAX_NEWTON_ITERATIONS_FIXED_STEP
+        } else {
+            MAX_NEWTON_ITERATIONS
+        };
+        let mut monitor = Contraction::new(Rule::Dassl, maxit, NEWTON_TOL, self.s);
         loop {
             if damping != 1.0 {
                 for d in &mut self.delta {
@@ -1120,32 +1020,12 @@ impl<'a> Integrator<'a> {
             // An overflowing update is a diverging iteration, not a fault of
             // the problem: the step is retried smaller.
             let delnrm = self.norm(&self.delta);
-            if !delnrm.is_finite() {
-                return Err(NewtonFail::Divergence);
-            }
-            if delnrm <= 100.0 * EPS * pnorm {
-                return Ok(());
-            }
-            if m == 0 {
-                oldnrm = delnrm;
-            } else {
-                let rate = (delnrm / oldnrm).powf(1.0 / m as f64);
-                if rate > MAX_RATE {
-                    return Err(NewtonFail::Divergence);
-                }
-                self.s = rate / (1.0 - rate);
-            }
-            if self.s * delnrm <= NEWTON_TOL {
-                return Ok(());
-            }
-            m += 1;
-            let maxit = if self.cfg.fixed_step {
-                MAX_NEWTON_ITERATIONS_FIXED_STEP
-            } else {
-                MAX_NEWTON_ITERATIONS
-            };
-            if m >= maxit {
-                return Err(NewtonFail::Divergence);
+            let verdict = monitor.observe(delnrm, 100.0 * EPS * pnorm);
+            self.s = monitor.eta;
+            match verdict {
+                Verdict::Converged => return Ok(()),
+                Verdict::Diverged | Verdict::TooSlow { .. } => return Err(NewtonFail::Divergence),
+                Verdict::Continue => {}
             }
             // Non-finite at an iterate (not at the predictor): divergence.
             self.residual().map_err(|_| NewtonFail::Divergence)?;
@@ -1299,17 +1179,6 @@ impl<'a> Integrator<'a> {
     }
 }
 
-/// Error weights `w_i = 1/(atol_i + rtol_i |y_i|)`, zero for components out
-/// of the test.
-fn set_weights(tol: &Tolerances, in_test: &[bool], y: &[f64], wt: &mut [f64]) {
-    tol.weights(y, wt);
-    for (w, &inc) in wt.iter_mut().zip(in_test) {
-        if !inc {
-            *w = 0.0;
-        }
-    }
-}
-
 /// Reject initial values that violate a row by more than a perturbation of
 /// every unknown by its tolerance could explain:
 /// `|F_i| > Σ_j |∂F_i/∂y_j| (atol_j + rtol_j |y_j|)`, beyond round-off.
@@ -1323,9 +1192,10 @@ fn check_consistency(
 ) -> Result<(), SolveError> {
     let n = y0.len();
     let info = sys.info();
-    let mut r = vec![0.0; n];
+    let m = info.equations();
+    let mut r = vec![0.0; m];
     sys.residual(t0, y0, yp0, &mut r);
-    let mut f = vec![0.0; n];
+    let mut f = vec![0.0; m];
     sys.rhs(t0, y0, &mut f);
     stats.residual_evals += 2;
     if !r.iter().all(|v| v.is_finite()) {
@@ -1334,22 +1204,22 @@ fn check_consistency(
             what: "residual",
         });
     }
-    let mut jac = DMatrix::zeros(n, n);
+    let mut jac = DMatrix::zeros(m, n);
     sys.rhs_jacobian(t0, y0, &mut jac);
     jac.neg_mut();
     if !info.constant_leading {
-        let mut lj = DMatrix::zeros(n, n);
+        let mut lj = DMatrix::zeros(m, n);
         sys.leading_jacobian(y0, yp0, &mut lj);
         jac += lj;
     }
-    let mut lead = DMatrix::zeros(n, n);
+    let mut lead = DMatrix::zeros(m, n);
     sys.leading(y0, &mut lead);
     stats.jacobian_evals += 1;
     let scale: Vec<f64> = (0..n)
         .map(|j| tol.atol(j) + tol.rtol(j) * y0[j].abs())
         .collect();
     let mut worst: Option<(usize, f64)> = None;
-    for i in 0..n {
+    for i in 0..m {
         let ri = r[i].abs();
         let ey: f64 = (0..n).map(|j| (lead[(i, j)] * yp0[j]).abs()).sum();
         if ri <= 100.0 * EPS * (f[i].abs() + ey) {

@@ -58,6 +58,10 @@ pub enum SolveError {
         /// Its residual.
         residual: f64,
     },
+    /// The solver cannot integrate this formulation at all
+    /// ([`crate::Solver::accepts`]).
+    #[error("not applicable: {0}")]
+    NotApplicable(#[from] NotApplicable),
     /// The problem or the options are invalid (negative tolerance, wrong
     /// length, `t_end <= t0`, a formulation the solver cannot take, …).
     #[error("invalid input: {what}")]
@@ -77,6 +81,7 @@ impl SolveError {
             SolveError::NonFinite { .. } => "non_finite",
             SolveError::StepLimit { .. } => "step_limit",
             SolveError::InconsistentInitialValues { .. } => "inconsistent_initial_values",
+            SolveError::NotApplicable(_) => "not_applicable",
             SolveError::InvalidInput { .. } => "invalid_input",
         }
     }
@@ -96,4 +101,41 @@ impl SolveError {
     pub(crate) fn invalid(what: impl Into<String>) -> Self {
         SolveError::InvalidInput { what: what.into() }
     }
+}
+
+/// Why a solver cannot integrate a formulation at all: the typed refusal of
+/// [`crate::Solver::accepts`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error, Serialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum NotApplicable {
+    /// The formulation has no unknowns.
+    #[error("the system has no unknowns")]
+    NoUnknowns,
+    /// More equations than unknowns, for a solver of square systems.
+    #[error(
+        "overdetermined: solver needs a square system ({equations} equations, {unknowns} unknowns)"
+    )]
+    Overdetermined {
+        /// Equations `M`.
+        equations: usize,
+        /// Unknowns `N`.
+        unknowns: usize,
+    },
+    /// Fewer equations than unknowns.
+    #[error("underdetermined: {equations} equations for {unknowns} unknowns")]
+    Underdetermined {
+        /// Equations `M`.
+        equations: usize,
+        /// Unknowns `N`.
+        unknowns: usize,
+    },
+    /// The formulation leaves out hidden constraints above the level the
+    /// method can integrate (its constraint level `c_level` exceeds `max`).
+    #[error("constraint level {c_level}: solver needs c-level at most {max}")]
+    ConstraintLevel {
+        /// The formulation's constraint level.
+        c_level: u8,
+        /// The highest level the solver takes.
+        max: u8,
+    },
 }

@@ -1,27 +1,37 @@
 //! DAE integrators over the [`dae_core::system::DaeSystem`] trait.
 //!
-//! Shared pieces live in their own modules — [`options`] (tolerances and
-//! error weights), [`stats`], [`solution`], [`error`], and the dense LU
-//! factorisation both solvers use (`linalg`, crate-private) — and each
-//! method family in one module: [`radau5`] (Radau IIA, order 5, after RADAU5
-//! of Hairer & Wanner) and [`bdf`] (variable order BDF in fixed-leading-
-//! coefficient form, after DASSL/DASPK). [`init`] computes consistent initial
-//! values from the model's constraint chain, and the initial derivative the
-//! BDF solver starts from.
+//! One integrator [`core`] — error weights and the one norm, the Newton
+//! contraction monitor, square and least-squares linear algebra behind one
+//! interface, step-size limits and failure budgets, the output grid, the
+//! defaults a formulation implies ([`core::policy`]) — and one module per
+//! method family, holding only what is particular to it:
 //!
-//! Every solver returns `Result<Solution, SolveError>` and never panics on a
-//! user's problem; no allocation happens inside the step loop.
+//! | solver | method | formulations |
+//! |---|---|---|
+//! | [`radau5`] | Radau IIA order 5 (RADAU5, Hairer & Wanner) | square, index ≤ 3 |
+//! | [`bdf`] | BDF orders 1–5, fixed leading coefficient (DASSL/DASPK) | square |
+//! | [`odradau`] | Radau IIA 5 with least-squares stage equations (QUALIDAES/GEOMS) | `M ≥ N`, c-level ≤ 1 |
+//! | [`odbdf`] | BDF 1–5 with a least-squares corrector (ODASSL/OVDBDF) | `M ≥ N`, c-level 0 |
+//!
+//! [`init`] computes consistent initial values from the model's constraint
+//! chain, and the initial derivative BDF starts from. Every solver returns
+//! `Result<Solution, SolveError>` and never panics on a user's problem; no
+//! allocation happens inside the step loop. [`Solver::accepts`] says, typed,
+//! why a solver cannot take a formulation.
 
 pub mod bdf;
+pub mod core;
 pub mod error;
 pub mod init;
 mod linalg;
+pub mod odbdf;
+pub mod odradau;
 pub mod options;
 pub mod radau5;
 pub mod solution;
 pub mod stats;
 
-pub use error::SolveError;
+pub use error::{NotApplicable, SolveError};
 pub use init::{consistent, initial_derivative, InitMode, InitOptions};
 pub use options::{Options, Tolerances};
 pub use solution::Solution;
@@ -63,22 +73,13 @@ impl Problem<'_> {
     }
 }
 
-/// [`Solver::accepts`] of a solver for square systems only (all of this
-/// crate's).
-fn accepts_square(info: &FormulationInfo) -> Result<(), String> {
-    if info.is_overdetermined() {
-        return Err("overdetermined: solver needs a square system".into());
-    }
-    Ok(())
-}
-
 /// A DAE integrator.
 pub trait Solver {
     /// Short name used on the command line (`radau5`, `bdf`, …).
     fn name(&self) -> &'static str;
     /// `Ok` when the solver can integrate this formulation at all; otherwise
-    /// the reason, e.g. "overdetermined: solver needs a square system".
-    fn accepts(&self, info: &FormulationInfo) -> Result<(), String>;
+    /// the typed reason, e.g. [`NotApplicable::Overdetermined`].
+    fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable>;
     /// Integrate from `t0` to `t_end`, reporting the solution at
     /// `options.output_times` (dense output, not step-size clipping).
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError>;
@@ -89,9 +90,11 @@ pub fn solver_by_name(name: &str) -> Option<Box<dyn Solver + Send + Sync>> {
     match name {
         "radau5" => Some(Box::new(radau5::Radau5)),
         "bdf" => Some(Box::new(bdf::Bdf)),
+        "odradau" => Some(Box::new(odradau::OdRadau)),
+        "odbdf" => Some(Box::new(odbdf::OdBdf)),
         _ => None,
     }
 }
 
 /// Names of all solvers, in report order.
-pub const SOLVER_NAMES: [&str; 2] = ["radau5", "bdf"];
+pub const SOLVER_NAMES: [&str; 4] = ["radau5", "bdf", "odradau", "odbdf"];

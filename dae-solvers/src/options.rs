@@ -102,15 +102,6 @@ impl Default for Tolerances {
     }
 }
 
-/// Weighted root-mean-square norm `sqrt(Σ (v_i w_i)² / n)`.
-pub fn wrms_norm(v: &[f64], w: &[f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    let s: f64 = v.iter().zip(w).map(|(a, b)| (a * b) * (a * b)).sum();
-    (s / v.len() as f64).sqrt()
-}
-
 /// Solver options. Tunables are fields with a [`Default`], so new options do
 /// not break callers.
 #[derive(Clone, Debug, PartialEq)]
@@ -125,13 +116,16 @@ pub struct Options {
     /// [`SolveError::StepLimit`].
     pub max_steps: usize,
     /// Times at which to report the solution (dense output). Times outside
-    /// `[t0, t_end]` are ignored; `t_end` is always reported last.
+    /// `[t0, t_end]` are ignored, repeats reported once; `t_end` is always
+    /// reported last (see `core::output` for the one rule).
     pub output_times: Vec<f64>,
     /// Record every accepted step in [`crate::Solution::steps`].
     pub record_steps: bool,
-    /// BDF only: include index-2 (and higher) unknowns in the error test.
-    /// `false` is DASPK's option that lets index-2 formulations run.
-    pub index2_in_error_test: bool,
+    /// BDF-type methods only: include index-2 (and higher) unknowns in the
+    /// error test. `None` (the default) leaves the decision to the
+    /// formulation, in [`crate::core::policy::bdf_error_test`]: they are
+    /// left out, DASPK's option that lets index-2 formulations run.
+    pub index2_in_error_test: Option<bool>,
     /// Integrate with this constant step size and no error control
     /// (convergence studies).
     pub fixed_step: Option<f64>,
@@ -150,7 +144,7 @@ impl Default for Options {
             max_steps: 20_000_000,
             output_times: Vec::new(),
             record_steps: false,
-            index2_in_error_test: true,
+            index2_in_error_test: None,
             fixed_step: None,
             fixed_order: None,
             max_order: 5,

@@ -141,11 +141,17 @@
 //! `10 u max(|t|, |t_end|)` give [`SolveError::StepSizeTooSmall`], and
 //! [`crate::Options::max_steps`] attempted steps [`SolveError::StepLimit`].
 
-use crate::linalg::{DenseLu, Pivoting, Singular};
+use crate::core::control::{self, Budget, Failure};
+use crate::core::matrix::{Rows, SquareStages, StageSystems};
+use crate::core::newton::{Contraction, Rule, Verdict};
+use crate::core::output::OutputGrid;
+use crate::core::policy;
+use crate::core::weights::Weights;
+use crate::linalg::Singular;
 use crate::options::Options;
-use crate::{Problem, Solution, SolveError, Solver, Stats};
+use crate::{NotApplicable, Problem, Solution, SolveError, Solver, Stats};
 use dae_core::system::{DaeSystem, FormulationInfo};
-use nalgebra::{Complex, DMatrix};
+use nalgebra::DMatrix;
 
 /// 3-stage Radau IIA of order 5 (see the [module documentation](self)).
 pub struct Radau5;
@@ -155,26 +161,25 @@ impl Solver for Radau5 {
         "radau5"
     }
 
-    fn accepts(&self, info: &FormulationInfo) -> Result<(), String> {
-        crate::accepts_square(info)
+    fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable> {
+        policy::square(info)
     }
 
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
-        let info = problem.system.info();
-        self.accepts(info).map_err(SolveError::invalid)?;
-        let n = info.unknowns();
-        if n == 0 {
-            return Err(SolveError::invalid("the system has no unknowns"));
-        }
-        if info.equations() != n {
-            return Err(SolveError::invalid(format!(
-                "underdetermined: {} equations for {n} unknowns, solver needs a square system",
-                info.equations()
-            )));
-        }
-        problem.check(n, options)?;
-        Integrator::new(problem, options).run()
+        self.accepts(problem.system.info())?;
+        integrate::<SquareStages>(problem, options)
     }
+}
+
+/// Integrate with Radau IIA 5, the stage systems solved by `S` (square LU,
+/// or least squares for [`crate::odradau`]); the caller has checked that
+/// the solver accepts the formulation.
+pub(crate) fn integrate<S: StageSystems>(
+    problem: &Problem<'_>,
+    options: &Options,
+) -> Result<Solution, SolveError> {
+    problem.check(problem.system.info().unknowns(), options)?;
+    Integrator::<S>::new(problem, options).run()
 }
 
 // ---------------------------------------------------------------------------
@@ -253,10 +258,6 @@ const FACR: f64 = 0.125;
 const UROUND: f64 = f64::EPSILON * 0.5;
 /// Initial step when [`Options::h0`] is not given (RADAU5's default).
 const H0_DEFAULT: f64 = 1e-6;
-/// Singular iteration matrices in a row before giving up.
-const MAX_SINGULAR: usize = 5;
-/// Failed Newton iterations in a row before giving up.
-const MAX_NEWTON_FAILURES: usize = 20;
 
 // ---------------------------------------------------------------------------
 // The tolerance map (see the module documentation)
@@ -302,41 +303,37 @@ fn tolerance_factor(options: &Options, i: usize) -> f64 {
 // The integrator
 // ---------------------------------------------------------------------------
 
-/// Every buffer the step loop touches, allocated once.
-struct Work {
+/// Every buffer the step loop touches, allocated once (`N` unknowns, `M`
+/// equations).
+struct Work<S> {
     /// `y_n`.
     y: Vec<f64>,
     /// Stage increments `Z_1, Z_2, Z_3` (stage-major, `3N`).
     z: Vec<f64>,
-    /// Transformed Newton right-hand sides, then increments `ΔW` (`3N`).
+    /// Transformed Newton right-hand sides (stride `M`), then increments
+    /// `ΔW` (the first `N` of each block).
     dw: Vec<f64>,
-    /// Stage residuals `G_i(Z)` (`3N`).
+    /// Stage residuals `G_i(Z)` (stride `M`).
     res: Vec<f64>,
     /// A stage value `Y_i`.
     ys: Vec<f64>,
     /// A stage derivative `Y'_i`.
     yd: Vec<f64>,
-    /// `f(t_n, y_n)`.
+    /// `f(t_n, y_n)` (`M`).
     f0: Vec<f64>,
     /// `y'(t_n)` from the last collocation polynomial (for `∂(E z)/∂y`).
     yp: Vec<f64>,
-    /// Error scales `sc_i`.
-    scal: Vec<f64>,
-    /// `rtol_i`, `atol_i`.
-    rtol: Vec<f64>,
-    atol: Vec<f64>,
-    /// `h^(k_i − 1)` exponents of the error scaling.
-    index_power: Vec<i32>,
+    /// Error weights, index-scaled.
+    weights: Weights,
+    /// Row classes of the least-squares systems.
+    rows: Rows,
     /// Collocation polynomial of the last accepted step (`4N`).
     cont: Vec<f64>,
-    /// Error estimate and temporaries.
+    /// Error estimate (`M` in, `N` out) and temporaries.
     err: Vec<f64>,
     tmp: Vec<f64>,
+    fm: Vec<f64>,
     ez: Vec<f64>,
-    /// Complex right-hand side.
-    cplx: Vec<Complex<f64>>,
-    /// Dense output value.
-    out: Vec<f64>,
     /// `J = ∂f/∂y − ∂(E z)/∂y` at the Jacobian point.
     jac: DMatrix<f64>,
     /// `∂(E z)/∂y`.
@@ -345,49 +342,44 @@ struct Work {
     e_jac: DMatrix<f64>,
     /// `E(y_n)`.
     e_n: DMatrix<f64>,
-    /// `γ/h E₀ − J`.
-    lu_real: DenseLu<f64>,
-    /// `(α + iβ)/h E₀ − J`.
-    lu_complex: DenseLu<Complex<f64>>,
+    /// `γ/h E₀ − J` and `(α + iβ)/h E₀ − J`, factorised.
+    stages: S,
 }
 
-impl Work {
-    fn new(n: usize, options: &Options, info: &FormulationInfo) -> Self {
+impl<S: StageSystems> Work<S> {
+    fn new(info: &FormulationInfo, options: &Options) -> Self {
+        let (m, n) = (info.equations(), info.unknowns());
         let v = |len: usize| vec![0.0; len];
-        let m = || DMatrix::zeros(n, n);
+        let mat = || DMatrix::zeros(m, n);
         Work {
             y: v(n),
             z: v(3 * n),
-            dw: v(3 * n),
-            res: v(3 * n),
+            dw: v(3 * m),
+            res: v(3 * m),
             ys: v(n),
             yd: v(n),
-            f0: v(n),
+            f0: v(m),
             yp: v(n),
-            scal: v(n),
-            rtol: (0..n)
-                .map(|i| tolerance_factor(options, i) * options.tol.rtol(i))
-                .collect(),
-            atol: (0..n)
-                .map(|i| tolerance_factor(options, i) * options.tol.atol(i))
-                .collect(),
-            index_power: info
-                .variables
-                .iter()
-                .map(|var| i32::from(var.index.max(1)) - 1)
-                .collect(),
+            weights: Weights::new(
+                &options.tol,
+                |i| tolerance_factor(options, i),
+                vec![true; n],
+                info.variables
+                    .iter()
+                    .map(|var| i32::from(var.index.max(1)) - 1)
+                    .collect(),
+            ),
+            rows: Rows::new(info),
             cont: v(4 * n),
-            err: v(n),
+            err: v(m),
             tmp: v(n),
-            ez: v(n),
-            cplx: vec![Complex::new(0.0, 0.0); n],
-            out: v(n),
-            jac: m(),
-            ljac: m(),
-            e_jac: m(),
-            e_n: m(),
-            lu_real: DenseLu::new(n, Pivoting::Checked),
-            lu_complex: DenseLu::new(n, Pivoting::Checked),
+            fm: v(m),
+            ez: v(m),
+            jac: mat(),
+            ljac: mat(),
+            e_jac: mat(),
+            e_n: mat(),
+            stages: S::new(m, n),
         }
     }
 }
@@ -415,90 +407,67 @@ enum Next {
     Step,
 }
 
-struct Integrator<'a> {
+struct Integrator<'a, S> {
     sys: &'a dyn DaeSystem,
     options: &'a Options,
     n: usize,
+    m: usize,
     t0: f64,
     t_end: f64,
     constant_leading: bool,
-    /// Newton stopping tolerance `κ·tol` relative to the error scales.
-    fnewt: f64,
-    w: Work,
+    w: Work<S>,
     stats: Stats,
-    /// `η = θ/(1 − θ)` carried from step to step.
-    faccon: f64,
-    /// Contraction factor of the last Newton iteration.
-    theta: f64,
+    /// Contraction monitor; its `η` is carried from step to step and its
+    /// `θ` decides Jacobian reuse.
+    newton: Contraction,
 }
 
-impl<'a> Integrator<'a> {
+impl<'a, S: StageSystems> Integrator<'a, S> {
     fn new(problem: &Problem<'a>, options: &'a Options) -> Self {
         let info = problem.system.info();
-        let n = info.unknowns();
-        let mut w = Work::new(n, options, info);
+        let (m, n) = (info.equations(), info.unknowns());
+        let mut w = Work::<S>::new(info, options);
         w.y.copy_from_slice(problem.y0);
         // RADAU5: fnewt = max(10 u / rtol, min(0.03, rtol^(1/2))), here
         // with the smallest relative tolerance (an absolute one where all
         // relative tolerances are zero), kept above 10 u.
-        let rmin = w.rtol.iter().copied().fold(f64::INFINITY, f64::min);
+        let rmin = w
+            .weights
+            .rtol()
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
         let r = if rmin > 0.0 {
             rmin
         } else {
-            w.atol.iter().copied().fold(f64::INFINITY, f64::min)
+            w.weights
+                .atol()
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min)
         };
         let r = r.max(10.0 * UROUND);
         let fnewt = (10.0 * UROUND / r).max(0.03f64.min(r.sqrt()));
+        let rule = Rule::Radau5 {
+            slow_exit: options.fixed_step.is_none(),
+        };
         Integrator {
             sys: problem.system,
             options,
             n,
+            m,
             t0: problem.t0,
             t_end: problem.t_end,
             constant_leading: info.constant_leading,
-            fnewt,
             w,
             stats: Stats::default(),
-            faccon: 1.0,
-            theta: THET,
+            newton: Contraction::new(rule, NIT, fnewt, 1.0),
         }
     }
 
-    /// The output times in `(t0, t_end]`, ascending, ending with `t_end`.
-    fn output_grid(&self) -> Vec<f64> {
-        let requested = &self.options.output_times;
-        let mut grid = Vec::with_capacity(requested.len() + 1);
-        grid.extend(
-            requested
-                .iter()
-                .copied()
-                .filter(|&t| t > self.t0 && t <= self.t_end),
-        );
-        grid.sort_by(f64::total_cmp);
-        grid.dedup();
-        if grid.last() != Some(&self.t_end) {
-            grid.push(self.t_end);
-        }
-        grid
-    }
-
-    fn run(mut self) -> Result<Solution, SolveError> {
-        let (t0, t_end) = (self.t0, self.t_end);
-        let span = t_end - t0;
-        let fixed = self.options.fixed_step;
-        let h_max = self.options.h_max.unwrap_or(span).min(span);
-
-        let grid = self.output_grid();
-        let mut sol = Solution {
-            t: Vec::with_capacity(grid.len()),
-            y: Vec::with_capacity(grid.len()),
-            steps: Vec::new(),
-            stats: Stats::default(),
-        };
-        let mut next_out = 0;
-
-        // f(t0, y0) and E(y0).
-        let mut t = t0;
+    /// `f(t, y_n)` into `f0`, and `E(y_n)` when it is not constant (or
+    /// `first`).
+    fn evaluate_at_step_point(&mut self, t: f64, first: bool) -> Result<(), SolveError> {
         self.sys.rhs(t, &self.w.y, &mut self.w.f0);
         self.stats.residual_evals += 1;
         if self.w.f0.iter().any(|v| !v.is_finite()) {
@@ -507,24 +476,40 @@ impl<'a> Integrator<'a> {
                 what: "residual",
             });
         }
-        self.sys.leading(&self.w.y, &mut self.w.e_n);
-        if self.w.e_n.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFinite {
-                t,
-                what: "leading matrix",
-            });
+        if first || !self.constant_leading {
+            self.sys.leading(&self.w.y, &mut self.w.e_n);
+            if self.w.e_n.iter().any(|v| !v.is_finite()) {
+                return Err(SolveError::NonFinite {
+                    t,
+                    what: "leading matrix",
+                });
+            }
         }
+        Ok(())
+    }
+
+    fn run(mut self) -> Result<Solution, SolveError> {
+        let (t0, t_end) = (self.t0, self.t_end);
+        let span = t_end - t0;
+        let fixed = self.options.fixed_step;
+        let h_max = self.options.h_max.unwrap_or(span).min(span);
+
+        let mut grid = OutputGrid::new(&self.options.output_times, t0, t_end, self.n);
+        grid.start(t0, &self.w.y);
+        let mut steps = Vec::new();
+
+        let mut t = t0;
+        self.evaluate_at_step_point(t, true)?;
 
         let mut h = match fixed {
             Some(hf) => hf,
-            // A tiny h0 is raised to well above the round-off limit of the
-            // step-size test.
+            // A tiny h0 is raised to well above the smallest step.
             None => self
                 .options
                 .h0
                 .unwrap_or(H0_DEFAULT)
                 .min(h_max)
-                .max(1e3 * UROUND * t0.abs().max(t_end.abs())),
+                .max(100.0 * control::h_min(t0, span)),
         };
         // A step ending within `end_slack` of t_end is stretched to it:
         // round-off for adaptive steps, a relative 1e-8 for fixed ones.
@@ -545,18 +530,11 @@ impl<'a> Integrator<'a> {
         let mut h_old = h;
         let mut h_acc = h;
         let mut err_acc = 1e-2;
-        let mut singular_in_row = 0;
-        let mut newton_failures_in_row = 0;
+        let mut budget = Budget::new(self.options.max_steps);
         let mut next = Next::Jacobian;
 
         loop {
-            if self.stats.steps + self.stats.rejected >= self.options.max_steps {
-                return Err(SolveError::StepLimit {
-                    t,
-                    max_steps: self.options.max_steps,
-                });
-            }
-            if fixed.is_none() && h <= 10.0 * UROUND * t.abs().max(t_end.abs()) {
+            if fixed.is_none() && h < control::h_min(t, span) {
                 return Err(SolveError::StepSizeTooSmall { t, h });
             }
             if next == Next::Jacobian {
@@ -566,8 +544,7 @@ impl<'a> Integrator<'a> {
             }
             if next == Next::Factor {
                 if self.factor(h).is_err() {
-                    singular_in_row += 1;
-                    if fixed.is_some() || singular_in_row >= MAX_SINGULAR {
+                    if fixed.is_some() || budget.failed(Failure::Singular) {
                         return Err(SolveError::SingularMatrix { t, h });
                     }
                     h *= 0.5;
@@ -578,9 +555,10 @@ impl<'a> Integrator<'a> {
                 }
                 self.stats.factorizations += 1;
             }
+            budget.attempt(t)?;
 
             // ---- one step attempt from t with h ----
-            self.set_scale(h);
+            self.w.weights.update_scaled(&self.w.y, h);
             self.starting_values(first, h / h_old);
 
             let outcome = self.newton(t, h, fixed.is_none());
@@ -615,24 +593,18 @@ impl<'a> Integrator<'a> {
             if newton_failed {
                 // ---- Newton failure (RADAU5's label 78) ----
                 self.stats.rejected += 1;
-                newton_failures_in_row += 1;
+                let failure = if non_finite {
+                    Failure::NonFinite("residual")
+                } else {
+                    Failure::Newton
+                };
+                let exhausted = budget.failed(failure);
                 if fixed.is_some() && !caljac {
                     next = Next::Jacobian;
                     continue;
                 }
-                if fixed.is_some() || newton_failures_in_row >= MAX_NEWTON_FAILURES {
-                    return Err(if non_finite {
-                        SolveError::NonFinite {
-                            t,
-                            what: "residual",
-                        }
-                    } else {
-                        SolveError::NewtonFailure {
-                            t,
-                            h,
-                            iterations: newt,
-                        }
-                    });
+                if fixed.is_some() || exhausted {
+                    return Err(Budget::error(failure, t, h, newt));
                 }
                 h *= failed_factor.unwrap_or(0.5);
                 reject = true;
@@ -640,8 +612,6 @@ impl<'a> Integrator<'a> {
                 next = if caljac { Next::Factor } else { Next::Jacobian };
                 continue;
             }
-            newton_failures_in_row = 0;
-            singular_in_row = 0;
 
             if err >= 1.0 {
                 // ---- rejected by the error test ----
@@ -658,6 +628,7 @@ impl<'a> Integrator<'a> {
             }
 
             // ---- accepted ----
+            budget.accepted();
             if fixed.is_none() {
                 if self.stats.steps > 0 {
                     let quot = (h / h_new).max(predictive_quotient(err, err_acc, h, h_acc));
@@ -667,7 +638,6 @@ impl<'a> Integrator<'a> {
                 err_acc = err.max(1e-2);
             }
             first = false;
-            let t_prev = t;
             t = if last { t_end } else { t + h };
             h_old = h;
             self.advance(h);
@@ -680,40 +650,17 @@ impl<'a> Integrator<'a> {
                 });
             }
 
-            // Dense output at the requested times in (t_prev, t].
-            while next_out < grid.len() && grid[next_out] <= t {
-                let tau = grid[next_out];
-                if tau > t_prev {
-                    self.dense(tau, t, h);
-                    sol.t.push(tau);
-                    sol.y.push(self.w.out.clone());
-                }
-                next_out += 1;
-            }
+            // Dense output at the requested times in (t − h, t].
+            let (n, w) = (self.n, &self.w);
+            grid.emit(t, |tau, out| dense(n, &w.cont, tau, t, h, out));
             if self.options.record_steps {
-                sol.steps.push((t, self.w.y.clone()));
+                steps.push((t, self.w.y.clone()));
             }
             if last {
                 break;
             }
 
-            self.sys.rhs(t, &self.w.y, &mut self.w.f0);
-            self.stats.residual_evals += 1;
-            if self.w.f0.iter().any(|v| !v.is_finite()) {
-                return Err(SolveError::NonFinite {
-                    t,
-                    what: "residual",
-                });
-            }
-            if !self.constant_leading {
-                self.sys.leading(&self.w.y, &mut self.w.e_n);
-                if self.w.e_n.iter().any(|v| !v.is_finite()) {
-                    return Err(SolveError::NonFinite {
-                        t,
-                        what: "leading matrix",
-                    });
-                }
-            }
+            self.evaluate_at_step_point(t, false)?;
 
             if let Some(hf) = fixed {
                 let remaining = t_end - t;
@@ -725,7 +672,7 @@ impl<'a> Integrator<'a> {
                 };
                 let new_h = h_next != h;
                 h = h_next;
-                next = match (self.theta <= THET, new_h) {
+                next = match (self.newton.theta <= THET, new_h) {
                     (true, false) => Next::Step,
                     (true, true) => Next::Factor,
                     (false, _) => Next::Jacobian,
@@ -750,13 +697,13 @@ impl<'a> Integrator<'a> {
                     h_new = 0.5 * (t_end - t);
                 }
                 let qt = h_new / h;
-                if self.theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
+                if self.newton.theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
                     next = Next::Step;
                     continue;
                 }
                 h = h_new;
             }
-            next = if self.theta <= THET {
+            next = if self.newton.theta <= THET {
                 Next::Factor
             } else {
                 Next::Jacobian
@@ -765,8 +712,13 @@ impl<'a> Integrator<'a> {
 
         // Every grid time is at most t_end, which the last step reaches
         // exactly: all have been reported.
-        sol.stats = self.stats;
-        Ok(sol)
+        let (t, y) = grid.finish();
+        Ok(Solution {
+            t,
+            y,
+            steps,
+            stats: self.stats,
+        })
     }
 
     /// `J = ∂f/∂y − ∂(E z)/∂y` and `E₀` at `(t, y_n)`.
@@ -793,28 +745,12 @@ impl<'a> Integrator<'a> {
     /// Factorise `γ/h E₀ − J` and `(α + iβ)/h E₀ − J`.
     fn factor(&mut self, h: f64) -> Result<(), Singular> {
         let w = &mut self.w;
-        let (e, j) = (&w.e_jac, &w.jac);
-        let fac1 = GAMMA / h;
-        let (alphn, betan) = (ALPHA / h, BETA / h);
-        w.lu_real.factor_from(|r, c| fac1 * e[(r, c)] - j[(r, c)])?;
-        w.lu_complex
-            .factor_from(|r, c| Complex::new(alphn * e[(r, c)] - j[(r, c)], betan * e[(r, c)]))
-    }
-
-    /// `sc_i = (atol_i + rtol_i |y_n,i|) / h^(k_i − 1)`.
-    fn set_scale(&mut self, h: f64) {
-        let w = &mut self.w;
-        let hinv = 1.0 / h;
-        for k in 0..self.n {
-            let base = w.atol[k] + w.rtol[k] * w.y[k].abs();
-            let factor = match w.index_power[k] {
-                0 => 1.0,
-                1 => hinv,
-                2 => hinv * hinv,
-                p => hinv.powi(p),
-            };
-            w.scal[k] = (base * factor).max(f64::MIN_POSITIVE);
+        if S::LEAST_SQUARES {
+            w.weights.update_scaled(&w.y, h);
+            w.rows.update(&w.e_jac, w.weights.get());
         }
+        w.stages
+            .factor(&w.e_jac, &w.jac, GAMMA / h, ALPHA / h, BETA / h, &w.rows)
     }
 
     /// Zero on the first step, otherwise the last collocation polynomial
@@ -837,7 +773,7 @@ impl<'a> Integrator<'a> {
 
     /// Stage residuals `G_i(Z) = E(Y_i) Y'_i − f(t + c_i h, Y_i)` into `res`.
     fn stage_residuals(&mut self, t: f64, h: f64) {
-        let n = self.n;
+        let (n, m) = (self.n, self.m);
         let w = &mut self.w;
         for (i, &ci) in C.iter().enumerate() {
             for k in 0..n {
@@ -846,7 +782,7 @@ impl<'a> Integrator<'a> {
                 w.yd[k] = (AINV[i][0] * z1 + AINV[i][1] * z2 + AINV[i][2] * z3) / h;
             }
             self.sys
-                .residual(t + ci * h, &w.ys, &w.yd, &mut w.res[i * n..(i + 1) * n]);
+                .residual(t + ci * h, &w.ys, &w.yd, &mut w.res[i * m..(i + 1) * m]);
         }
         self.stats.residual_evals += 3;
     }
@@ -856,116 +792,80 @@ impl<'a> Integrator<'a> {
     /// convergence; without it (fixed-step mode) up to `NIT_FIXED`
     /// iterations are made.
     fn newton(&mut self, t: f64, h: f64, may_shorten: bool) -> Newton {
-        let n = self.n;
-        self.faccon = self.faccon.max(UROUND).powf(0.8);
-        self.theta = THET;
-        let mut dyno_old = 0.0;
-        let mut thq_old = 0.0;
-        let mut newt = 0;
+        let (n, m) = (self.n, self.m);
         let max_iter = if may_shorten { NIT } else { NIT_FIXED };
+        let eta = self.newton.eta.max(UROUND).powf(0.8);
+        self.newton.restart(max_iter, eta, THET);
         loop {
-            if newt >= max_iter {
-                return Newton::Diverged(newt);
-            }
             self.stage_residuals(t, h);
             let w = &mut self.w;
             if w.res.iter().any(|v| !v.is_finite()) {
-                return Newton::NonFinite(newt);
+                return Newton::NonFinite(self.newton.iterations());
             }
             // R = −(T⁻¹ ⊗ I) G.
-            for k in 0..n {
-                let (g1, g2, g3) = (w.res[k], w.res[n + k], w.res[2 * n + k]);
+            for k in 0..m {
+                let (g1, g2, g3) = (w.res[k], w.res[m + k], w.res[2 * m + k]);
                 for (r, ti) in TI.iter().enumerate() {
-                    w.dw[r * n + k] = -(ti[0] * g1 + ti[1] * g2 + ti[2] * g3);
+                    w.dw[r * m + k] = -(ti[0] * g1 + ti[1] * g2 + ti[2] * g3);
                 }
             }
-            w.lu_real.solve(&mut w.dw[..n]);
-            for k in 0..n {
-                w.cplx[k] = Complex::new(w.dw[n + k], w.dw[2 * n + k]);
-            }
-            w.lu_complex.solve(&mut w.cplx);
-            for k in 0..n {
-                w.dw[n + k] = w.cplx[k].re;
-                w.dw[2 * n + k] = w.cplx[k].im;
-            }
-            newt += 1;
+            w.stages.solve_real(&mut w.dw[..m]);
+            let (re, im) = w.dw[m..].split_at_mut(m);
+            w.stages.solve_complex(re, im);
 
-            let mut sum = 0.0;
-            for k in 0..n {
-                let s = w.scal[k];
-                for r in 0..3 {
-                    let q = w.dw[r * n + k] / s;
-                    sum += q * q;
-                }
-            }
-            let dyno = (sum / (3 * n) as f64).sqrt();
+            let dyno = w.weights.norm_blocks(&w.dw, m, 3);
             if !dyno.is_finite() {
-                return Newton::NonFinite(newt);
+                return Newton::NonFinite(self.newton.iterations() + 1);
             }
-            if newt > 1 && newt < max_iter {
-                let thq = dyno / dyno_old;
-                self.theta = if newt == 2 {
-                    thq
-                } else {
-                    (thq * thq_old).sqrt()
-                };
-                thq_old = thq;
-                if self.theta < 0.99 {
-                    self.faccon = self.theta / (1.0 - self.theta);
-                    let remaining = max_iter.saturating_sub(newt + 1) as i32;
-                    let dyth = self.faccon * dyno * self.theta.powi(remaining) / self.fnewt;
-                    if may_shorten && dyth >= 1.0 {
-                        let qnewt = dyth.clamp(1e-4, 20.0);
-                        let factor = 0.8 * qnewt.powf(-1.0 / (4.0 + f64::from(remaining)));
-                        return Newton::TooSlow {
-                            iterations: newt,
-                            factor,
-                        };
-                    }
-                } else {
-                    return Newton::Diverged(newt);
+            let verdict = self.newton.observe(dyno, 0.0);
+            let iterations = self.newton.iterations();
+            match verdict {
+                Verdict::Diverged => return Newton::Diverged(iterations),
+                Verdict::TooSlow { factor } => {
+                    return Newton::TooSlow { iterations, factor };
                 }
+                Verdict::Continue | Verdict::Converged => {}
             }
-            dyno_old = dyno.max(UROUND);
 
             // Z += (T ⊗ I) ΔW   (T₃₂ = 1, T₃₃ = 0).
+            let w = &mut self.w;
             for k in 0..n {
-                let (a1, a2, a3) = (w.dw[k], w.dw[n + k], w.dw[2 * n + k]);
+                let (a1, a2, a3) = (w.dw[k], w.dw[m + k], w.dw[2 * m + k]);
                 w.z[k] += T[0][0] * a1 + T[0][1] * a2 + T[0][2] * a3;
                 w.z[n + k] += T[1][0] * a1 + T[1][1] * a2 + T[1][2] * a3;
                 w.z[2 * n + k] += T[2][0] * a1 + a2;
             }
-            if self.faccon * dyno <= self.fnewt {
-                return Newton::Converged(newt);
+            if verdict == Verdict::Converged {
+                return Newton::Converged(iterations);
             }
         }
     }
 
     /// Scaled norm of the embedded error estimate; NaN if it is not finite.
     fn error_norm(&mut self, t: f64, h: f64, refine: bool) -> f64 {
-        let n = self.n;
+        let (n, m) = (self.n, self.m);
         let w = &mut self.w;
         // tmp = (1/h) Σ d_i Z_i,  ez = E(y_n) tmp.
         for k in 0..n {
             w.tmp[k] = (DD[0] * w.z[k] + DD[1] * w.z[n + k] + DD[2] * w.z[2 * n + k]) / h;
         }
         mat_vec(&w.e_n, &w.tmp, &mut w.ez);
-        for k in 0..n {
+        for k in 0..m {
             w.err[k] = w.f0[k] + w.ez[k];
         }
-        w.lu_real.solve(&mut w.err);
-        let mut err = scaled_rms(&w.err, &w.scal);
+        w.stages.solve_real(&mut w.err);
+        let mut err = w.weights.norm(&w.err[..n]);
         if err >= 1.0 && refine {
             for k in 0..n {
                 w.ys[k] = w.y[k] + w.err[k];
             }
-            self.sys.rhs(t, &w.ys, &mut w.tmp);
+            self.sys.rhs(t, &w.ys, &mut w.fm);
             self.stats.residual_evals += 1;
-            for k in 0..n {
-                w.err[k] = w.tmp[k] + w.ez[k];
+            for k in 0..m {
+                w.err[k] = w.fm[k] + w.ez[k];
             }
-            w.lu_real.solve(&mut w.err);
-            err = scaled_rms(&w.err, &w.scal);
+            w.stages.solve_real(&mut w.err);
+            err = w.weights.norm(&w.err[..n]);
         }
         if err.is_nan() {
             f64::NAN
@@ -991,16 +891,15 @@ impl<'a> Integrator<'a> {
             w.yp[k] = (AINV[2][0] * z1 + AINV[2][1] * z2 + AINV[2][2] * z3) / h;
         }
     }
+}
 
-    /// The collocation polynomial of the step `[t − h, t]` at `tau` into `out`.
-    fn dense(&mut self, tau: f64, t: f64, h: f64) {
-        let n = self.n;
-        let w = &mut self.w;
-        let s = (tau - t) / h;
-        for k in 0..n {
-            let d = [w.cont[n + k], w.cont[2 * n + k], w.cont[3 * n + k]];
-            w.out[k] = w.cont[k] + polynomial_increment(&d, s);
-        }
+/// The collocation polynomial `cont` (`4N`) of the step `[t − h, t]` at
+/// `tau` into `out`.
+fn dense(n: usize, cont: &[f64], tau: f64, t: f64, h: f64, out: &mut [f64]) {
+    let s = (tau - t) / h;
+    for k in 0..n {
+        let d = [cont[n + k], cont[2 * n + k], cont[3 * n + k]];
+        out[k] = cont[k] + polynomial_increment(&d, s);
     }
 }
 
@@ -1038,23 +937,17 @@ fn polynomial_increment(d: &[f64; 3], s: f64) -> f64 {
     s * (d[0] + (s - C2M1) * (d[1] + (s - C1M1) * d[2]))
 }
 
-/// `out = m v` for a square column-major matrix.
+/// `out = m v` for a column-major `M × N` matrix.
 fn mat_vec(m: &DMatrix<f64>, v: &[f64], out: &mut [f64]) {
-    let n = v.len();
+    let rows = out.len();
     let a = m.as_slice();
     out.fill(0.0);
     for (j, &vj) in v.iter().enumerate() {
-        let col = &a[j * n..(j + 1) * n];
+        let col = &a[j * rows..(j + 1) * rows];
         for (o, &aij) in out.iter_mut().zip(col) {
             *o += aij * vj;
         }
     }
-}
-
-/// `sqrt((1/N) Σ (v_i / s_i)²)`.
-fn scaled_rms(v: &[f64], s: &[f64]) -> f64 {
-    let sum: f64 = v.iter().zip(s).map(|(a, b)| (a / b) * (a / b)).sum();
-    (sum / v.len() as f64).sqrt()
 }
 
 #[cfg(test)]

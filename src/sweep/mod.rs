@@ -388,7 +388,7 @@ pub fn pairs(
             .ok_or_else(|| SweepError::UnknownSolver { name: s.clone() })?;
         for f in formulations {
             let not_applicable = match model.formulation(f) {
-                Ok(sys) => solver.accepts(sys.info()).err(),
+                Ok(sys) => solver.accepts(sys.info()).err().map(|why| why.to_string()),
                 Err(FormulationError::NotProvided { .. }) => {
                     Some("not provided by the model".to_string())
                 }

@@ -1,0 +1,101 @@
+//! Step-size limits and failure budgets shared by every method.
+//!
+//! - The smallest step: `h_min(t) = 4 ε max(|t|, ε (t_end − t₀))` (DASSL's
+//!   rule: a step shorter than a few units in the last place of `t` no
+//!   longer advances the solution). A step below it is
+//!   [`SolveError::StepSizeTooSmall`].
+//! - Failures on one step, counted until a step is accepted: ten Newton
+//!   failures (divergence or too slow convergence), five singular
+//!   iteration matrices, ten non-finite residuals; one more is the typed
+//!   error of that kind.
+//! - [`crate::Options::max_steps`] step attempts (accepted and rejected) in
+//!   all: [`SolveError::StepLimit`].
+
+use crate::SolveError;
+
+/// Smallest step allowed at `t` on a horizon of length `span`.
+pub(crate) fn h_min(t: f64, span: f64) -> f64 {
+    4.0 * f64::EPSILON * t.abs().max(f64::EPSILON * span)
+}
+
+/// Newton failures tolerated on one step.
+pub(crate) const MAX_NEWTON_FAILURES: usize = 10;
+/// Singular iteration matrices tolerated on one step.
+pub(crate) const MAX_SINGULAR: usize = 5;
+/// Non-finite residuals tolerated on one step.
+pub(crate) const MAX_NON_FINITE: usize = 10;
+
+/// Why a step attempt failed before its error test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Failure {
+    /// The Newton iteration diverged or converged too slowly.
+    Newton,
+    /// The iteration matrix is singular.
+    Singular,
+    /// A residual (or the named quantity) was not finite.
+    NonFinite(&'static str),
+}
+
+/// Failure counters of the current step and the attempt budget.
+#[derive(Clone, Debug)]
+pub(crate) struct Budget {
+    max_attempts: usize,
+    attempts: usize,
+    newton: usize,
+    singular: usize,
+    non_finite: usize,
+}
+
+impl Budget {
+    /// A budget of `max_attempts` step attempts.
+    pub(crate) fn new(max_attempts: usize) -> Self {
+        Budget {
+            max_attempts,
+            attempts: 0,
+            newton: 0,
+            singular: 0,
+            non_finite: 0,
+        }
+    }
+
+    /// Count a step attempt at `t`; [`SolveError::StepLimit`] when none is
+    /// left.
+    pub(crate) fn attempt(&mut self, t: f64) -> Result<(), SolveError> {
+        if self.attempts >= self.max_attempts {
+            return Err(SolveError::StepLimit {
+                t,
+                max_steps: self.max_attempts,
+            });
+        }
+        self.attempts += 1;
+        Ok(())
+    }
+
+    /// A step was accepted: the failure counters start again.
+    pub(crate) fn accepted(&mut self) {
+        self.newton = 0;
+        self.singular = 0;
+        self.non_finite = 0;
+    }
+
+    /// Count a failure; `true` when it exhausts its budget.
+    pub(crate) fn failed(&mut self, failure: Failure) -> bool {
+        let (count, limit) = match failure {
+            Failure::Newton => (&mut self.newton, MAX_NEWTON_FAILURES),
+            Failure::Singular => (&mut self.singular, MAX_SINGULAR),
+            Failure::NonFinite(_) => (&mut self.non_finite, MAX_NON_FINITE),
+        };
+        *count += 1;
+        *count >= limit
+    }
+
+    /// The typed error for `failure` at `t` with step `h` after
+    /// `iterations` Newton iterations.
+    pub(crate) fn error(failure: Failure, t: f64, h: f64, iterations: usize) -> SolveError {
+        match failure {
+            Failure::Newton => SolveError::NewtonFailure { t, h, iterations },
+            Failure::Singular => SolveError::SingularMatrix { t, h },
+            Failure::NonFinite(what) => SolveError::NonFinite { t, what },
+        }
+    }
+}

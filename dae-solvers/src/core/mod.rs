@@ -1,0 +1,28 @@
+//! The integrator core: what every method family shares, each piece with one
+//! reason to change.
+//!
+//! - [`weights`]: error weights from the tolerances, the index scaling of
+//!   Radau-type methods, the mask of components in the error test — and the
+//!   one weighted RMS norm every test and every Newton iteration uses.
+//! - [`newton`]: the contraction monitor of a simplified Newton iteration.
+//! - [`matrix`]: the linear systems of the Newton iterations — square LU for
+//!   square formulations, constrained least squares for overdetermined ones —
+//!   behind one interface, so that a method is written once for both.
+//! - [`control`]: step-size limits shared by all methods (the smallest
+//!   step, the end of the horizon) and the failure budgets.
+//! - [`output`]: the output grid (one rule for `t0`, `t_end` and the times
+//!   between) and dense output.
+//! - [`policy`]: the defaults a formulation implies (which unknowns enter the
+//!   error test, square or least-squares linear algebra), decided in one
+//!   place for the library and the command line alike.
+//!
+//! A method family (`radau5`, `bdf`, `odradau`, `odbdf`) keeps in its own
+//! module only its coefficients, predictor, corrector sweep, error estimate,
+//! step/order proposal and dense output.
+
+pub(crate) mod control;
+pub(crate) mod matrix;
+pub(crate) mod newton;
+pub(crate) mod output;
+pub mod policy;
+pub(crate) mod weights;

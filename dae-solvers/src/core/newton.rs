@@ -1,0 +1,199 @@
+//! The contraction monitor of a simplified Newton iteration.
+//!
+//! A simplified Newton iteration `x_{k+1} = x_k − M⁻¹ F(x_k)` with a frozen
+//! matrix `M` converges linearly. With `‖Δ_k‖` the norm of its `k`-th
+//! increment, the contraction factor `θ` is estimated from successive
+//! increments, and the distance to the solution is bounded by
+//! `η ‖Δ_k‖`, `η = θ/(1 − θ)` (Hairer & Wanner IV.8 (8.10)–(8.13); Brenan,
+//! Campbell & Petzold ch. 5). After each increment the monitor says
+//! [`Verdict::Continue`], [`Verdict::Converged`] (`η ‖Δ_k‖ ≤ κ`),
+//! [`Verdict::TooSlow`] (the iterations left cannot reach `κ`: retry with a
+//! smaller step, by the factor given) or [`Verdict::Diverged`].
+//!
+//! The two classical codes estimate `θ` differently, and both are kept
+//! ([`Rule`]) because the step counts of the methods built on them are
+//! pinned to those codes:
+//!
+//! - RADAU5: `θ_k = sqrt(q_k q_{k−1})` with `q_k = ‖Δ_k‖/‖Δ_{k−1}‖` (the
+//!   first estimate is `q_2`), divergence at `θ ≥ 0.99`, and an early exit
+//!   when `η ‖Δ_k‖ θ^(k_max − k − 1) ≥ κ`;
+//! - DASSL: `θ_k = (‖Δ_k‖/‖Δ_1‖)^(1/(k−1))`, divergence at `θ > 0.9`, and
+//!   convergence as soon as `‖Δ_k‖ ≤ 100 ε ‖y‖`.
+//!
+//! `η` persists from one iteration to the next (a method may carry it
+//! across steps, as both codes do).
+
+/// What the iteration does after an increment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Verdict {
+    /// Iterate once more.
+    Continue,
+    /// The iterate is within `κ` of the solution.
+    Converged,
+    /// The remaining iterations cannot reach `κ`: retry with the step size
+    /// multiplied by `factor`.
+    TooSlow {
+        /// Step-size factor.
+        factor: f64,
+    },
+    /// Diverging, or no convergence within the iteration limit.
+    Diverged,
+}
+
+/// How `θ` is estimated and judged (see the [module documentation](self)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Rule {
+    /// RADAU5's estimate; the early exit when `slow_exit`.
+    Radau5 {
+        /// Stop early with [`Verdict::TooSlow`] (adaptive steps).
+        slow_exit: bool,
+    },
+    /// DASSL's estimate.
+    Dassl,
+}
+
+/// Unit round-off.
+const UROUND: f64 = f64::EPSILON * 0.5;
+
+/// State of one Newton iteration (see the [module documentation](self)).
+pub(crate) struct Contraction {
+    rule: Rule,
+    /// Iterations allowed.
+    max_iter: usize,
+    /// Convergence bound `κ`.
+    kappa: f64,
+    /// Increments so far.
+    k: usize,
+    /// `‖Δ_1‖` (DASSL) or `‖Δ_{k−1}‖` (RADAU5).
+    reference: f64,
+    /// `q_{k−1}` (RADAU5).
+    q_prev: f64,
+    /// Current contraction estimate `θ`.
+    pub(crate) theta: f64,
+    /// `η = θ/(1 − θ)`, carried between iterations.
+    pub(crate) eta: f64,
+}
+
+impl Contraction {
+    /// A monitor for `rule` converging at `η ‖Δ‖ ≤ kappa`; `eta` is the
+    /// starting value of `η` (carried from earlier iterations, or large
+    /// when unknown).
+    pub(crate) fn new(rule: Rule, max_iter: usize, kappa: f64, eta: f64) -> Self {
+        Contraction {
+            rule,
+            max_iter,
+            kappa,
+            k: 0,
+            reference: 0.0,
+            q_prev: 0.0,
+            theta: 0.0,
+            eta,
+        }
+    }
+
+    /// Restart for a new iteration with the carried `η` and initial `θ`.
+    pub(crate) fn restart(&mut self, max_iter: usize, eta: f64, theta: f64) {
+        self.max_iter = max_iter;
+        self.k = 0;
+        self.reference = 0.0;
+        self.q_prev = 0.0;
+        self.eta = eta;
+        self.theta = theta;
+    }
+
+    /// Increments observed in this iteration.
+    pub(crate) fn iterations(&self) -> usize {
+        self.k
+    }
+
+    /// Judge the increment of norm `norm`; `tiny` is DASSL's round-off
+    /// bound `100 ε ‖y‖` (ignored by the RADAU5 rule). A non-finite norm
+    /// diverges.
+    pub(crate) fn observe(&mut self, norm: f64, tiny: f64) -> Verdict {
+        self.k += 1;
+        let k = self.k;
+        if !norm.is_finite() {
+            return Verdict::Diverged;
+        }
+        match self.rule {
+            Rule::Radau5 { slow_exit } => {
+                if k > 1 && k < self.max_iter {
+                    let q = norm / self.reference;
+                    self.theta = if k == 2 { q } else { (q * self.q_prev).sqrt() };
+                    self.q_prev = q;
+                    if self.theta >= 0.99 {
+                        return Verdict::Diverged;
+                    }
+                    self.eta = self.theta / (1.0 - self.theta);
+                    let remaining = (self.max_iter - k - 1) as i32;
+                    let predicted = self.eta * norm * self.theta.powi(remaining) / self.kappa;
+                    if slow_exit && predicted >= 1.0 {
+                        let q = predicted.clamp(1e-4, 20.0);
+                        let factor = 0.8 * q.powf(-1.0 / (4.0 + f64::from(remaining)));
+                        return Verdict::TooSlow { factor };
+                    }
+                }
+                self.reference = norm.max(UROUND);
+                if self.eta * norm <= self.kappa {
+                    return Verdict::Converged;
+                }
+            }
+            Rule::Dassl => {
+                if norm <= tiny {
+                    return Verdict::Converged;
+                }
+                if k == 1 {
+                    self.reference = norm;
+                } else {
+                    self.theta = (norm / self.reference).powf(1.0 / (k - 1) as f64);
+                    if self.theta > 0.9 {
+                        return Verdict::Diverged;
+                    }
+                    self.eta = self.theta / (1.0 - self.theta);
+                }
+                if self.eta * norm <= self.kappa {
+                    return Verdict::Converged;
+                }
+            }
+        }
+        if k >= self.max_iter {
+            Verdict::Diverged
+        } else {
+            Verdict::Continue
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_contraction_converges_and_estimates_theta() {
+        for rule in [Rule::Radau5 { slow_exit: true }, Rule::Dassl] {
+            let mut c = Contraction::new(rule, 10, 1e-6, 1.0);
+            let mut norm = 1.0;
+            let mut verdict = Verdict::Continue;
+            while verdict == Verdict::Continue {
+                verdict = c.observe(norm, 0.0);
+                norm *= 0.1;
+            }
+            assert_eq!(verdict, Verdict::Converged, "{rule:?}");
+            assert!((c.theta - 0.1).abs() < 1e-12, "{rule:?}: {}", c.theta);
+        }
+    }
+
+    #[test]
+    fn growth_diverges_and_slow_contraction_exits_early() {
+        let mut c = Contraction::new(Rule::Dassl, 4, 0.33, 100.0);
+        assert_eq!(c.observe(1.0, 0.0), Verdict::Continue);
+        assert_eq!(c.observe(2.0, 0.0), Verdict::Diverged);
+        let mut c = Contraction::new(Rule::Radau5 { slow_exit: true }, 7, 1e-3, 1.0);
+        assert_eq!(c.observe(1.0, 0.0), Verdict::Continue);
+        assert!(matches!(c.observe(0.9, 0.0), Verdict::TooSlow { factor } if factor < 1.0));
+        assert_eq!(c.observe(f64::NAN, 0.0), Verdict::Diverged);
+        // Round-off: DASSL accepts a negligible first increment at once.
+        let mut c = Contraction::new(Rule::Dassl, 4, 0.33, 100.0);
+        assert_eq!(c.observe(1e-20, 1e-14), Verdict::Converged);
+    }
+}

@@ -1,0 +1,166 @@
+//! Error weights and the one norm.
+//!
+//! Component `i` of a vector `v` is measured against its tolerance:
+//!
+//! ```text
+//!     w_i = h^(k_i − 1) / (atol_i + rtol_i |y_i|)        (0 outside the test)
+//!     ‖v‖ = sqrt( (1/N_test) Σ (v_i w_i)² ) ,
+//! ```
+//!
+//! where `k_i` is the index of unknown `i` when the method scales errors by
+//! the index (Radau IIA, Hairer & Wanner VII.8: the estimate of an index-`k`
+//! component is `O(h^(1−k))` larger than its local error), and `k_i = 1`
+//! otherwise; `N_test` counts the components in the error test (DASPK leaves
+//! index-2 unknowns out of a BDF error test). The sum is scaled by its
+//! largest term against overflow, as DASSL's `DDANRM` does, and a NaN
+//! anywhere gives NaN. Every error test and every Newton iteration of every
+//! method uses this norm.
+
+use crate::options::Tolerances;
+
+/// Error weights of the `N` unknowns, updated from the solution as the
+/// integration proceeds (see the [module documentation](self)).
+pub(crate) struct Weights {
+    rtol: Vec<f64>,
+    atol: Vec<f64>,
+    /// `k_i − 1` when the method scales by the index, else 0.
+    index_power: Vec<i32>,
+    in_test: Vec<bool>,
+    inv_count: f64,
+    w: Vec<f64>,
+}
+
+impl Weights {
+    /// Weights for tolerances multiplied by `factor(i)` (a method's
+    /// internal tolerance map; `1` for none), with components `in_test`
+    /// counted, and index scaling by `index_power[i] = k_i − 1` (all zero
+    /// for none).
+    pub(crate) fn new(
+        tol: &Tolerances,
+        factor: impl Fn(usize) -> f64,
+        in_test: Vec<bool>,
+        index_power: Vec<i32>,
+    ) -> Self {
+        let n = in_test.len();
+        let count = in_test.iter().filter(|&&b| b).count().max(1);
+        Weights {
+            rtol: (0..n).map(|i| factor(i) * tol.rtol(i)).collect(),
+            atol: (0..n).map(|i| factor(i) * tol.atol(i)).collect(),
+            index_power,
+            in_test,
+            inv_count: 1.0 / count as f64,
+            w: vec![0.0; n],
+        }
+    }
+
+    /// Relative tolerances in force (after the method's map).
+    pub(crate) fn rtol(&self) -> &[f64] {
+        &self.rtol
+    }
+
+    /// Absolute tolerances in force.
+    pub(crate) fn atol(&self) -> &[f64] {
+        &self.atol
+    }
+
+    /// The current weights.
+    pub(crate) fn get(&self) -> &[f64] {
+        &self.w
+    }
+
+    /// `w_i = 1/(atol_i + rtol_i |y_i|)`, zero outside the test.
+    pub(crate) fn update(&mut self, y: &[f64]) {
+        for (i, (w, yi)) in self.w.iter_mut().zip(y).enumerate() {
+            *w = if self.in_test[i] {
+                1.0 / (self.atol[i] + self.rtol[i] * yi.abs())
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// `w_i = h^(k_i − 1)/(atol_i + rtol_i |y_i|)`, the index-scaled
+    /// weights for step size `h` (a scale below the smallest normal number
+    /// counts as that number).
+    pub(crate) fn update_scaled(&mut self, y: &[f64], h: f64) {
+        let hinv = 1.0 / h;
+        for (i, (w, yi)) in self.w.iter_mut().zip(y).enumerate() {
+            if !self.in_test[i] {
+                *w = 0.0;
+                continue;
+            }
+            let base = self.atol[i] + self.rtol[i] * yi.abs();
+            let factor = match self.index_power[i] {
+                0 => 1.0,
+                1 => hinv,
+                2 => hinv * hinv,
+                p => hinv.powi(p),
+            };
+            *w = 1.0 / (base * factor).max(f64::MIN_POSITIVE);
+        }
+    }
+
+    /// `‖v‖` over the first `N` entries of `v`.
+    pub(crate) fn norm(&self, v: &[f64]) -> f64 {
+        self.norm_blocks(v, v.len().min(self.w.len()), 1)
+    }
+
+    /// `‖v‖` of `blocks` vectors stored `stride` apart in `v` (the stages of
+    /// a Runge–Kutta method), as one vector of `blocks · N` entries.
+    pub(crate) fn norm_blocks(&self, v: &[f64], stride: usize, blocks: usize) -> f64 {
+        let n = self.w.len().min(stride);
+        let mut vmax = 0.0_f64;
+        for b in 0..blocks {
+            for (a, w) in v[b * stride..b * stride + n].iter().zip(&self.w) {
+                let x = (a * w).abs();
+                if x.is_nan() {
+                    return f64::NAN;
+                }
+                vmax = vmax.max(x);
+            }
+        }
+        if vmax == 0.0 || !vmax.is_finite() {
+            return vmax;
+        }
+        let mut sum = 0.0;
+        for b in 0..blocks {
+            for (a, w) in v[b * stride..b * stride + n].iter().zip(&self.w) {
+                let x = a * w / vmax;
+                sum += x * x;
+            }
+        }
+        vmax * (sum * self.inv_count / blocks as f64).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn norm_is_the_weighted_rms_over_the_test() {
+        let tol = Tolerances::uniform(0.5);
+        let mut w = Weights::new(&tol, |_| 1.0, vec![true, true, false], vec![0, 0, 1]);
+        w.update(&[1.0, 3.0, 100.0]);
+        assert_eq!(w.get(), &[1.0, 0.5, 0.0]);
+        // sqrt((3² + 2²)/2), the third component out of the test.
+        let n = w.norm(&[3.0, 4.0, 1e300]);
+        assert!((n - (13.0f64 / 2.0).sqrt()).abs() < 1e-15);
+        assert!(w.norm(&[f64::NAN, 0.0, 0.0]).is_nan());
+        assert_eq!(w.norm(&[1e308, 1e308, 0.0]), 1e308 * (1.25f64 / 2.0).sqrt());
+        // Two blocks of the same vector have the same norm as one.
+        let b = w.norm_blocks(&[3.0, 4.0, 0.0, 3.0, 4.0, 0.0], 3, 2);
+        assert!((b - n).abs() < 1e-15);
+    }
+
+    #[test]
+    fn index_scaling_divides_by_powers_of_h() {
+        let tol = Tolerances::uniform(1.0);
+        let mut w = Weights::new(&tol, |i| [1.0, 2.0, 1.0][i], vec![true; 3], vec![0, 1, 2]);
+        w.update_scaled(&[0.0, 0.0, 0.0], 0.1);
+        let g = w.get();
+        assert!((g[0] - 1.0).abs() < 1e-15);
+        assert!((g[1] - 0.1 / 2.0).abs() < 1e-15);
+        assert!((g[2] - 0.01).abs() < 1e-15);
+    }
+}

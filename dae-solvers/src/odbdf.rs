@@ -1,0 +1,74 @@
+//! BDF for overdetermined quasi-linear DAEs, in the manner of ODASSL and
+//! OVDBDF (Führer; Eich-Soellner & Führer, *Numerical Methods in Multibody
+//! Dynamics*, §5.3).
+//!
+//! # The problem
+//!
+//! `E(y) y' = f(t, y)` with `M ≥ N` rows whose constraint rows include
+//! every hidden constraint down to the level that fixes the algebraic
+//! unknowns (constraint level 0): `ovd0` (the dynamics with position,
+//! velocity and acceleration constraints), and the square `rcd0` and
+//! `psi0`. These systems are of index one once the constraints are read as
+//! an overdetermined, consistent set; the position and velocity constraints
+//! are then invariants the numerical solution keeps to, instead of drifting
+//! off them as it does with `rcd0`.
+//!
+//! # The method
+//!
+//! DASSL's variable-order, variable-step BDF in fixed-leading-coefficient
+//! form ([`crate::bdf`]: predictor, corrector, error estimate, order and
+//! step selection, dense output), with the corrector
+//!
+//! ```text
+//!     F(t_{n+1}, y, y'⁽⁰⁾ + c_J (y − y⁽⁰⁾)) = 0        (M equations, N unknowns)
+//! ```
+//!
+//! solved by a simplified Newton iteration whose steps are constrained
+//! least-squares solutions of `G δ = F` (see `core::matrix`): the
+//! constraint rows exactly, the differential rows in a weighted
+//! least-squares sense. The iterate therefore lies on every constraint of
+//! the formulation (to the Newton tolerance), and the differential rows
+//! carry the discretisation's inconsistency, of the order of the local
+//! error. Error control is on the unknowns, as in ODASSL, with index-2
+//! unknowns (none in a c-level-0 formulation) left out of the test by the
+//! same policy as [`crate::bdf`]. For a square formulation the least-squares
+//! solve is the exact solve, and `odbdf` is DASSL up to round-off in a
+//! different factorisation.
+//!
+//! # What it accepts
+//!
+//! `M ≥ N` and constraint level 0 (`ovd0`, `rcd0`, `psi0`); formulations
+//! that leave out hidden constraints (`ovd1`, `ggl1`, `psi1`, `rcd1`,
+//! `ori2`) are refused with [`NotApplicable::ConstraintLevel`], as ODASSL
+//! asks for an index-1 overdetermined system.
+
+use crate::core::matrix::Corrector;
+use crate::core::policy;
+use crate::linalg::ConstrainedLstsq;
+use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
+use dae_core::system::FormulationInfo;
+
+/// BDF orders 1–5 with a least-squares corrector (see the
+/// [module documentation](self)).
+pub struct OdBdf;
+
+/// Highest constraint level `odbdf` integrates.
+pub const MAX_C_LEVEL: u8 = 0;
+
+impl Solver for OdBdf {
+    fn name(&self) -> &'static str {
+        "odbdf"
+    }
+
+    fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable> {
+        policy::overdetermined(info, MAX_C_LEVEL)
+    }
+
+    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+        self.accepts(problem.system.info())?;
+        crate::bdf::integrate::<ConstrainedLstsq>(problem, options)
+    }
+}
+
+// The corrector type is the least-squares one.
+const _: () = assert!(<ConstrainedLstsq as Corrector>::LEAST_SQUARES);
