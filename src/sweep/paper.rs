@@ -3,7 +3,8 @@
 //! our `err_sum` with the paper's ERR.
 //!
 //! Families: our `radau5` is compared with RADAU5, our `bdf` with DASSL and
-//! with DASPK (one comparison row per paper code). A cell is labelled by
+//! with DASPK, our `odradau` with QUALIDAES and GEOMS, our `odbdf` with
+//! ODASSL and OVDBDF (one comparison row per paper code). A cell is labelled by
 //! the ratio `ours / paper`: below 1/2 **more accurate**, within a factor
 //! 2 either way **equal**, above 2 **behind**. Where only one side
 //! succeeded the cell says so.
@@ -196,6 +197,8 @@ pub fn family(solver: &str) -> &'static [&'static str] {
     match solver {
         "radau5" => &["RADAU5"],
         "bdf" => &["DASSL", "DASPK"],
+        "odradau" => &["QUALIDAES", "GEOMS"],
+        "odbdf" => &["ODASSL", "OVDBDF"],
         _ => &[],
     }
 }
@@ -398,7 +401,7 @@ pub fn compare_runs(
         note: format!(
             "our err_sum (sum over the check times of |x-x*|+|y-y*|+|v-v*|+|w-w*|+|lambda-lambda*| against the exact \
              solution) next to the paper's ERR; more accurate: ours < paper/{EQUAL_FACTOR}, equal: within a factor \
-             {EQUAL_FACTOR}, behind: ours > {EQUAL_FACTOR}·paper. radau5 ↔ RADAU5, bdf ↔ DASSL and DASPK."
+             {EQUAL_FACTOR}, behind: ours > {EQUAL_FACTOR}·paper. radau5 ↔ RADAU5, bdf ↔ DASSL and DASPK, odradau ↔ QUALIDAES and GEOMS, odbdf ↔ ODASSL and OVDBDF."
         ),
         rows,
         illegible,
