@@ -78,8 +78,9 @@
 //! at every step until the first failure or lowering (`IPHASE`).
 //! Failures: error test — first `r = 0.9 (2·EST)^{−1/(k+1)}` clamped to
 //! `[0.25, 0.9]`, second `r = 1/4`, later order one and `r = 1/4`; Newton
-//! failure — `r = 1/4` up to ten times; singular `G` — `r = 1/4` up to three
-//! times.
+//! failure and singular `G` — `r = 1/4`, within the failure budget of
+//! `core::control` (ten Newton failures, five singular matrices, ten
+//! non-finite residuals on one step).
 //!
 //! *Dense output* (DASSL's DDATRP): between steps the solution is the
 //! polynomial of degree `k` through the last `k+1` solution values,
@@ -104,7 +105,9 @@
 //!
 //! # Index-2 formulations (DASPK)
 //!
-//! With [`Options::index2_in_error_test`] `= false`, unknowns whose
+//! By default ([`Options::index2_in_error_test`] `= None`, decided in
+//! [`crate::core::policy::bdf_error_test`]; `Some(false)` says the same
+//! explicitly, `Some(true)` keeps them), unknowns whose
 //! [`VarInfo::index`](dae_core::system::VarInfo) is two or more (Lagrange
 //! multipliers of index-2 formulations) get weight zero in the error test and
 //! in the Newton convergence norm, which then averages over the remaining
@@ -160,7 +163,7 @@ use crate::core::newton::{Contraction, Rule, Verdict};
 use crate::core::output::OutputGrid;
 use crate::core::policy;
 use crate::core::weights::Weights;
-use crate::init::{initial_derivative_with, DerivativeRule};
+use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
 use crate::options::Tolerances;
 use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver, Stats};
 use dae_core::system::{DaeSystem, FormulationInfo};
@@ -222,7 +225,7 @@ pub(crate) fn integrate<L: Corrector>(
     let mut stats = Stats::default();
     let yp0 = initial_derivative_with(sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
     stats.residual_evals += 1; // its f(t0, y0)
-    check_consistency(sys, &options.tol, t0, problem.y0, &yp0, &mut stats)?;
+    check_residuals(sys, &options.tol, t0, problem.y0, &yp0, &mut stats)?;
 
     let mut out = OutputGrid::new(&options.output_times, t0, t_end, n);
     out.start(t0, problem.y0);
@@ -1176,78 +1179,5 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                 *o += c * p;
             }
         }
-    }
-}
-
-/// Reject initial values that violate a row by more than a perturbation of
-/// every unknown by its tolerance could explain:
-/// `|F_i| > Σ_j |∂F_i/∂y_j| (atol_j + rtol_j |y_j|)`, beyond round-off.
-fn check_consistency(
-    sys: &dyn DaeSystem,
-    tol: &Tolerances,
-    t0: f64,
-    y0: &[f64],
-    yp0: &[f64],
-    stats: &mut Stats,
-) -> Result<(), SolveError> {
-    let n = y0.len();
-    let info = sys.info();
-    let m = info.equations();
-    let mut r = vec![0.0; m];
-    sys.residual(t0, y0, yp0, &mut r);
-    let mut f = vec![0.0; m];
-    sys.rhs(t0, y0, &mut f);
-    stats.residual_evals += 2;
-    if !r.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            t: t0,
-            what: "residual",
-        });
-    }
-    let mut jac = DMatrix::zeros(m, n);
-    sys.rhs_jacobian(t0, y0, &mut jac);
-    jac.neg_mut();
-    if !info.constant_leading {
-        let mut lj = DMatrix::zeros(m, n);
-        sys.leading_jacobian(y0, yp0, &mut lj);
-        jac += lj;
-    }
-    let mut lead = DMatrix::zeros(m, n);
-    sys.leading(y0, &mut lead);
-    stats.jacobian_evals += 1;
-    let scale: Vec<f64> = (0..n)
-        .map(|j| tol.atol(j) + tol.rtol(j) * y0[j].abs())
-        .collect();
-    let mut worst: Option<(usize, f64)> = None;
-    for i in 0..m {
-        let ri = r[i].abs();
-        let ey: f64 = (0..n).map(|j| (lead[(i, j)] * yp0[j]).abs()).sum();
-        if ri <= 100.0 * EPS * (f[i].abs() + ey) {
-            continue;
-        }
-        let allowed: f64 = (0..n).map(|j| (jac[(i, j)] * scale[j]).abs()).sum();
-        let ratio = if allowed > 0.0 {
-            ri / allowed
-        } else {
-            f64::INFINITY
-        };
-        let worse = match worst {
-            Some((_, w)) => ratio > w,
-            None => true,
-        };
-        if ratio > 1.0 && worse {
-            worst = Some((i, ratio));
-        }
-    }
-    match worst {
-        Some((i, _)) => Err(SolveError::InconsistentInitialValues {
-            equation: info
-                .rows
-                .get(i)
-                .map(|row| row.text.clone())
-                .unwrap_or_else(|| format!("row {i}")),
-            residual: r[i],
-        }),
-        None => Ok(()),
     }
 }

@@ -112,9 +112,7 @@ pub enum NotApplicable {
     #[error("the system has no unknowns")]
     NoUnknowns,
     /// More equations than unknowns, for a solver of square systems.
-    #[error(
-        "overdetermined: solver needs a square system ({equations} equations, {unknowns} unknowns)"
-    )]
+    #[error("overdetermined: solver needs a square system")]
     Overdetermined {
         /// Equations `M`.
         equations: usize,

@@ -103,6 +103,8 @@
 //! `G y' + ∂g/∂t = 0`, and otherwise chosen of minimum norm.
 
 use crate::error::SolveError;
+use crate::options::Tolerances;
+use crate::stats::Stats;
 use dae_core::system::{DaeSystem, VarKind};
 use nalgebra::{linalg::SVD, DMatrix, Dyn};
 use serde::Serialize;
@@ -1275,5 +1277,78 @@ fn kernel_from_chain(
         None => give_up(SolveError::invalid(
             "singular value decomposition of the constraint Jacobian did not converge",
         )),
+    }
+}
+
+/// Reject initial values `(y0, yp0)` that violate a row of `E y' = f` by more
+/// than a perturbation of every unknown by its tolerance could explain:
+/// `|F_i| > Σ_j |∂F_i/∂y_j| (atol_j + rtol_j |y_j|)`, beyond round-off.
+pub(crate) fn check_residuals(
+    sys: &dyn DaeSystem,
+    tol: &Tolerances,
+    t0: f64,
+    y0: &[f64],
+    yp0: &[f64],
+    stats: &mut Stats,
+) -> Result<(), SolveError> {
+    let n = y0.len();
+    let info = sys.info();
+    let m = info.equations();
+    let mut r = vec![0.0; m];
+    sys.residual(t0, y0, yp0, &mut r);
+    let mut f = vec![0.0; m];
+    sys.rhs(t0, y0, &mut f);
+    stats.residual_evals += 2;
+    if !r.iter().all(|v| v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            t: t0,
+            what: "residual",
+        });
+    }
+    let mut jac = DMatrix::zeros(m, n);
+    sys.rhs_jacobian(t0, y0, &mut jac);
+    jac.neg_mut();
+    if !info.constant_leading {
+        let mut lj = DMatrix::zeros(m, n);
+        sys.leading_jacobian(y0, yp0, &mut lj);
+        jac += lj;
+    }
+    let mut lead = DMatrix::zeros(m, n);
+    sys.leading(y0, &mut lead);
+    stats.jacobian_evals += 1;
+    let scale: Vec<f64> = (0..n)
+        .map(|j| tol.atol(j) + tol.rtol(j) * y0[j].abs())
+        .collect();
+    let mut worst: Option<(usize, f64)> = None;
+    for i in 0..m {
+        let ri = r[i].abs();
+        let ey: f64 = (0..n).map(|j| (lead[(i, j)] * yp0[j]).abs()).sum();
+        if ri <= 100.0 * f64::EPSILON * (f[i].abs() + ey) {
+            continue;
+        }
+        let allowed: f64 = (0..n).map(|j| (jac[(i, j)] * scale[j]).abs()).sum();
+        let ratio = if allowed > 0.0 {
+            ri / allowed
+        } else {
+            f64::INFINITY
+        };
+        let worse = match worst {
+            Some((_, w)) => ratio > w,
+            None => true,
+        };
+        if ratio > 1.0 && worse {
+            worst = Some((i, ratio));
+        }
+    }
+    match worst {
+        Some((i, _)) => Err(SolveError::InconsistentInitialValues {
+            equation: info
+                .rows
+                .get(i)
+                .map(|row| row.text.clone())
+                .unwrap_or_else(|| format!("row {i}")),
+            residual: r[i],
+        }),
+        None => Ok(()),
     }
 }

@@ -133,13 +133,16 @@
 //!
 //! # Failure
 //!
-//! Every failure is a typed [`SolveError`]: a singular iteration matrix is
+//! Every failure is a typed [`SolveError`], within the budgets of
+//! `core::control` shared by all methods: a singular iteration matrix is
 //! retried with halved steps ([`SolveError::SingularMatrix`] after five in a
 //! row), a failed Newton iteration likewise
-//! ([`SolveError::NewtonFailure`] after twenty in a row, or
-//! [`SolveError::NonFinite`] if the residual was not finite), steps below
-//! `10 u max(|t|, |t_end|)` give [`SolveError::StepSizeTooSmall`], and
+//! ([`SolveError::NewtonFailure`] after ten in a row, or
+//! [`SolveError::NonFinite`] after ten non-finite residuals), steps below
+//! `4 ε max(|t|, ε (t_end − t₀))` give [`SolveError::StepSizeTooSmall`], and
 //! [`crate::Options::max_steps`] attempted steps [`SolveError::StepLimit`].
+//! The error norm is the one of `core::weights`, with the index-scaled
+//! weights `h^(k_i−1)/sc_i`.
 
 use crate::core::control::{self, Budget, Failure};
 use crate::core::matrix::{Rows, SquareStages, StageSystems};

@@ -18,11 +18,8 @@ pub(crate) struct OutputGrid {
 impl OutputGrid {
     /// The grid for `requested` times on `[t0, t_end]` and `n` unknowns.
     pub(crate) fn new(requested: &[f64], t0: f64, t_end: f64, n: usize) -> Self {
-        let mut times: Vec<f64> = requested
-            .iter()
-            .copied()
-            .filter(|&t| t >= t0 && t <= t_end)
-            .collect();
+        let mut times = Vec::with_capacity(requested.len() + 1);
+        times.extend(requested.iter().copied().filter(|&t| t >= t0 && t <= t_end));
         times.sort_by(f64::total_cmp);
         times.dedup();
         if times.last() != Some(&t_end) {

@@ -126,8 +126,6 @@ pub(crate) struct ConstrainedLstsq {
     factored: bool,
 }
 
-// used by the overdetermined methods
-#[allow(dead_code)]
 impl ConstrainedLstsq {
     /// Storage for an `m × n` system (zero). `m ≥ n ≥ 1` is the intended
     /// use; with `m < n` every [`ConstrainedLstsq::factor`] fails.
@@ -148,16 +146,6 @@ impl ConstrainedLstsq {
             q: 0,
             factored: false,
         }
-    }
-
-    /// Number of rows `M`.
-    pub(crate) fn rows(&self) -> usize {
-        self.m
-    }
-
-    /// Number of columns (unknowns) `N`.
-    pub(crate) fn cols(&self) -> usize {
-        self.n
     }
 
     /// The `M × N` matrix `A` to factorise. [`ConstrainedLstsq::factor`]
@@ -329,8 +317,7 @@ impl ConstrainedLstsq {
 /// # Panics
 ///
 /// If `exact`, `weight` or `b` does not have one entry per row of `a`.
-// used by the overdetermined methods
-#[allow(dead_code)]
+#[cfg(test)]
 pub(crate) fn lstsq(
     a: &DMatrix<f64>,
     exact: &[bool],
@@ -725,7 +712,7 @@ mod tests {
         let (m, n) = (9, 5);
         let mut next = rng(0xabcd_ef01);
         let mut ls = ConstrainedLstsq::new(m, n);
-        assert_eq!((ls.rows(), ls.cols()), (m, n));
+        assert_eq!((ls.m, ls.n), (m, n));
         let patterns: [&[usize]; 5] = [&[0, 4, 8], &[], &[7], &[0, 4, 8], &[1, 2, 3, 5, 6]];
         for (trial, rows) in patterns.into_iter().enumerate() {
             let a = random(m, n, &mut next);

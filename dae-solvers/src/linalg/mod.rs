@@ -5,7 +5,5 @@
 pub(crate) mod lstsq;
 pub(crate) mod lu;
 
-// used by the overdetermined methods
-#[allow(unused_imports)]
 pub(crate) use lstsq::ConstrainedLstsq;
 pub(crate) use lu::{DenseLu, Pivoting, Singular};
