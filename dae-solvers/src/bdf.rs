@@ -158,6 +158,7 @@
 //! [`Options::record_steps`] asks for it.
 
 use crate::core::control::{self, Budget, Failure as Fail};
+use crate::core::driver::{self, Method};
 use crate::core::matrix::{Corrector, Rows, SquareLu};
 use crate::core::newton::{Contraction, Rule, Verdict};
 use crate::core::output::OutputGrid;
@@ -289,7 +290,7 @@ impl Run<'_> {
             None => integ.initial_step(self.y0, self.yp0),
         };
         integ.start(self.t0, self.y0, self.yp0, h0);
-        let result = integ.run(out, steps, opts.record_steps);
+        let result = driver::drive(&mut integ, driver::report(out, steps, opts.record_steps));
         add_stats(stats, &integ.stats);
         result
     }
@@ -346,7 +347,7 @@ impl Run<'_> {
             let mut integ = Integrator::<L>::new(self.sys, &opts.tol, self.in_test, cfg);
             let h0 = integ.initial_step(self.y0, self.yp0).min(h);
             integ.start(self.t0, self.y0, self.yp0, h0);
-            let result = integ.run_with(|it| {
+            let result = driver::drive(&mut integ, |it| {
                 start.emit(it.t, |tau, o| it.interpolate(tau, o));
                 out.emit(it.t, |tau, o| it.interpolate(tau, o));
             });
@@ -381,7 +382,7 @@ impl Run<'_> {
             history.extend(start.values().iter().map(|v| v.as_slice()));
             integ.start_from_history(grid(k - 1), &history, h);
         }
-        let result = integ.run(out, steps, opts.record_steps);
+        let result = driver::drive(&mut integ, driver::report(out, steps, opts.record_steps));
         add_stats(stats, &integ.stats);
         result
     }
@@ -539,6 +540,27 @@ struct Integrator<'a, L> {
     budget: Budget,
 }
 
+impl<L: Corrector> Method for Integrator<'_, L> {
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.phi[..self.n]
+    }
+    fn dense(&self, tau: f64, out: &mut [f64]) {
+        self.interpolate(tau, out)
+    }
+    fn finished(&self) -> bool {
+        self.t >= self.cfg.t_end
+    }
+    fn step(&mut self) -> Result<(), SolveError> {
+        Integrator::step(self)
+    }
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+}
+
 impl<'a, L: Corrector> Integrator<'a, L> {
     /// Allocate every buffer of the step loop.
     fn new(sys: &'a dyn DaeSystem, tol: &Tolerances, in_test: &[bool], cfg: Config) -> Self {
@@ -653,30 +675,6 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                 }
             }
         }
-    }
-
-    /// Step until `t_end`, reporting into `out` (and `steps`).
-    fn run(
-        &mut self,
-        out: &mut OutputGrid,
-        steps: &mut Vec<(f64, Vec<f64>)>,
-        record: bool,
-    ) -> Result<(), SolveError> {
-        self.run_with(|it| {
-            out.emit(it.t, |tau, o| it.interpolate(tau, o));
-            if record {
-                steps.push((it.t, it.phi[..it.n].to_vec()));
-            }
-        })
-    }
-
-    /// Step until `t_end`, calling `after_step` after every accepted step.
-    fn run_with(&mut self, mut after_step: impl FnMut(&Self)) -> Result<(), SolveError> {
-        while self.t < self.cfg.t_end {
-            self.step()?;
-            after_step(self);
-        }
-        Ok(())
     }
 
     /// The weighted RMS norm over the components in the test.

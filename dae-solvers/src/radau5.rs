@@ -145,9 +145,9 @@
 //! weights `h^(k_i−1)/sc_i`.
 
 use crate::core::control::{self, Budget, Failure};
+use crate::core::driver::{self, Method};
 use crate::core::matrix::{Rows, SquareStages, StageSystems};
 use crate::core::newton::{Contraction, Rule, Verdict};
-use crate::core::output::OutputGrid;
 use crate::core::policy;
 use crate::core::weights::Weights;
 use crate::linalg::Singular;
@@ -182,7 +182,9 @@ pub(crate) fn integrate<S: StageSystems>(
     options: &Options,
 ) -> Result<Solution, SolveError> {
     problem.check(problem.system.info().unknowns(), options)?;
-    Integrator::<S>::new(problem, options).run()
+    let mut integrator = Integrator::<S>::new(problem, options);
+    integrator.start()?;
+    driver::solve(&mut integrator, options, problem.t0, problem.t_end)
 }
 
 // ---------------------------------------------------------------------------
@@ -423,6 +425,76 @@ struct Integrator<'a, S> {
     /// Contraction monitor; its `η` is carried from step to step and its
     /// `θ` decides Jacobian reuse.
     newton: Contraction,
+    /// Step-size controller state.
+    c: Control,
+}
+
+/// RADAU5's controller state (its `FIRST`, `REJECT`, `CALJAC`, `HOLD`,
+/// `HACC`, `ERRACC`, `LAST`) between and within steps.
+struct Control {
+    /// Time of the last accepted step (`t₀` at first).
+    t: f64,
+    /// Step size of the next attempt.
+    h: f64,
+    /// Largest step.
+    h_max: f64,
+    /// Constant step size (no error control), if any.
+    fixed: Option<f64>,
+    /// The next attempt reaches `t_end`.
+    last: bool,
+    /// `t_end` reached.
+    done: bool,
+    first: bool,
+    reject: bool,
+    caljac: bool,
+    /// Size of the last accepted step.
+    h_old: f64,
+    h_acc: f64,
+    err_acc: f64,
+    budget: Budget,
+    next: Next,
+}
+
+impl Control {
+    /// After a failed attempt: factorise again with the Jacobian of this
+    /// step, or evaluate a new one if it is old.
+    fn after_failure(&self) -> Next {
+        if self.caljac {
+            Next::Factor
+        } else {
+            Next::Jacobian
+        }
+    }
+
+    /// A step ending within this of `t_end` is stretched to it: round-off
+    /// for adaptive steps, a relative 1e-8 for fixed ones.
+    fn end_slack(&self, t: f64, h: f64, t_end: f64) -> f64 {
+        match self.fixed {
+            Some(_) => 1e-8 * h,
+            None => 100.0 * UROUND * t.abs().max(t_end.abs()),
+        }
+    }
+}
+
+impl<S: StageSystems> Method for Integrator<'_, S> {
+    fn t(&self) -> f64 {
+        self.c.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.w.y
+    }
+    fn dense(&self, tau: f64, out: &mut [f64]) {
+        dense(self.n, &self.w.cont, tau, self.c.t, self.c.h_old, out)
+    }
+    fn finished(&self) -> bool {
+        self.c.done
+    }
+    fn step(&mut self) -> Result<(), SolveError> {
+        Integrator::step(self)
+    }
+    fn stats(&self) -> Stats {
+        self.stats
+    }
 }
 
 impl<'a, S: StageSystems> Integrator<'a, S> {
@@ -454,6 +526,7 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
         let rule = Rule::Radau5 {
             slow_exit: options.fixed_step.is_none(),
         };
+        let span = problem.t_end - problem.t0;
         Integrator {
             sys: problem.system,
             options,
@@ -465,6 +538,22 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
             w,
             stats: Stats::default(),
             newton: Contraction::new(rule, NIT, fnewt, 1.0),
+            c: Control {
+                t: problem.t0,
+                h: 0.0,
+                h_max: options.h_max.unwrap_or(span).min(span),
+                fixed: options.fixed_step,
+                last: false,
+                done: false,
+                first: true,
+                reject: false,
+                caljac: false,
+                h_old: 0.0,
+                h_acc: 0.0,
+                err_acc: 1e-2,
+                budget: Budget::new(options.max_steps),
+                next: Next::Jacobian,
+            },
         }
     }
 
@@ -491,78 +580,65 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
         Ok(())
     }
 
-    fn run(mut self) -> Result<Solution, SolveError> {
+    /// Evaluate at `t₀` and choose the first step.
+    fn start(&mut self) -> Result<(), SolveError> {
         let (t0, t_end) = (self.t0, self.t_end);
         let span = t_end - t0;
-        let fixed = self.options.fixed_step;
-        let h_max = self.options.h_max.unwrap_or(span).min(span);
-
-        let mut grid = OutputGrid::new(&self.options.output_times, t0, t_end, self.n);
-        grid.start(t0, &self.w.y);
-        let mut steps = Vec::new();
-
-        let mut t = t0;
-        self.evaluate_at_step_point(t, true)?;
-
-        let mut h = match fixed {
+        self.evaluate_at_step_point(t0, true)?;
+        let c = &mut self.c;
+        c.h = match c.fixed {
             Some(hf) => hf,
             // A tiny h0 is raised to well above the smallest step.
             None => self
                 .options
                 .h0
                 .unwrap_or(H0_DEFAULT)
-                .min(h_max)
+                .min(c.h_max)
                 .max(100.0 * control::h_min(t0, span)),
         };
-        // A step ending within `end_slack` of t_end is stretched to it:
-        // round-off for adaptive steps, a relative 1e-8 for fixed ones.
-        let end_slack = |t: f64, h: f64| match fixed {
-            Some(_) => 1e-8 * h,
-            None => 100.0 * UROUND * t.abs().max(t_end.abs()),
-        };
-        let mut last = false;
-        if t0 + h >= t_end - end_slack(t0, h) {
-            h = span;
-            last = true;
+        if t0 + c.h >= t_end - c.end_slack(t0, c.h, t_end) {
+            c.h = span;
+            c.last = true;
         }
+        c.h_old = c.h;
+        c.h_acc = c.h;
+        Ok(())
+    }
 
-        // Controller state (RADAU5's FIRST, REJECT, CALJAC, HOLD, HACC, ERRACC).
-        let mut first = true;
-        let mut reject = false;
-        let mut caljac = false;
-        let mut h_old = h;
-        let mut h_acc = h;
-        let mut err_acc = 1e-2;
-        let mut budget = Budget::new(self.options.max_steps);
-        let mut next = Next::Jacobian;
-
+    /// One accepted step from `c.t` (RADAU5's loop from label 10 to the
+    /// acceptance of a step), then the size of the next one.
+    fn step(&mut self) -> Result<(), SolveError> {
+        let t_end = self.t_end;
+        let span = t_end - self.t0;
         loop {
+            let (t, h, fixed) = (self.c.t, self.c.h, self.c.fixed);
             if fixed.is_none() && h < control::h_min(t, span) {
                 return Err(SolveError::StepSizeTooSmall { t, h });
             }
-            if next == Next::Jacobian {
+            if self.c.next == Next::Jacobian {
                 self.jacobian(t)?;
-                caljac = true;
-                next = Next::Factor;
+                self.c.caljac = true;
+                self.c.next = Next::Factor;
             }
-            if next == Next::Factor {
+            if self.c.next == Next::Factor {
                 if self.factor(h).is_err() {
-                    if fixed.is_some() || budget.failed(Failure::Singular) {
+                    let c = &mut self.c;
+                    if fixed.is_some() || c.budget.failed(Failure::Singular) {
                         return Err(SolveError::SingularMatrix { t, h });
                     }
-                    h *= 0.5;
-                    reject = true;
-                    last = false;
-                    next = if caljac { Next::Factor } else { Next::Jacobian };
+                    c.h *= 0.5;
+                    c.reject = true;
+                    c.last = false;
+                    c.next = c.after_failure();
                     continue;
                 }
                 self.stats.factorizations += 1;
             }
-            budget.attempt(t)?;
+            self.c.budget.attempt(t)?;
 
             // ---- one step attempt from t with h ----
             self.w.weights.update_scaled(&self.w.y, h);
-            self.starting_values(first, h / h_old);
+            self.starting_values(self.c.first, h / self.c.h_old);
 
             let outcome = self.newton(t, h, fixed.is_none());
             let newt = match outcome {
@@ -584,7 +660,7 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
             let mut non_finite = matches!(outcome, Newton::NonFinite(_));
             let mut newton_failed = failed_factor.is_some();
             if !newton_failed && fixed.is_none() {
-                err = self.error_norm(t, h, first || reject);
+                err = self.error_norm(t, h, self.c.first || self.c.reject);
                 if err.is_finite() {
                     h_new = h / classical_quotient(err, newt);
                 } else {
@@ -593,6 +669,7 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                 }
             }
 
+            let c = &mut self.c;
             if newton_failed {
                 // ---- Newton failure (RADAU5's label 78) ----
                 self.stats.rejected += 1;
@@ -601,127 +678,120 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                 } else {
                     Failure::Newton
                 };
-                let exhausted = budget.failed(failure);
-                if fixed.is_some() && !caljac {
-                    next = Next::Jacobian;
+                let exhausted = c.budget.failed(failure);
+                if fixed.is_some() && !c.caljac {
+                    c.next = Next::Jacobian;
                     continue;
                 }
                 if fixed.is_some() || exhausted {
                     return Err(Budget::error(failure, t, h, newt));
                 }
-                h *= failed_factor.unwrap_or(0.5);
-                reject = true;
-                last = false;
-                next = if caljac { Next::Factor } else { Next::Jacobian };
+                c.h *= failed_factor.unwrap_or(0.5);
+                c.reject = true;
+                c.last = false;
+                c.next = c.after_failure();
                 continue;
             }
 
             if err >= 1.0 {
                 // ---- rejected by the error test ----
                 self.stats.rejected += 1;
-                reject = true;
-                last = false;
-                if first {
-                    h *= 0.1;
+                c.reject = true;
+                c.last = false;
+                if c.first {
+                    c.h *= 0.1;
                 } else {
-                    h = h_new;
+                    c.h = h_new;
                 }
-                next = if caljac { Next::Factor } else { Next::Jacobian };
+                c.next = c.after_failure();
                 continue;
             }
 
             // ---- accepted ----
-            budget.accepted();
+            c.budget.accepted();
             if fixed.is_none() {
                 if self.stats.steps > 0 {
-                    let quot = (h / h_new).max(predictive_quotient(err, err_acc, h, h_acc));
+                    let quot = (h / h_new).max(predictive_quotient(err, c.err_acc, h, c.h_acc));
                     h_new = h / quot;
                 }
-                h_acc = h;
-                err_acc = err.max(1e-2);
+                c.h_acc = h;
+                c.err_acc = err.max(1e-2);
             }
-            first = false;
-            t = if last { t_end } else { t + h };
-            h_old = h;
+            c.first = false;
+            c.t = if c.last { t_end } else { t + h };
+            c.h_old = h;
+            c.caljac = false;
             self.advance(h);
             self.stats.steps += 1;
-            caljac = false;
+            let t = self.c.t;
             if self.w.y.iter().any(|v| !v.is_finite()) {
                 return Err(SolveError::NonFinite {
                     t,
                     what: "solution",
                 });
             }
-
-            // Dense output at the requested times in (t − h, t].
-            let (n, w) = (self.n, &self.w);
-            grid.emit(t, |tau, out| dense(n, &w.cont, tau, t, h, out));
-            if self.options.record_steps {
-                steps.push((t, self.w.y.clone()));
+            if self.c.last {
+                self.c.done = true;
+                return Ok(());
             }
-            if last {
-                break;
-            }
-
             self.evaluate_at_step_point(t, false)?;
-
-            if let Some(hf) = fixed {
-                let remaining = t_end - t;
-                let h_next = if t + hf >= t_end - end_slack(t, hf) {
-                    last = true;
-                    remaining
-                } else {
-                    hf
-                };
-                let new_h = h_next != h;
-                h = h_next;
-                next = match (self.newton.theta <= THET, new_h) {
-                    (true, false) => Next::Step,
-                    (true, true) => Next::Factor,
-                    (false, _) => Next::Jacobian,
-                };
-                continue;
-            }
-
-            h_new = h_new.min(h_max);
-            if reject {
-                h_new = h_new.min(h);
-            }
-            reject = false;
-            if t + h_new >= t_end - end_slack(t, h_new) {
-                h = t_end - t;
-                last = true;
-            } else {
-                if t + 2.0 * h_new > t_end {
-                    // Split the rest evenly rather than end with a short
-                    // step: after a large step-size ratio the index-2 and
-                    // index-3 components lose accuracy (HW VII.4), and the
-                    // last step is where they are reported.
-                    h_new = 0.5 * (t_end - t);
-                }
-                let qt = h_new / h;
-                if self.newton.theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
-                    next = Next::Step;
-                    continue;
-                }
-                h = h_new;
-            }
-            next = if self.newton.theta <= THET {
-                Next::Factor
-            } else {
-                Next::Jacobian
-            };
+            self.next_step(h_new);
+            return Ok(());
         }
+    }
 
-        // Every grid time is at most t_end, which the last step reaches
-        // exactly: all have been reported.
-        let (t, y) = grid.finish();
-        Ok(Solution {
-            t,
-            y,
-            steps,
-            stats: self.stats,
-        })
+    /// Size of the next step after one accepted with proposal `h_new`, and
+    /// whether the factorisation (or the Jacobian) can be kept.
+    fn next_step(&mut self, mut h_new: f64) {
+        let t_end = self.t_end;
+        let small_theta = self.newton.theta <= THET;
+        let c = &mut self.c;
+        let (t, h) = (c.t, c.h);
+        if let Some(hf) = c.fixed {
+            let remaining = t_end - t;
+            let h_next = if t + hf >= t_end - c.end_slack(t, hf, t_end) {
+                c.last = true;
+                remaining
+            } else {
+                hf
+            };
+            let new_h = h_next != h;
+            c.h = h_next;
+            c.next = match (small_theta, new_h) {
+                (true, false) => Next::Step,
+                (true, true) => Next::Factor,
+                (false, _) => Next::Jacobian,
+            };
+            return;
+        }
+        h_new = h_new.min(c.h_max);
+        if c.reject {
+            h_new = h_new.min(h);
+        }
+        c.reject = false;
+        if t + h_new >= t_end - c.end_slack(t, h_new, t_end) {
+            c.h = t_end - t;
+            c.last = true;
+        } else {
+            if t + 2.0 * h_new > t_end {
+                // Split the rest evenly rather than end with a short step:
+                // after a large step-size ratio the index-2 and index-3
+                // components lose accuracy (HW VII.4), and the last step is
+                // where they are reported.
+                h_new = 0.5 * (t_end - t);
+            }
+            let qt = h_new / h;
+            if small_theta && (QUOT1..=QUOT2).contains(&qt) {
+                c.next = Next::Step;
+                return;
+            }
+            c.h = h_new;
+        }
+        c.next = if small_theta {
+            Next::Factor
+        } else {
+            Next::Jacobian
+        };
     }
 
     /// `J = ∂f/∂y − ∂(E z)/∂y` and `E₀` at `(t, y_n)`.

@@ -12,6 +12,9 @@
 //!   step, the end of the horizon) and the failure budgets.
 //! - [`output`]: the output grid (one rule for `t0`, `t_end` and the times
 //!   between) and dense output.
+//! - [`driver`]: the step loop — a method implements [`driver::Method`]
+//!   (start, one accepted step, dense output), the driver steps to the end,
+//!   fills the output grid, records steps and assembles the solution.
 //! - [`policy`]: the defaults a formulation implies (which unknowns enter the
 //!   error test, square or least-squares linear algebra), decided in one
 //!   place for the library and the command line alike.
@@ -21,6 +24,7 @@
 //! step/order proposal and dense output.
 
 pub(crate) mod control;
+pub(crate) mod driver;
 pub(crate) mod matrix;
 pub(crate) mod newton;
 pub(crate) mod output;
