@@ -201,6 +201,12 @@ const MAX_NEWTON_ITERATIONS: usize = 4;
 const MAX_NEWTON_ITERATIONS_FIXED_STEP: usize = 20;
 /// Convergence test `ρ/(1−ρ)·‖δ‖ ≤ NEWTON_TOL` (DASSL's 0.33).
 const NEWTON_TOL: f64 = 0.33;
+/// The same for a least-squares corrector (`odbdf`), ten times tighter: its
+/// iterate satisfies the constraint rows only to the accuracy of the
+/// iteration, and the error estimate `y − y⁽⁰⁾` carries what is left of it.
+/// Measured on the pendulum (S01/S02, ovd0 and psi0, tol 1e-6 … 1e-10):
+/// 1.3–20× smaller errors with 25–45 % fewer steps than with 0.33.
+const NEWTON_TOL_LEAST_SQUARES: f64 = 0.033;
 /// Re-evaluate the iteration matrix when `c_J/c_J^old` leaves
 /// `[(1−XRATE)/(1+XRATE), (1+XRATE)/(1−XRATE)]`.
 const XRATE: f64 = 0.25;
@@ -737,6 +743,13 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                 Ok(()) if self.cfg.fixed_step => {
                     self.accept(None);
                     self.budget.accepted();
+                    if L::LEAST_SQUARES {
+                        // The point a least-squares corrector converges to
+                        // depends on its matrix: with constant steps a
+                        // matrix kept for many steps would bias every step
+                        // the same way. A fresh one each step.
+                        self.jac = JacState::Needed;
+                    }
                     return Ok(());
                 }
                 Ok(()) => {
@@ -996,7 +1009,12 @@ impl<'a, L: Corrector> Integrator<'a, L> {
         } else {
             MAX_NEWTON_ITERATIONS
         };
-        let mut monitor = Contraction::new(Rule::Dassl, maxit, NEWTON_TOL, self.s);
+        let kappa = if L::LEAST_SQUARES {
+            NEWTON_TOL_LEAST_SQUARES
+        } else {
+            NEWTON_TOL
+        };
+        let mut monitor = Contraction::new(Rule::Dassl, maxit, kappa, self.s);
         loop {
             if damping != 1.0 {
                 for d in &mut self.delta {

@@ -61,21 +61,22 @@
 //! `T` is zero, not finite, or not above
 //!
 //! ```text
-//!     N ε max_k |R_kk|   (resp. N ε max_k |T_kk|) ,
+//!     N ε ‖c_k‖          (resp. N ε ‖d_k‖) ,
 //! ```
 //!
-//! `ε` being the machine epsilon: a test relative to the scale of each
-//! factor, so unaffected by scaling `A`, or all the weights, by a constant
-//! (`b` plays no part). The
-//! QR factorisations do not pivot, so the test is not rank-revealing in
-//! general: it catches exact and round-off-level dependence (repeated or
-//! zero constraint rows, unknowns absent from every row), while an
-//! ill-conditioned but numerically full-rank system goes through and shows
-//! in large, inaccurate solutions, which the Newton iteration's convergence
-//! test detects. In particular `T` is judged against itself only: weighted
-//! rows that lie at round-off level in the span of the exact rows leave a
-//! `T` of round-off size which can pass (as a round-off-sized pivot passes
-//! [`super::DenseLu`]).
+//! `c_k` being the `k`-th constraint row, `d_k` the `k`-th column of `D₂`
+//! before its QR, and `ε` the machine epsilon. `|R_kk|` is the part of `c_k`
+//! orthogonal to the rows before it and is judged against `c_k` itself, and
+//! likewise `|T_kk|` against `d_k`: the test does not see how a constraint
+//! row, or a column of `D₂`, is scaled (an iteration matrix `c E − J` has
+//! columns of size `1/h` beside columns of size one, and an `h` of 1e-15
+//! must not make it "singular"). The QR factorisations do not pivot, so the
+//! test is not rank-revealing in general: it catches exact and
+//! round-off-level dependence (repeated or zero constraint rows, unknowns
+//! absent from every row), while an ill-conditioned but numerically
+//! full-rank system goes through and shows in large, inaccurate solutions,
+//! which the Newton iteration's convergence test detects; as a
+//! round-off-sized pivot passes [`super::DenseLu`].
 //!
 //! # Cost
 //!
@@ -122,6 +123,8 @@ pub(crate) struct ConstrainedLstsq {
     p: usize,
     /// Number of weighted rows of the current factorisation.
     q: usize,
+    /// Norms of the columns of a factor before its QR (the rank test).
+    norms: Vec<f64>,
     /// Whether the last [`ConstrainedLstsq::factor`] succeeded.
     factored: bool,
 }
@@ -142,6 +145,7 @@ impl ConstrainedLstsq {
             weighted_rows: vec![0; m],
             row_weight: vec![0.0; m],
             work: vec![0.0; m],
+            norms: vec![0.0; n],
             p: 0,
             q: 0,
             factored: false,
@@ -202,8 +206,9 @@ impl ConstrainedLstsq {
                 *c = a[j * m + i];
             }
         }
+        column_norms(ct, n, &mut self.norms[..p]);
         householder_qr(ct, n, p, &mut self.tau_c[..p]);
-        if !full_rank(ct, n, p, n) {
+        if !full_rank(ct, n, &self.norms[..p], n) {
             return Err(Singular);
         }
 
@@ -242,8 +247,9 @@ impl ConstrainedLstsq {
         }
         let k = n - p;
         let d2 = &mut sd[p * q..];
+        column_norms(d2, q, &mut self.norms[..k]);
         householder_qr(d2, q, k, &mut self.tau_d[..k]);
-        if !full_rank(d2, q, k, n) {
+        if !full_rank(d2, q, &self.norms[..k], n) {
             return Err(Singular);
         }
         self.factored = true;
@@ -386,20 +392,22 @@ fn reflect(v_tail: &[f64], tau: f64, y: &mut [f64]) {
     axpy(-s, v_tail, y_tail);
 }
 
-/// Whether the diagonal of the `k × k` upper triangle of `a` (leading
-/// dimension `ld`) passes the rank test of the module documentation, with
-/// `n` unknowns.
-fn full_rank(a: &[f64], ld: usize, k: usize, n: usize) -> bool {
-    let mut dmax = 0.0_f64;
-    for j in 0..k {
+/// Whether the diagonal of the upper triangle of `a` (leading dimension
+/// `ld`, one column per entry of `norms`, the column norms before the QR)
+/// passes the rank test of the module documentation, with `n` unknowns.
+fn full_rank(a: &[f64], ld: usize, norms: &[f64], n: usize) -> bool {
+    norms.iter().enumerate().all(|(j, &nu)| {
         let d = a[j * ld + j].abs();
-        if !d.is_finite() {
-            return false;
-        }
-        dmax = dmax.max(d);
+        d.is_finite() && d > n as f64 * f64::EPSILON * nu
+    })
+}
+
+/// Euclidean norms of the `norms.len()` columns (leading dimension `ld`)
+/// of `a`.
+fn column_norms(a: &[f64], ld: usize, norms: &mut [f64]) {
+    for (nu, col) in norms.iter_mut().zip(a.chunks_exact(ld.max(1))) {
+        *nu = col.iter().map(|v| v * v).sum::<f64>().sqrt();
     }
-    let tol = n as f64 * f64::EPSILON * dmax;
-    (0..k).all(|j| a[j * ld + j].abs() > tol)
 }
 
 /// Euclidean norm, scaled against overflow and underflow.

@@ -1,9 +1,10 @@
 //! Hand-written test models, shared by `tests/radau5.rs`, `tests/bdf.rs`,
-//! `tests/init.rs` and the S02 examples (included there with `#[path]`,
-//! hence the `dead_code` allowance):
+//! `tests/od.rs`, `tests/init.rs` and the S02 examples (included there with
+//! `#[path]`, hence the `dead_code` allowance):
 //!
-//! * the paper's pendulum in seven formulations ([`Pendulum`], [`Form`]),
-//!   its exact solution and the reference files of `shared/reference/`;
+//! * the paper's pendulum in seven formulations ([`Pendulum`], [`Form`]) and
+//!   in `ovd0` ([`PendulumOvd0`]), its exact solution and the reference
+//!   files of `shared/reference/`;
 //! * the planar double pendulum ([`DoublePendulum`]), the index-2 test
 //!   problem of the IDeC paper ([`Idec`]) and two toy chains ([`Toy`]),
 //!   written as [`Hand`] formulations;
@@ -496,6 +497,141 @@ impl DaeSystem for Pendulum {
 /// The exact multiplier on the circle: `λ = m(v² + w² − g y)/(2L²)`.
 pub fn pendulum_lambda(p: &Pendulum, y: &[f64]) -> f64 {
     p.m * (y[2] * y[2] + y[3] * y[3] - p.g * y[1]) / (2.0 * p.l * p.l)
+}
+
+// ---------------------------------------------------------------------------
+// The pendulum's ovd0 (dynamics and all three constraint levels)
+// ---------------------------------------------------------------------------
+
+/// The pendulum in `ovd0` form: the four dynamic rows together with the
+/// position, velocity and acceleration constraints, 7 equations for the 5
+/// unknowns `(x, y, v, w, λ)` — constraint level 0, every unknown of index
+/// one, as dae-core derives it (`d_index` none, `s_index` one).
+///
+/// A type of its own rather than a [`Form`] variant: the files that match on
+/// [`Form`] exhaustively (`tests/radau5.rs`, `tests/harness.rs`,
+/// `examples/radau5_s02.rs`) then compile unchanged. Constraints,
+/// invariants and the helpers for the acceleration level are those of the
+/// inner [`Pendulum`].
+pub struct PendulumOvd0 {
+    /// The same pendulum (its `rcd0` form), for parameters and the chain.
+    pub p: Pendulum,
+    info: FormulationInfo,
+}
+
+impl PendulumOvd0 {
+    /// Rows of the position, velocity and acceleration constraints.
+    pub const POS_ROW: usize = 4;
+    pub const VEL_ROW: usize = 5;
+    pub const ACC_ROW: usize = 6;
+
+    /// The paper's pendulum: `m = 1`, `L = 1`, `g = 13.75…`.
+    pub fn new() -> Self {
+        PendulumOvd0::with_parameters(1.0, 1.0, G)
+    }
+
+    /// Any parameters.
+    pub fn with_parameters(m: f64, l: f64, g: f64) -> Self {
+        let p = Pendulum::with_parameters(Form::Rcd0, m, l, g);
+        let mut info = p.info.clone();
+        info.name = "ovd0".into();
+        info.rows.truncate(4);
+        for (level, expr) in [PENDULUM_L0, PENDULUM_L1, PENDULUM_L2].iter().enumerate() {
+            info.rows
+                .push(constraint_row(level as u8, 0, &format!("0 = {expr}")));
+        }
+        info.d_index = None;
+        info.s_index = 1;
+        info.c_level = 0;
+        PendulumOvd0 { p, info }
+    }
+
+    /// The consistent start `x = L, y = v = w = λ = 0`.
+    pub fn y0(&self) -> Vec<f64> {
+        self.p.y0()
+    }
+}
+
+impl Default for PendulumOvd0 {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl DaeSystem for PendulumOvd0 {
+    fn info(&self) -> &FormulationInfo {
+        &self.info
+    }
+
+    fn parameter_values(&self) -> Vec<f64> {
+        self.p.parameter_values()
+    }
+
+    fn rhs(&self, _t: f64, u: &[f64], f: &mut [f64]) {
+        let (x, y, v, w, lam) = (u[0], u[1], u[2], u[3], u[4]);
+        let p = &self.p;
+        f[0] = v;
+        f[1] = w;
+        f[2] = -2.0 * x * lam;
+        f[3] = -2.0 * y * lam - p.m * p.g;
+        f[4] = x * x + y * y - p.l * p.l;
+        f[5] = 2.0 * x * v + 2.0 * y * w;
+        f[6] = p.acc(x, y, v, w, lam);
+    }
+
+    fn residual(&self, t: f64, u: &[f64], up: &[f64], r: &mut [f64]) {
+        self.rhs(t, u, r);
+        let m = self.p.m;
+        let ey = [up[0], up[1], m * up[2], m * up[3]];
+        for (i, ri) in r.iter_mut().enumerate() {
+            *ri = ey.get(i).copied().unwrap_or(0.0) - *ri;
+        }
+    }
+
+    fn leading(&self, _u: &[f64], e: &mut DMatrix<f64>) {
+        e.fill(0.0);
+        e[(0, 0)] = 1.0;
+        e[(1, 1)] = 1.0;
+        e[(2, 2)] = self.p.m;
+        e[(3, 3)] = self.p.m;
+    }
+
+    fn rhs_jacobian(&self, _t: f64, u: &[f64], j: &mut DMatrix<f64>) {
+        j.fill(0.0);
+        let (x, y, v, w, lam) = (u[0], u[1], u[2], u[3], u[4]);
+        j[(0, 2)] = 1.0;
+        j[(1, 3)] = 1.0;
+        j[(2, 0)] = -2.0 * lam;
+        j[(2, 4)] = -2.0 * x;
+        j[(3, 1)] = -2.0 * lam;
+        j[(3, 4)] = -2.0 * y;
+        let rows = [
+            [2.0 * x, 2.0 * y, 0.0, 0.0, 0.0],
+            [2.0 * v, 2.0 * w, 2.0 * x, 2.0 * y, 0.0],
+            self.p.acc_gradient(x, y, v, w, lam),
+        ];
+        for (r, row) in rows.iter().enumerate() {
+            for (c, &val) in row.iter().enumerate() {
+                j[(Self::POS_ROW + r, c)] = val;
+            }
+        }
+    }
+
+    fn leading_jacobian(&self, _u: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
+        j.fill(0.0);
+    }
+
+    fn constraints(&self, t: f64, u: &[f64], g: &mut [f64]) {
+        self.p.constraints(t, u, g)
+    }
+
+    fn constraints_jacobian(&self, t: f64, u: &[f64], j: &mut DMatrix<f64>) {
+        self.p.constraints_jacobian(t, u, j)
+    }
+
+    fn invariants(&self, t: f64, u: &[f64], out: &mut [f64]) {
+        self.p.invariants(t, u, out)
+    }
 }
 
 // ---------------------------------------------------------------------------
