@@ -1,18 +1,18 @@
 //! The integrator core: what every method family shares, each piece with one
 //! reason to change.
 //!
-//! - [`weights`]: error weights from the tolerances, the index scaling of
+//! - `weights`: error weights from the tolerances, the index scaling of
 //!   Radau-type methods, the mask of components in the error test — and the
 //!   one weighted RMS norm every test and every Newton iteration uses.
-//! - [`newton`]: the contraction monitor of a simplified Newton iteration.
-//! - [`matrix`]: the linear systems of the Newton iterations — square LU for
+//! - `newton`: the contraction monitor of a simplified Newton iteration.
+//! - `matrix`: the linear systems of the Newton iterations — square LU for
 //!   square formulations, constrained least squares for overdetermined ones —
 //!   behind one interface, so that a method is written once for both.
-//! - [`control`]: step-size limits shared by all methods (the smallest
+//! - `control`: step-size limits shared by all methods (the smallest
 //!   step, the end of the horizon) and the failure budgets.
-//! - [`output`]: the output grid (one rule for `t0`, `t_end` and the times
+//! - `output`: the output grid (one rule for `t0`, `t_end` and the times
 //!   between) and dense output.
-//! - [`driver`]: the step loop — a method implements [`driver::Method`]
+//! - `driver`: the step loop — a method implements `driver::Method`
 //!   (start, one accepted step, dense output), the driver steps to the end,
 //!   fills the output grid, records steps and assembles the solution.
 //! - [`policy`]: the defaults a formulation implies (which unknowns enter the
