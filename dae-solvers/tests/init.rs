@@ -3,8 +3,8 @@
 mod common;
 
 use common::{
-    pendulum_lambda, DoublePendulum, Form, Idec, Pendulum, Sys, Toy, DP_A0, DP_B0, G, IDEC_C0,
-    IDEC_C1, PENDULUM_L0, PENDULUM_L1, PENDULUM_L2,
+    fd_matrix, pendulum_lambda, DoublePendulum, Form, Idec, Pendulum, Sys, Toy, DP_A0, DP_B0, G,
+    IDEC_C0, IDEC_C1, PENDULUM_L0, PENDULUM_L1, PENDULUM_L2,
 };
 use dae_core::system::DaeSystem;
 use dae_solvers::init::{
@@ -55,26 +55,6 @@ fn off_range(a: &DMatrix<f64>, d: &[f64]) -> f64 {
 
 // ---------------------------------------------------------------------------
 // The hand-written test systems are right.
-
-fn fd_matrix(n_out: usize, y: &[f64], mut eval: impl FnMut(&[f64], &mut [f64])) -> DMatrix<f64> {
-    let n = y.len();
-    let mut j = DMatrix::zeros(n_out, n);
-    let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
-    let (mut fp, mut fm) = (vec![0.0; n_out], vec![0.0; n_out]);
-    for c in 0..n {
-        let h = 1e-6 * (1.0 + y[c].abs());
-        yp[c] = y[c] + h;
-        ym[c] = y[c] - h;
-        eval(&yp, &mut fp);
-        eval(&ym, &mut fm);
-        for r in 0..n_out {
-            j[(r, c)] = (fp[r] - fm[r]) / (2.0 * h);
-        }
-        yp[c] = y[c];
-        ym[c] = y[c];
-    }
-    j
-}
 
 fn check_jacobians(sys: &dyn DaeSystem, y: &[f64]) {
     let info = sys.info();

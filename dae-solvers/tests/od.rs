@@ -134,27 +134,6 @@ fn orders_of(errors: &[f64]) -> Vec<f64> {
 // The hand-written ovd0 is the derived one
 // ---------------------------------------------------------------------------
 
-/// Central differences of `eval` (`n_out` outputs) at `y`.
-fn fd_matrix(n_out: usize, y: &[f64], mut eval: impl FnMut(&[f64], &mut [f64])) -> DMatrix<f64> {
-    let n = y.len();
-    let mut j = DMatrix::zeros(n_out, n);
-    let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
-    let (mut fp, mut fm) = (vec![0.0; n_out], vec![0.0; n_out]);
-    for c in 0..n {
-        let h = 1e-6 * (1.0 + y[c].abs());
-        yp[c] = y[c] + h;
-        ym[c] = y[c] - h;
-        eval(&yp, &mut fp);
-        eval(&ym, &mut fm);
-        for r in 0..n_out {
-            j[(r, c)] = (fp[r] - fm[r]) / (2.0 * h);
-        }
-        yp[c] = y[c];
-        ym[c] = y[c];
-    }
-    j
-}
-
 #[test]
 fn hand_written_ovd0_is_the_derived_formulation() {
     let hand = PendulumOvd0::new();
