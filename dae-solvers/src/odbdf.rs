@@ -26,7 +26,13 @@
 //! solved by a simplified Newton iteration whose steps are constrained
 //! least-squares solutions of `G δ = F` (see `core::matrix`): the
 //! constraint rows exactly, the differential rows in a weighted
-//! least-squares sense. The iterate therefore lies on every constraint of
+//! least-squares sense. The iteration is stopped ten times tighter than
+//! DASSL's (`ρ/(1−ρ)‖δ‖ ≤ 0.033`): the constraint rows hold only to the
+//! accuracy of the iteration, and the error estimate carries what is left
+//! of it (on the pendulum, S02, this made the error 3–17× smaller with
+//! fewer steps). The point a least-squares iteration converges to depends
+//! on its matrix, so with constant steps the matrix is evaluated afresh at
+//! every step. The iterate therefore lies on every constraint of
 //! the formulation (to the Newton tolerance), and the differential rows
 //! carry the discretisation's inconsistency, of the order of the local
 //! error. Error control is on the unknowns, as in ODASSL, with index-2
