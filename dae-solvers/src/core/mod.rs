@@ -8,8 +8,8 @@
 //! - `matrix`: the linear systems of the Newton iterations — square LU for
 //!   square formulations, constrained least squares for overdetermined ones —
 //!   behind one interface, so that a method is written once for both.
-//! - `control`: step-size limits shared by all methods (the smallest
-//!   step, the end of the horizon) and the failure budgets.
+//! - `control`: the smallest step and the failure budgets, the same for
+//!   every method, and the typed errors they end in.
 //! - `output`: the output grid (one rule for `t0`, `t_end` and the times
 //!   between) and dense output.
 //! - `driver`: the step loop — a method implements `driver::Method`
