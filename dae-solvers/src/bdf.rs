@@ -204,8 +204,9 @@ const NEWTON_TOL: f64 = 0.33;
 /// The same for a least-squares corrector (`odbdf`), ten times tighter: its
 /// iterate satisfies the constraint rows only to the accuracy of the
 /// iteration, and the error estimate `y − y⁽⁰⁾` carries what is left of it.
-/// Measured on the pendulum (S01/S02, ovd0 and psi0, tol 1e-6 … 1e-10):
-/// 1.3–20× smaller errors with 25–45 % fewer steps than with 0.33.
+/// Measured on the pendulum (ovd0 and psi0; S01 at tol 1e-6, 1e-8, 1e-10,
+/// S02 at 1e-8; BENCHMARKS.md §3b): 2.6–11× smaller errors with 25–42 %
+/// fewer steps than with 0.33.
 const NEWTON_TOL_LEAST_SQUARES: f64 = 0.033;
 /// Re-evaluate the iteration matrix when `c_J/c_J^old` leaves
 /// `[(1−XRATE)/(1+XRATE), (1+XRATE)/(1−XRATE)]`.
@@ -339,7 +340,6 @@ impl Run<'_> {
         // Starting values y(t0 + j h), j = 0 … m.
         let m = (k - 1).min(nsteps);
         let mut start = OutputGrid::at(n, (1..=m).map(grid));
-        let start_times: Vec<f64> = start.times().to_vec();
         if m > 0 {
             let cfg = Config {
                 maxord: MAX_ORDER,
@@ -354,13 +354,13 @@ impl Run<'_> {
             let h0 = integ.initial_step(self.y0, self.yp0).min(h);
             integ.start(self.t0, self.y0, self.yp0, h0);
             let result = driver::drive(&mut integ, |it| {
-                start.emit(it.t, |tau, o| it.interpolate(tau, o));
-                out.emit(it.t, |tau, o| it.interpolate(tau, o));
+                start.emit(it.t, |tau, o| it.dense(tau, o));
+                out.emit(it.t, |tau, o| it.dense(tau, o));
             });
             add_stats(stats, &integ.stats);
             result?;
             if opts.record_steps {
-                for (t, y) in start_times.iter().zip(start.values()) {
+                for (t, y) in start.times().iter().zip(start.values()) {
                     steps.push((*t, y.clone()));
                 }
             }
@@ -434,32 +434,11 @@ enum JacState {
     Stale,
 }
 
-/// Why a corrector iteration failed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum NewtonFail {
-    /// Contraction rate above 0.9 or too many iterations.
-    Divergence,
-    /// Exactly zero pivot in the iteration matrix.
-    Singular,
-    /// NaN or infinity in the named quantity.
-    NonFinite(&'static str),
-}
-
-impl From<NewtonFail> for Fail {
-    fn from(fail: NewtonFail) -> Fail {
-        match fail {
-            NewtonFail::Singular => Fail::Singular,
-            NewtonFail::NonFinite(what) => Fail::NonFinite(what),
-            NewtonFail::Divergence => Fail::Newton,
-        }
-    }
-}
-
 /// Why a step attempt was rejected.
 #[derive(Clone, Copy, Debug)]
 enum Failure {
     /// The corrector did not converge.
-    Newton(NewtonFail),
+    Newton(Fail),
     /// The local error estimate exceeded the tolerance.
     ErrorTest(ErrorTest),
 }
@@ -777,7 +756,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                         return Err(self.newton_error(fail, h_failed));
                     }
                     self.h *= 0.25;
-                    let limit_hit = self.budget.failed(fail.into());
+                    let limit_hit = self.budget.failed(fail);
                     if limit_hit || self.h < hmin {
                         return Err(self.newton_error(fail, h_failed));
                     }
@@ -823,8 +802,8 @@ impl<'a, L: Corrector> Integrator<'a, L> {
 
     /// The typed error for a Newton failure at the current time with step
     /// size `h`.
-    fn newton_error(&self, fail: NewtonFail, h: f64) -> SolveError {
-        Budget::error(fail.into(), self.t, h, self.last_iterations)
+    fn newton_error(&self, fail: Fail, h: f64) -> SolveError {
+        Budget::error(fail, self.t, h, self.last_iterations)
     }
 
     /// Block 1: coefficients `ψ, α, β, γ, σ` of the new step, `c_J`, `C_k`,
@@ -920,20 +899,20 @@ impl<'a, L: Corrector> Integrator<'a, L> {
     }
 
     /// `δ = F(t, y, y')`.
-    fn residual(&mut self) -> Result<(), NewtonFail> {
+    fn residual(&mut self) -> Result<(), Fail> {
         self.sys
             .residual(self.t, &self.y, &self.yp, &mut self.delta);
         self.stats.residual_evals += 1;
         if self.delta.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(NewtonFail::NonFinite("residual"))
+            Err(Fail::NonFinite("residual"))
         }
     }
 
     /// Evaluate `G = ∂(E(y) y')/∂y − ∂f/∂y + c_J E(y)` at the predictor and
     /// factor it in place.
-    fn form_iteration_matrix(&mut self) -> Result<(), NewtonFail> {
+    fn form_iteration_matrix(&mut self) -> Result<(), Fail> {
         let sys = self.sys;
         sys.rhs_jacobian(self.t, &self.y, self.lu.matrix_mut());
         sys.leading(&self.y, &mut self.lead);
@@ -952,7 +931,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             }
         }
         if !a.iter().all(|v| v.is_finite()) {
-            return Err(NewtonFail::NonFinite("iteration matrix"));
+            return Err(Fail::NonFinite("iteration matrix"));
         }
         self.cjold = cj;
         self.s = 100.0;
@@ -961,12 +940,12 @@ impl<'a, L: Corrector> Integrator<'a, L> {
         if L::LEAST_SQUARES {
             self.rows.update(&self.lead, self.weights.get());
         }
-        self.lu.factor(&self.rows).map_err(|_| NewtonFail::Singular)
+        self.lu.factor(&self.rows).map_err(|_| Fail::Singular)
     }
 
     /// Block 3: solve the corrector, re-evaluating the iteration matrix once
     /// if an old one fails.
-    fn corrector(&mut self) -> Result<(), NewtonFail> {
+    fn corrector(&mut self) -> Result<(), Fail> {
         loop {
             let stale = self.jac == JacState::Stale;
             match self.newton() {
@@ -974,9 +953,9 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                     self.jac = JacState::Stale;
                     return Ok(());
                 }
-                Err(NewtonFail::Singular) => {
+                Err(Fail::Singular) => {
                     self.jac = JacState::Needed;
-                    return Err(NewtonFail::Singular);
+                    return Err(Fail::Singular);
                 }
                 Err(_) if stale => self.jac = JacState::Needed,
                 Err(fail) => {
@@ -990,7 +969,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
     }
 
     /// Modified Newton iteration on the corrector from the predictor.
-    fn newton(&mut self) -> Result<(), NewtonFail> {
+    fn newton(&mut self) -> Result<(), Fail> {
         self.predict();
         let pnorm = self.norm(&self.y);
         self.e.fill(0.0);
@@ -1043,11 +1022,11 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             self.s = monitor.eta;
             match verdict {
                 Verdict::Converged => return Ok(()),
-                Verdict::Diverged | Verdict::TooSlow { .. } => return Err(NewtonFail::Divergence),
+                Verdict::Diverged | Verdict::TooSlow { .. } => return Err(Fail::Newton),
                 Verdict::Continue => {}
             }
             // Non-finite at an iterate (not at the predictor): divergence.
-            self.residual().map_err(|_| NewtonFail::Divergence)?;
+            self.residual().map_err(|_| Fail::Newton)?;
         }
     }
 

@@ -1,4 +1,4 @@
-//! Tolerances, error weights and solver options.
+//! Tolerances and solver options (the error weights and the norm are `core::weights`).
 
 use crate::error::SolveError;
 
@@ -86,13 +86,6 @@ impl Tolerances {
     /// Absolute tolerance of component `i`.
     pub fn atol(&self, i: usize) -> f64 {
         self.atol.get(i)
-    }
-
-    /// Error weights `w_i = 1 / (atol_i + rtol_i |y_i|)` into `w`.
-    pub fn weights(&self, y: &[f64], w: &mut [f64]) {
-        for (i, (wi, yi)) in w.iter_mut().zip(y).enumerate() {
-            *wi = 1.0 / (self.atol.get(i) + self.rtol.get(i) * yi.abs());
-        }
     }
 }
 
