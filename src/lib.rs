@@ -16,7 +16,7 @@ pub mod sweep;
 
 /// Everything a user of the macro and the solvers needs.
 pub mod prelude {
-    pub use crate::dae;
+    pub use dae_macros::dae;
     pub use dae_core::system::{
         BoxedSystem, DaeSystem, FormulationInfo, Model, ModelInfo, RowKind, StaticSize, VarKind,
     };
