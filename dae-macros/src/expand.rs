@@ -460,6 +460,19 @@ mod tests {
         }
     }
 
+    /// Issue 9, defect 1: a function of a fraction used to crash rustc
+    /// (the row texts of the generated docs recursed forever).
+    #[test]
+    fn functions_of_fractions_expand() {
+        for rhs in ["sin(0.5)", "exp(3/2)", "sqrt(1/2)", "(3/2)^x"] {
+            let src = format!("C {{ differential {{ x }} equations {{ der(x) = {rhs}; }} }}");
+            let out = expand(TokenStream::from_str(&src).unwrap());
+            let file: syn::File = syn::parse2(out.clone()).unwrap_or_else(|e| panic!("{e}: {out}"));
+            assert!(!file.items.is_empty());
+            assert!(!out.to_string().contains("compile_error"), "{out}");
+        }
+    }
+
     #[test]
     fn tokens_are_counted_with_groups() {
         let t = TokenStream::from_str("a (b c) [d]").unwrap();
