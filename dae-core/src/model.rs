@@ -6,6 +6,7 @@ use crate::dsl::{Ast, BinOp, Errors, ModelAst, Name};
 use crate::expr::{self, Expr, Func, Sym};
 use crate::system::{VarKind, FORMULATION_NAMES};
 use proc_macro2::Span;
+use std::collections::HashMap;
 use std::str::FromStr;
 
 /// A parameter with its default.
@@ -93,17 +94,26 @@ pub struct Model {
 /// Names of the elementary functions.
 pub const FUNCTIONS: [&str; 6] = ["sin", "cos", "tan", "exp", "ln", "sqrt"];
 
+/// The name of time, which no parameter or unknown may take.
+pub const TIME: &str = "t";
+
 impl Model {
     /// Check a parsed model; every problem is reported, each at its token.
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
         let mut errors = Errors::default();
         let mut seen: Vec<(String, Span)> = Vec::new();
-        // Names declared twice: uses of them raise no further errors.
+        // Names declared twice or reserved: uses of them raise no further
+        // errors.
         let mut dupes: Vec<String> = Vec::new();
         let mut declare = |n: &Name, errors: &mut Errors| {
             if let Some((_, first)) = seen.iter().find(|(s, _)| *s == n.name) {
                 errors.push(n.span, format!("`{}` is declared twice", n.name));
                 errors.push(*first, format!("`{}` is first declared here", n.name));
+                dupes.push(n.name.clone());
+                return false;
+            }
+            if n.name == TIME {
+                errors.push(n.span, "`t` is reserved (time): choose another name");
                 dupes.push(n.name.clone());
                 return false;
             }
@@ -115,6 +125,7 @@ impl Model {
                         n.name
                     ),
                 );
+                dupes.push(n.name.clone());
                 return false;
             }
             seen.push((n.name.clone(), n.span));
@@ -308,7 +319,20 @@ impl Model {
             }
         }
         let mut invariants = Vec::new();
+        let mut invariant_names: HashMap<&str, Span> = HashMap::new();
         for inv in &ast.invariants {
+            if let Some(first) = invariant_names.get(inv.name.name.as_str()) {
+                errors.push(
+                    inv.name.span,
+                    format!("invariant `{}` is declared twice", inv.name.name),
+                );
+                errors.push(
+                    *first,
+                    format!("invariant `{}` is first declared here", inv.name.name),
+                );
+                continue;
+            }
+            invariant_names.insert(&inv.name.name, inv.name.span);
             if let Some(e) = scope.lower(&inv.expr, &mut errors) {
                 if e.any_sym(&|s| matches!(s, Sym::Der(_))) {
                     errors.push(inv.expr.span(), "invariants may not contain der()");
@@ -440,7 +464,7 @@ impl Model {
 struct Scope<'a> {
     params: &'a [ParamDef],
     vars: &'a [VarDef],
-    /// Names declared twice (already reported).
+    /// Names declared twice or reserved (already reported).
     dupes: &'a [String],
 }
 
