@@ -136,6 +136,13 @@ pub struct ModelAst {
     pub body_span: Span,
 }
 
+/// Deepest nesting of an expression: parentheses, function calls, unary
+/// signs and powers each add a level. Real models stay below 20; the limit
+/// keeps every recursive pass over an expression (lowering, derivatives,
+/// printing, code generation) far inside an 8 MiB stack, and inside the
+/// stack rustc lends a procedural macro.
+pub const MAX_DEPTH: usize = 256;
+
 /// Collects errors instead of stopping at the first.
 #[derive(Default)]
 pub struct Errors {
@@ -167,12 +174,60 @@ impl Errors {
     }
 }
 
-/// Parse model text read at run time (a `.dae` file). Lexer errors are
-/// reported with their position too.
+/// Parse model text read at run time (a `.dae` file). Lexical errors
+/// (unbalanced brackets, stray characters, unterminated strings, …) are one
+/// line each, at their position.
 pub fn parse_str(src: &str) -> Result<ModelAst, syn::Error> {
-    let tokens = TokenStream::from_str(src)
-        .map_err(|e| syn::Error::new(e.span(), format!("cannot read model: {e}")))?;
-    parse(tokens)
+    parse(lex(src)?)
+}
+
+/// Split text into tokens, after [`crate::lex::scan`] has checked that it
+/// can be: every error at its position. The model body and a section add
+/// two brackets around an expression's own.
+pub fn lex(src: &str) -> Result<TokenStream, syn::Error> {
+    crate::lex::scan(src, MAX_DEPTH + 2, MAX_DEPTH)
+        .map_err(|e| syn::Error::new(span_at(e.pos()), e.message()))?;
+    TokenStream::from_str(src).map_err(|e| {
+        // Not expected after the scan; proc_macro2 still knows where.
+        syn::Error::new(e.span(), "this text cannot be split into tokens")
+    })
+}
+
+/// A span that starts at `pos` of the text being read: the span of a
+/// placeholder token lexed at that line and column. Outside a procedural
+/// macro (and under `proc_macro2::fallback::force`) spans of lexed text
+/// carry their line and column, which is all an error needs.
+fn span_at(pos: crate::lex::Pos) -> Span {
+    let mut text = "\n".repeat(pos.line.saturating_sub(1));
+    text.push_str(&" ".repeat(pos.column.saturating_sub(1)));
+    text.push('x');
+    TokenStream::from_str(&text)
+        .ok()
+        .and_then(|t| t.into_iter().next())
+        .map_or_else(Span::call_site, |t| t.span())
+}
+
+/// A token as an error message shows it: a bracket group by its opening
+/// bracket, a long literal cut short, never more than one line.
+pub fn describe(t: &TokenTree) -> String {
+    match t {
+        TokenTree::Group(g) => match g.delimiter() {
+            Delimiter::Parenthesis => "(".into(),
+            Delimiter::Bracket => "[".into(),
+            Delimiter::Brace => "{".into(),
+            Delimiter::None => "…".into(),
+        },
+        other => {
+            let text = other.to_string();
+            let first = text.lines().next().unwrap_or("");
+            let short: String = first.chars().take(24).collect();
+            if short.len() < text.len() {
+                format!("{short}…")
+            } else {
+                short
+            }
+        }
+    }
 }
 
 /// Parse a model from tokens (the body of `dae! { … }`).
@@ -378,7 +433,10 @@ fn parse_parameters(tokens: &[TokenTree], errors: &mut Errors) -> Vec<ParamDecl>
                 None => {
                     errors.push(
                         lit.span(),
-                        format!("default of `{name}` must be a number, found `{lit}`"),
+                        format!(
+                            "default of `{name}` must be a number, found `{}`",
+                            describe(&TokenTree::Literal(lit.clone()))
+                        ),
                     );
                     continue;
                 }
@@ -393,7 +451,10 @@ fn parse_parameters(tokens: &[TokenTree], errors: &mut Errors) -> Vec<ParamDecl>
             [t, ..] => {
                 errors.push(
                     t.span(),
-                    format!("default of `{name}` must be a numeric literal, found `{t}`"),
+                    format!(
+                        "default of `{name}` must be a numeric literal, found `{}`",
+                        describe(t)
+                    ),
                 );
                 continue;
             }
@@ -527,7 +588,10 @@ pub fn parse_expr(tokens: &[TokenTree], at: Span, errors: &mut Errors) -> Option
     match p.expr(0) {
         Ok(e) => {
             if let Some(t) = p.toks.get(p.pos) {
-                errors.push(t.span(), format!("unexpected `{t}` in expression"));
+                errors.push(
+                    t.span(),
+                    format!("unexpected `{}` in expression", describe(t)),
+                );
                 None
             } else {
                 Some(e)
@@ -624,7 +688,10 @@ impl ExprParser<'_> {
                 number(&s).map(|v| Ast::Num(v, lit.span())).ok_or_else(|| {
                     syn::Error::new(
                         lit.span(),
-                        format!("`{s}` is not a number the model language understands"),
+                        format!(
+                            "`{}` is not a number the model language understands",
+                            describe(tok)
+                        ),
                     )
                 })
             }
@@ -672,7 +739,7 @@ impl ExprParser<'_> {
             }
             other => Err(syn::Error::new(
                 other.span(),
-                format!("unexpected `{other}` in expression"),
+                format!("unexpected `{}` in expression", describe(other)),
             )),
         }
     }

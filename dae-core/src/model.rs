@@ -433,10 +433,7 @@ impl Model {
     /// Parse an expression in this model's names (e.g. a hand-derived
     /// constraint to compare with a derived one).
     pub fn parse_expr(&self, src: &str) -> Result<Expr, syn::Error> {
-        let tokens: Vec<proc_macro2::TokenTree> = proc_macro2::TokenStream::from_str(src)
-            .map_err(|e| syn::Error::new(e.span(), format!("cannot read expression: {e}")))?
-            .into_iter()
-            .collect();
+        let tokens: Vec<proc_macro2::TokenTree> = crate::dsl::lex(src)?.into_iter().collect();
         let mut errors = Errors::default();
         let ast = crate::dsl::parse_expr(&tokens, Span::call_site(), &mut errors);
         let scope = Scope {
