@@ -7,7 +7,6 @@ use crate::expr::{self, Expr, Func, Sym};
 use crate::system::{VarKind, FORMULATION_NAMES};
 use proc_macro2::Span;
 use std::collections::HashMap;
-use std::str::FromStr;
 
 /// A parameter with its default.
 #[derive(Clone, Debug)]
@@ -564,47 +563,93 @@ impl Scope<'_> {
                 let a = self.lower(l, errors);
                 let b = self.lower(r, errors);
                 let (a, b) = (a?, b?);
-                let has_der = |e: &Expr| e.any_sym(&|s| matches!(s, Sym::Der(_)));
-                Some(match op {
-                    BinOp::Add => expr::add(&a, &b),
-                    BinOp::Sub => expr::sub(&a, &b),
-                    BinOp::Mul => {
-                        if has_der(&a) && has_der(&b) {
-                            errors.push(
-                                *span,
-                                "product of two der() terms: der() must appear linearly",
-                            );
-                            return None;
-                        }
-                        expr::mul(&a, &b)
+                let (a_der, b_der) = (has_der(&a), has_der(&b));
+                binary(*op, &a, &b, (a_der, b_der), (*span, r.span()), errors)
+            }
+            Ast::Chain(first, rest) => {
+                // Every operand is lowered (each reports its own errors),
+                // then combined in a loop: a long chain costs no stack.
+                let first = self.lower(first, errors);
+                let operands: Vec<Option<Expr>> =
+                    rest.iter().map(|(_, r, _)| self.lower(r, errors)).collect();
+                let mut acc = first?;
+                let operands: Vec<Expr> = operands.into_iter().collect::<Option<_>>()?;
+                if matches!(rest.first(), Some((BinOp::Add | BinOp::Sub, ..))) {
+                    // One canonical sum of all terms, not a sum rebuilt per
+                    // term.
+                    let mut terms = Vec::with_capacity(operands.len() + 1);
+                    terms.push(acc);
+                    for ((op, ..), e) in rest.iter().zip(operands) {
+                        terms.push(if *op == BinOp::Sub { expr::neg(&e) } else { e });
                     }
-                    BinOp::Div => {
-                        if has_der(&b) {
-                            errors.push(
-                                r.span(),
-                                "division by a der() term: der() must appear linearly",
-                            );
-                            return None;
-                        }
-                        if b.is_zero() {
-                            errors.push(r.span(), "division by zero");
-                            return None;
-                        }
-                        expr::div(&a, &b)
-                    }
-                    BinOp::Pow => {
-                        if has_der(&a) || has_der(&b) {
-                            errors.push(*span, "power of a der() term: der() must appear linearly");
-                            return None;
-                        }
-                        if a.is_zero() && b.as_num().is_some_and(num_traits::Signed::is_negative) {
-                            errors.push(*span, "zero to a negative power");
-                            return None;
-                        }
-                        expr::pow(&a, &b)
-                    }
-                })
+                    return Some(expr::add_all(terms));
+                }
+                let mut acc_der = has_der(&acc);
+                for ((op, r, span), b) in rest.iter().zip(operands) {
+                    let b_der = has_der(&b);
+                    acc = binary(*op, &acc, &b, (acc_der, b_der), (*span, r.span()), errors)?;
+                    // A product can lose its der() (`der(x) * 0`): look
+                    // again, but only when there was one.
+                    acc_der = (acc_der || b_der) && has_der(&acc);
+                }
+                Some(acc)
             }
         }
     }
+}
+
+fn has_der(e: &Expr) -> bool {
+    e.any_sym(&|s| matches!(s, Sym::Der(_)))
+}
+
+/// `a op b` with the checks of the language; `ders` says whether `a` and
+/// `b` contain der(), `spans` are the operator's and `b`'s.
+fn binary(
+    op: BinOp,
+    a: &Expr,
+    b: &Expr,
+    ders: (bool, bool),
+    spans: (Span, Span),
+    errors: &mut Errors,
+) -> Option<Expr> {
+    let (span, b_span) = spans;
+    Some(match op {
+        BinOp::Add => expr::add(a, b),
+        BinOp::Sub => expr::sub(a, b),
+        BinOp::Mul => {
+            if ders.0 && ders.1 {
+                errors.push(
+                    span,
+                    "product of two der() terms: der() must appear linearly",
+                );
+                return None;
+            }
+            expr::mul(a, b)
+        }
+        BinOp::Div => {
+            if ders.1 {
+                errors.push(
+                    b_span,
+                    "division by a der() term: der() must appear linearly",
+                );
+                return None;
+            }
+            if b.is_zero() {
+                errors.push(b_span, "division by zero");
+                return None;
+            }
+            expr::div(a, b)
+        }
+        BinOp::Pow => {
+            if ders.0 || ders.1 {
+                errors.push(span, "power of a der() term: der() must appear linearly");
+                return None;
+            }
+            if a.is_zero() && b.as_num().is_some_and(num_traits::Signed::is_negative) {
+                errors.push(span, "zero to a negative power");
+                return None;
+            }
+            expr::pow(a, b)
+        }
+    })
 }

@@ -248,16 +248,16 @@ impl Printer<'_> {
             // Every constant is printed here, never through `expr` (which
             // would come back to `atom` for a fraction).
             Expr::Num(v) => self.num_atom(v),
-            Expr::Func(f, a) => match self.style {
-                Style::Text => format!("{}({})", f.name(), self.expr(a)),
-                Style::Latex => format!("\\{}\\left({}\\right)", f.name(), self.expr(a)),
+            Expr::Func(c) => match self.style {
+                Style::Text => format!("{}({})", c.func.name(), self.expr(&c.arg)),
+                Style::Latex => format!("\\{}\\left({}\\right)", c.func.name(), self.expr(&c.arg)),
             },
             Expr::Prod(p) if p.factors.len() == 1 && p.factors[0].1 == qr(1, 2) => {
                 self.power(&p.factors[0].0, &qr(1, 2))
             }
-            Expr::Pow(be) => match self.style {
-                Style::Text => format!("{}^({})", self.atom(&be.0), self.expr(&be.1)),
-                Style::Latex => format!("{}^{{{}}}", self.atom(&be.0), self.expr(&be.1)),
+            Expr::Pow(p) => match self.style {
+                Style::Text => format!("{}^({})", self.atom(&p.base), self.expr(&p.exponent)),
+                Style::Latex => format!("{}^{{{}}}", self.atom(&p.base), self.expr(&p.exponent)),
             },
             _ => match self.style {
                 Style::Text => format!("({})", self.expr(e)),
