@@ -95,10 +95,14 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
         for (j, c) in &row.e {
             e_cells.push((i, *j, c.clone()));
         }
-        for k in 0..n {
-            let s = Sym::Var(k as u32);
-            fj_cells.push((i, k, expr::diff(&row.f, s)));
-            if !f.constant_leading {
+        // Only the unknowns an expression contains have non-zero
+        // derivatives: a row costs its own size, not the model's.
+        for k in unknowns(std::iter::once(&row.f), n) {
+            fj_cells.push((i, k, expr::diff(&row.f, Sym::Var(k as u32))));
+        }
+        if !f.constant_leading {
+            for k in unknowns(row.e.iter().map(|(_, c)| c), n) {
+                let s = Sym::Var(k as u32);
                 let ez =
                     expr::add_all(row.e.iter().map(|(j, c)| {
                         expr::mul(&expr::diff(c, s), &Expr::sym(Sym::Dir(*j as u32)))
@@ -112,7 +116,7 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
     let mut cj_cells = Vec::new();
     for (r, (_, _, e)) in chain.iter().enumerate() {
         cons.output(e);
-        for k in 0..n {
+        for k in unknowns(std::iter::once(*e), n) {
             cj_cells.push((r, k, expr::diff(e, Sym::Var(k as u32))));
         }
     }
@@ -132,6 +136,21 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
         invariants: inv.finish(),
         parameter_defaults: model.params.iter().map(|p| p.default).collect(),
     }
+}
+
+/// The unknowns `y_k`, `k < n`, that any of `exprs` contains, ascending.
+fn unknowns<'a>(exprs: impl Iterator<Item = &'a Expr>, n: usize) -> Vec<usize> {
+    let mut all = std::collections::BTreeSet::new();
+    for e in exprs {
+        for s in e.symbols() {
+            if let Sym::Var(k) = s {
+                if (k as usize) < n {
+                    all.insert(k as usize);
+                }
+            }
+        }
+    }
+    all.into_iter().collect()
 }
 
 impl Derived {

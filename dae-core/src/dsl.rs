@@ -61,6 +61,10 @@ pub enum Ast {
     Neg(Box<Ast>, Span),
     /// Binary operation; the span is the operator's.
     Bin(BinOp, Box<Ast>, Box<Ast>, Span),
+    /// A left-associative chain of `+`/`−` or of `*`/`/`:
+    /// `first op₁ a₁ op₂ a₂ …`, each operator with its span. A sum of
+    /// 20,000 terms is one node, not a tree 20,000 deep.
+    Chain(Box<Ast>, Vec<(BinOp, Ast, Span)>),
 }
 
 impl Ast {
@@ -68,7 +72,7 @@ impl Ast {
     pub fn span(&self) -> Span {
         match self {
             Ast::Num(_, s) | Ast::Ident(_, s) | Ast::Call(_, s, _) | Ast::Neg(_, s) => *s,
-            Ast::Bin(_, l, _, _) => l.span(),
+            Ast::Bin(_, l, _, _) | Ast::Chain(l, _) => l.span(),
         }
     }
 }
@@ -136,6 +140,16 @@ pub struct ModelAst {
     pub body_span: Span,
 }
 
+/// Deepest nesting of an expression: parentheses, function calls, unary
+/// signs and exponents each add a level. Real models stay below 20. The
+/// parser, the lowering and the printer recurse once per level (and the
+/// derivative passes once per level of the expressions derived from it), so
+/// the limit is what keeps them inside the stack: at 200 levels the deepest
+/// forms (`sin(x*cos(x*…))`, 10,000-character lines of parentheses) need
+/// about 1.5 MiB unoptimised and a few hundred KiB optimised, well inside
+/// an 8 MiB main thread or the thread rustc runs a procedural macro on.
+pub const MAX_DEPTH: usize = 200;
+
 /// Collects errors instead of stopping at the first.
 #[derive(Default)]
 pub struct Errors {
@@ -167,12 +181,60 @@ impl Errors {
     }
 }
 
-/// Parse model text read at run time (a `.dae` file). Lexer errors are
-/// reported with their position too.
+/// Parse model text read at run time (a `.dae` file). Lexical errors
+/// (unbalanced brackets, stray characters, unterminated strings, …) are one
+/// line each, at their position.
 pub fn parse_str(src: &str) -> Result<ModelAst, syn::Error> {
-    let tokens = TokenStream::from_str(src)
-        .map_err(|e| syn::Error::new(e.span(), format!("cannot read model: {e}")))?;
-    parse(tokens)
+    parse(lex(src)?)
+}
+
+/// Split text into tokens, after [`crate::lex::scan`] has checked that it
+/// can be: every error at its position. The model body and a section add
+/// two brackets around an expression's own.
+pub fn lex(src: &str) -> Result<TokenStream, syn::Error> {
+    crate::lex::scan(src, MAX_DEPTH + 2, MAX_DEPTH)
+        .map_err(|e| syn::Error::new(span_at(e.pos()), e.message()))?;
+    TokenStream::from_str(src).map_err(|e| {
+        // Not expected after the scan; proc_macro2 still knows where.
+        syn::Error::new(e.span(), "this text cannot be split into tokens")
+    })
+}
+
+/// A span that starts at `pos` of the text being read: the span of a
+/// placeholder token lexed at that line and column. Outside a procedural
+/// macro (and under `proc_macro2::fallback::force`) spans of lexed text
+/// carry their line and column, which is all an error needs.
+fn span_at(pos: crate::lex::Pos) -> Span {
+    let mut text = "\n".repeat(pos.line.saturating_sub(1));
+    text.push_str(&" ".repeat(pos.column.saturating_sub(1)));
+    text.push('x');
+    TokenStream::from_str(&text)
+        .ok()
+        .and_then(|t| t.into_iter().next())
+        .map_or_else(Span::call_site, |t| t.span())
+}
+
+/// A token as an error message shows it: a bracket group by its opening
+/// bracket, a long literal cut short, never more than one line.
+pub fn describe(t: &TokenTree) -> String {
+    match t {
+        TokenTree::Group(g) => match g.delimiter() {
+            Delimiter::Parenthesis => "(".into(),
+            Delimiter::Bracket => "[".into(),
+            Delimiter::Brace => "{".into(),
+            Delimiter::None => "…".into(),
+        },
+        other => {
+            let text = other.to_string();
+            let first = text.lines().next().unwrap_or("");
+            let short: String = first.chars().take(24).collect();
+            if short.len() < text.len() {
+                format!("{short}…")
+            } else {
+                short
+            }
+        }
+    }
 }
 
 /// Parse a model from tokens (the body of `dae! { … }`).
@@ -378,7 +440,10 @@ fn parse_parameters(tokens: &[TokenTree], errors: &mut Errors) -> Vec<ParamDecl>
                 None => {
                     errors.push(
                         lit.span(),
-                        format!("default of `{name}` must be a number, found `{lit}`"),
+                        format!(
+                            "default of `{name}` must be a number, found `{}`",
+                            describe(&TokenTree::Literal(lit.clone()))
+                        ),
                     );
                     continue;
                 }
@@ -393,7 +458,10 @@ fn parse_parameters(tokens: &[TokenTree], errors: &mut Errors) -> Vec<ParamDecl>
             [t, ..] => {
                 errors.push(
                     t.span(),
-                    format!("default of `{name}` must be a numeric literal, found `{t}`"),
+                    format!(
+                        "default of `{name}` must be a numeric literal, found `{}`",
+                        describe(t)
+                    ),
                 );
                 continue;
             }
@@ -516,6 +584,11 @@ pub fn number(lit: &str) -> Option<Q> {
 /// Parse an expression from a token slice; `at` locates errors in an empty
 /// slice.
 pub fn parse_expr(tokens: &[TokenTree], at: Span, errors: &mut Errors) -> Option<Ast> {
+    parse_expr_at(tokens, at, errors, 0)
+}
+
+/// [`parse_expr`] for tokens nested `depth` levels deep.
+fn parse_expr_at(tokens: &[TokenTree], at: Span, errors: &mut Errors, depth: usize) -> Option<Ast> {
     if tokens.is_empty() {
         errors.push(at, "expected an expression");
         return None;
@@ -523,11 +596,12 @@ pub fn parse_expr(tokens: &[TokenTree], at: Span, errors: &mut Errors) -> Option
     let mut p = ExprParser {
         toks: tokens,
         pos: 0,
+        depth,
     };
     match p.expr(0) {
         Ok(e) => {
             if let Some(t) = p.toks.get(p.pos) {
-                errors.push(t.span(), format!("unexpected `{t}` in expression"));
+                errors.push_error(unexpected(t));
                 None
             } else {
                 Some(e)
@@ -543,6 +617,27 @@ pub fn parse_expr(tokens: &[TokenTree], at: Span, errors: &mut Errors) -> Option
 struct ExprParser<'a> {
     toks: &'a [TokenTree],
     pos: usize,
+    /// Nesting level: parentheses, call arguments, unary signs and
+    /// exponents each add one.
+    depth: usize,
+}
+
+/// `+`/`−` and `*`/`/` chain separately.
+fn chain_class(op: BinOp) -> u8 {
+    match op {
+        BinOp::Add | BinOp::Sub => 0,
+        BinOp::Mul | BinOp::Div => 1,
+        BinOp::Pow => 2,
+    }
+}
+
+/// `first` followed by the chain read so far, as one node.
+fn close_chain(first: Ast, chain: &mut Vec<(BinOp, Ast, Span)>) -> Ast {
+    if chain.is_empty() {
+        first
+    } else {
+        Ast::Chain(Box::new(first), std::mem::take(chain))
+    }
 }
 
 const BP_ADD: u8 = 10;
@@ -568,8 +663,25 @@ impl ExprParser<'_> {
         }
     }
 
+    /// One level deeper, at the token of `span`; an error past
+    /// [`MAX_DEPTH`].
+    fn enter(&mut self, span: Span) -> Result<(), syn::Error> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(too_deep(span));
+        }
+        Ok(())
+    }
+
+    fn leave(&mut self) {
+        self.depth -= 1;
+    }
+
     fn expr(&mut self, min_bp: u8) -> Result<Ast, syn::Error> {
         let mut lhs = self.prefix()?;
+        // Operands of the `+`/`−` or `*`/`/` chain being read (a loop, so
+        // a long sum costs no stack).
+        let mut chain: Vec<(BinOp, Ast, Span)> = Vec::new();
         while let Some((op, span)) = self.peek_op() {
             let (lbp, rbp) = match op {
                 BinOp::Add | BinOp::Sub => (BP_ADD, BP_ADD + 1),
@@ -580,15 +692,27 @@ impl ExprParser<'_> {
                 break;
             }
             self.pos += 1;
-            let rhs = if op == BinOp::Pow {
-                // The exponent may carry its own sign: `x^-2`.
-                self.expr_or_unary(rbp)?
-            } else {
-                self.expr(rbp)?
-            };
-            lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs), span);
+            if op == BinOp::Pow {
+                // `^` binds tighter than a chain, so it only ever follows a
+                // single operand. The exponent may carry its own sign:
+                // `x^-2`.
+                lhs = close_chain(lhs, &mut chain);
+                self.enter(span)?;
+                let rhs = self.expr_or_unary(rbp)?;
+                self.leave();
+                lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs), span);
+                continue;
+            }
+            let rhs = self.expr(rbp)?;
+            if chain
+                .first()
+                .is_some_and(|(first, ..)| chain_class(*first) != chain_class(op))
+            {
+                lhs = close_chain(lhs, &mut chain);
+            }
+            chain.push((op, rhs, span));
         }
-        Ok(lhs)
+        Ok(close_chain(lhs, &mut chain))
     }
 
     fn expr_or_unary(&mut self, bp: u8) -> Result<Ast, syn::Error> {
@@ -597,7 +721,9 @@ impl ExprParser<'_> {
                 let span = p.span();
                 let negative = p.as_char() == '-';
                 self.pos += 1;
+                self.enter(span)?;
                 let inner = self.expr_or_unary(bp)?;
+                self.leave();
                 return Ok(if negative {
                     Ast::Neg(Box::new(inner), span)
                 } else {
@@ -608,6 +734,9 @@ impl ExprParser<'_> {
         self.expr(bp)
     }
 
+    // The recursive descent keeps each level's frame small: every case is
+    // its own function and messages are formatted out of line, so an
+    // expression at the nesting limit needs little stack even unoptimised.
     fn prefix(&mut self) -> Result<Ast, syn::Error> {
         let Some(tok) = self.toks.get(self.pos) else {
             let span = self
@@ -619,63 +748,103 @@ impl ExprParser<'_> {
         };
         self.pos += 1;
         match tok {
-            TokenTree::Literal(lit) => {
-                let s = lit.to_string();
-                number(&s).map(|v| Ast::Num(v, lit.span())).ok_or_else(|| {
-                    syn::Error::new(
-                        lit.span(),
-                        format!("`{s}` is not a number the model language understands"),
-                    )
-                })
-            }
-            TokenTree::Ident(id) => {
-                let name = id.to_string();
-                if let Some(TokenTree::Group(g)) = self.toks.get(self.pos) {
-                    if g.delimiter() == Delimiter::Parenthesis {
-                        self.pos += 1;
-                        let inner: Vec<TokenTree> = g.stream().into_iter().collect();
-                        let mut errs = Errors::default();
-                        let mut args = Vec::new();
-                        for (piece, _) in split(&inner, ',') {
-                            if let Some(a) = parse_expr(piece, g.span(), &mut errs) {
-                                args.push(a);
-                            }
-                        }
-                        errs.finish(())?;
-                        if args.is_empty() {
-                            return Err(syn::Error::new(
-                                g.span(),
-                                format!("`{name}(…)` needs an argument"),
-                            ));
-                        }
-                        return Ok(Ast::Call(name, id.span(), args));
-                    }
-                }
-                Ok(Ast::Ident(name, id.span()))
-            }
-            TokenTree::Group(g) if g.delimiter() == Delimiter::Parenthesis => {
-                let inner: Vec<TokenTree> = g.stream().into_iter().collect();
-                let mut errs = Errors::default();
-                let e = parse_expr(&inner, g.span(), &mut errs);
-                errs.finish(())?;
-                e.ok_or_else(|| {
-                    syn::Error::new(g.span(), "expected an expression inside parentheses")
-                })
-            }
-            TokenTree::Punct(p) if p.as_char() == '-' || p.as_char() == '+' => {
-                let inner = self.expr(BP_UNARY)?;
-                Ok(if p.as_char() == '-' {
-                    Ast::Neg(Box::new(inner), p.span())
-                } else {
-                    inner
-                })
-            }
-            other => Err(syn::Error::new(
-                other.span(),
-                format!("unexpected `{other}` in expression"),
-            )),
+            TokenTree::Literal(lit) => literal(lit),
+            TokenTree::Ident(id) => self.name_or_call(id),
+            TokenTree::Group(g) if g.delimiter() == Delimiter::Parenthesis => self.group(g),
+            TokenTree::Punct(p) if p.as_char() == '-' || p.as_char() == '+' => self.unary(p),
+            other => Err(unexpected(other)),
         }
     }
+
+    fn name_or_call(&mut self, id: &proc_macro2::Ident) -> Result<Ast, syn::Error> {
+        let name = id.to_string();
+        let Some(TokenTree::Group(g)) = self.toks.get(self.pos) else {
+            return Ok(Ast::Ident(name, id.span()));
+        };
+        if g.delimiter() != Delimiter::Parenthesis {
+            return Ok(Ast::Ident(name, id.span()));
+        }
+        self.pos += 1;
+        let inner: Vec<TokenTree> = g.stream().into_iter().collect();
+        let mut errs = Errors::default();
+        let mut args = Vec::new();
+        self.enter(g.span())?;
+        for (piece, _) in split(&inner, ',') {
+            if let Some(a) = parse_expr_at(piece, g.span(), &mut errs, self.depth) {
+                args.push(a);
+            }
+        }
+        self.leave();
+        errs.finish(())?;
+        if args.is_empty() {
+            return Err(needs_argument(&name, g.span()));
+        }
+        Ok(Ast::Call(name, id.span(), args))
+    }
+
+    fn group(&mut self, g: &proc_macro2::Group) -> Result<Ast, syn::Error> {
+        let inner: Vec<TokenTree> = g.stream().into_iter().collect();
+        let mut errs = Errors::default();
+        self.enter(g.span())?;
+        let e = parse_expr_at(&inner, g.span(), &mut errs, self.depth);
+        self.leave();
+        errs.finish(())?;
+        e.ok_or_else(|| syn::Error::new(g.span(), "expected an expression inside parentheses"))
+    }
+
+    fn unary(&mut self, p: &proc_macro2::Punct) -> Result<Ast, syn::Error> {
+        self.enter(p.span())?;
+        let inner = self.expr(BP_UNARY)?;
+        self.leave();
+        Ok(if p.as_char() == '-' {
+            Ast::Neg(Box::new(inner), p.span())
+        } else {
+            inner
+        })
+    }
+}
+
+fn literal(lit: &proc_macro2::Literal) -> Result<Ast, syn::Error> {
+    let s = lit.to_string();
+    number(&s)
+        .map(|v| Ast::Num(v, lit.span()))
+        .ok_or_else(|| not_a_number(lit))
+}
+
+#[cold]
+#[inline(never)]
+fn not_a_number(lit: &proc_macro2::Literal) -> syn::Error {
+    syn::Error::new(
+        lit.span(),
+        format!(
+            "`{}` is not a number the model language understands",
+            describe(&TokenTree::Literal(lit.clone()))
+        ),
+    )
+}
+
+#[cold]
+#[inline(never)]
+fn needs_argument(name: &str, span: Span) -> syn::Error {
+    syn::Error::new(span, format!("`{name}(…)` needs an argument"))
+}
+
+#[cold]
+#[inline(never)]
+fn unexpected(t: &TokenTree) -> syn::Error {
+    syn::Error::new(
+        t.span(),
+        format!("unexpected `{}` in expression", describe(t)),
+    )
+}
+
+#[cold]
+#[inline(never)]
+fn too_deep(span: Span) -> syn::Error {
+    syn::Error::new(
+        span,
+        format!("expression nested too deep (limit {MAX_DEPTH})"),
+    )
 }
 
 #[cfg(test)]
@@ -701,12 +870,14 @@ mod tests {
         let e = parse_expr(&toks, Span::call_site(), &mut errs).unwrap();
         // (-(x^2) * 3) + (2^(-1))
         match e {
-            Ast::Bin(BinOp::Add, l, r, _) => {
+            Ast::Chain(l, rest) => {
                 assert!(
-                    matches!(*l, Ast::Bin(BinOp::Mul, ref a, _, _) if matches!(**a, Ast::Neg(ref b, _) if matches!(**b, Ast::Bin(BinOp::Pow, ..))))
+                    matches!(*l, Ast::Chain(ref a, ref m) if m.len() == 1 && m[0].0 == BinOp::Mul && matches!(**a, Ast::Neg(ref b, _) if matches!(**b, Ast::Bin(BinOp::Pow, ..))))
                 );
+                assert_eq!(rest.len(), 1);
+                assert_eq!(rest[0].0, BinOp::Add);
                 assert!(
-                    matches!(*r, Ast::Bin(BinOp::Pow, _, ref b, _) if matches!(**b, Ast::Neg(..)))
+                    matches!(rest[0].1, Ast::Bin(BinOp::Pow, _, ref b, _) if matches!(**b, Ast::Neg(..)))
                 );
             }
             other => panic!("wrong tree {other:?}"),

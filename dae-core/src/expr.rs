@@ -24,8 +24,10 @@ use num_bigint::BigInt;
 use num_integer::Integer;
 use num_rational::BigRational;
 use num_traits::{One, Signed, ToPrimitive, Zero};
+use std::cmp::Ordering;
 use std::collections::BTreeMap;
 use std::fmt;
+use std::hash::{Hash, Hasher};
 use std::rc::Rc;
 
 /// Exact rational number.
@@ -94,24 +96,119 @@ impl Func {
 }
 
 /// A canonical sum `constant + Σ coefficient·term`.
-#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Clone, Debug)]
 pub struct Sum {
     /// Sorted by term, coefficients non-zero; no term is a number or a sum.
     pub terms: Vec<(Expr, Q)>,
     /// Constant part.
     pub constant: Q,
+    meta: Meta,
 }
 
 /// A canonical product `Π base^exponent` (coefficient 1).
-#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Clone, Debug)]
 pub struct Prod {
     /// Sorted by base, exponents non-zero; no base is a product.
     pub factors: Vec<(Expr, Q)>,
+    meta: Meta,
+}
+
+/// `base ^ exponent` with a non-numeric exponent.
+#[derive(Clone, Debug)]
+pub struct Power {
+    /// The base.
+    pub base: Expr,
+    /// The exponent (not a number).
+    pub exponent: Expr,
+    meta: Meta,
+}
+
+/// An elementary function applied to an argument.
+#[derive(Clone, Debug)]
+pub struct Call {
+    /// The function.
+    pub func: Func,
+    /// Its argument.
+    pub arg: Expr,
+    meta: Meta,
+}
+
+/// What every compound node caches about itself when it is built, so that
+/// no question about it needs a walk of the tree: its height, a structural
+/// hash, and a mask of the symbols below it.
+#[derive(Clone, Copy, Debug)]
+struct Meta {
+    /// Longest path to a leaf (numbers and symbols have height 0).
+    height: u32,
+    /// Hash of the structure (equal expressions have equal hashes).
+    hash: u64,
+    /// Bit [`sym_bit`] of every symbol the expression contains.
+    syms: u64,
+}
+
+impl Meta {
+    /// Metadata of a node with tag `tag` over `children`; `extra` hashes
+    /// the node's own data (coefficients, exponents, the function).
+    fn of<'a>(tag: u8, children: impl Iterator<Item = &'a Expr>, extra: &dyn Fn(&mut Fnv)) -> Meta {
+        let mut h = Fnv::new();
+        h.write_u8(tag);
+        let (mut height, mut syms) = (0u32, 0u64);
+        for c in children {
+            height = height.max(c.height());
+            syms |= c.sym_mask();
+            h.write_u64(c.structural_hash());
+        }
+        extra(&mut h);
+        Meta {
+            height: height.saturating_add(1),
+            hash: h.finish(),
+            syms,
+        }
+    }
+}
+
+/// FNV-1a, 64 bits: a fixed hash, so nothing depends on a random seed.
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Hasher for Fnv {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.0 ^= u64::from(*b);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+}
+
+fn hash_q(v: &Q, h: &mut Fnv) {
+    v.hash(h);
+}
+
+/// The bit of `s` in a [`Meta::syms`] mask.
+fn sym_bit(s: Sym) -> u64 {
+    let mut h = Fnv::new();
+    s.hash(&mut h);
+    1u64 << (h.finish() % 64)
 }
 
 /// A symbolic expression in canonical form. Build with the free functions
 /// of this module; the variants are public for inspection.
-#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+///
+/// Equality is structural. The order is the structural order (variant,
+/// then fields, children compared the same way) for expressions of height
+/// up to [`ORDER_HEIGHT`]; a taller expression is first ordered by height.
+/// That keeps the familiar order of every printed term of a real model
+/// while making comparisons of deep expressions (the factors of a long
+/// chain rule, say) constant-time instead of proportional to their depth.
+#[derive(Clone, Debug)]
 pub enum Expr {
     /// Exact rational constant.
     Num(Rc<Q>),
@@ -122,9 +219,200 @@ pub enum Expr {
     /// Product.
     Prod(Rc<Prod>),
     /// `base ^ exponent` with a non-numeric exponent.
-    Pow(Rc<(Expr, Expr)>),
+    Pow(Rc<Power>),
     /// Elementary function.
-    Func(Func, Rc<Expr>),
+    Func(Rc<Call>),
+}
+
+/// Height up to which expressions are ordered purely structurally (see
+/// [`Expr`]).
+pub const ORDER_HEIGHT: u32 = 16;
+
+impl Expr {
+    fn meta(&self) -> Option<&Meta> {
+        match self {
+            Expr::Num(_) | Expr::Sym(_) => None,
+            Expr::Sum(s) => Some(&s.meta),
+            Expr::Prod(p) => Some(&p.meta),
+            Expr::Pow(p) => Some(&p.meta),
+            Expr::Func(c) => Some(&c.meta),
+        }
+    }
+
+    /// Longest path from the root to a leaf (0 for numbers and symbols).
+    pub fn height(&self) -> u32 {
+        self.meta().map_or(0, |m| m.height)
+    }
+
+    /// Mask of the symbols below (a superset test: a clear bit means the
+    /// symbol is absent).
+    fn sym_mask(&self) -> u64 {
+        match self {
+            Expr::Sym(s) => sym_bit(*s),
+            _ => self.meta().map_or(0, |m| m.syms),
+        }
+    }
+
+    /// A hash of the structure, independent of how the expression was
+    /// built and of any random seed.
+    pub fn structural_hash(&self) -> u64 {
+        match self {
+            Expr::Num(v) => {
+                let mut h = Fnv::new();
+                h.write_u8(0);
+                hash_q(v, &mut h);
+                h.finish()
+            }
+            Expr::Sym(s) => {
+                let mut h = Fnv::new();
+                h.write_u8(1);
+                s.hash(&mut h);
+                h.finish()
+            }
+            _ => self.meta().map_or(0, |m| m.hash),
+        }
+    }
+
+    fn variant(&self) -> u8 {
+        match self {
+            Expr::Num(_) => 0,
+            Expr::Sym(_) => 1,
+            Expr::Sum(_) => 2,
+            Expr::Prod(_) => 3,
+            Expr::Pow(_) => 4,
+            Expr::Func(_) => 5,
+        }
+    }
+
+    /// The same node (shared), so equal without a look inside.
+    fn same_node(&self, other: &Expr) -> bool {
+        match (self, other) {
+            (Expr::Num(a), Expr::Num(b)) => Rc::ptr_eq(a, b),
+            (Expr::Sum(a), Expr::Sum(b)) => Rc::ptr_eq(a, b),
+            (Expr::Prod(a), Expr::Prod(b)) => Rc::ptr_eq(a, b),
+            (Expr::Pow(a), Expr::Pow(b)) => Rc::ptr_eq(a, b),
+            (Expr::Func(a), Expr::Func(b)) => Rc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
+}
+
+thread_local! {
+    static WORK: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// Symbolic work done on this thread so far: structural comparison steps
+/// and derivative steps. A measure of cost that does not depend on the
+/// machine, for tests that bound how work grows with a model.
+pub fn work() -> u64 {
+    WORK.with(std::cell::Cell::get)
+}
+
+fn count_work() {
+    WORK.with(|w| w.set(w.get() + 1));
+}
+
+impl PartialEq for Expr {
+    fn eq(&self, other: &Expr) -> bool {
+        if self.same_node(other) {
+            return true;
+        }
+        if self.variant() != other.variant()
+            || self.height() != other.height()
+            || self.structural_hash() != other.structural_hash()
+        {
+            return false;
+        }
+        count_work();
+        match (self, other) {
+            (Expr::Num(a), Expr::Num(b)) => a == b,
+            (Expr::Sym(a), Expr::Sym(b)) => a == b,
+            (Expr::Sum(a), Expr::Sum(b)) => a.constant == b.constant && a.terms == b.terms,
+            (Expr::Prod(a), Expr::Prod(b)) => a.factors == b.factors,
+            (Expr::Pow(a), Expr::Pow(b)) => a.base == b.base && a.exponent == b.exponent,
+            (Expr::Func(a), Expr::Func(b)) => a.func == b.func && a.arg == b.arg,
+            _ => false,
+        }
+    }
+}
+
+impl Eq for Expr {}
+
+impl PartialOrd for Expr {
+    fn partial_cmp(&self, other: &Expr) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Expr {
+    fn cmp(&self, other: &Expr) -> Ordering {
+        if self.same_node(other) {
+            return Ordering::Equal;
+        }
+        let (ha, hb) = (self.height(), other.height());
+        if ha != hb && ha.max(hb) > ORDER_HEIGHT {
+            return ha.cmp(&hb);
+        }
+        count_work();
+        match (self, other) {
+            (Expr::Num(a), Expr::Num(b)) => a.cmp(b),
+            (Expr::Sym(a), Expr::Sym(b)) => a.cmp(b),
+            (Expr::Sum(a), Expr::Sum(b)) => a
+                .terms
+                .cmp(&b.terms)
+                .then_with(|| a.constant.cmp(&b.constant)),
+            (Expr::Prod(a), Expr::Prod(b)) => a.factors.cmp(&b.factors),
+            (Expr::Pow(a), Expr::Pow(b)) => a
+                .base
+                .cmp(&b.base)
+                .then_with(|| a.exponent.cmp(&b.exponent)),
+            (Expr::Func(a), Expr::Func(b)) => a.func.cmp(&b.func).then_with(|| a.arg.cmp(&b.arg)),
+            _ => self.variant().cmp(&other.variant()),
+        }
+    }
+}
+
+impl Hash for Expr {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        state.write_u64(self.structural_hash());
+    }
+}
+
+fn sum_node(terms: Vec<(Expr, Q)>, constant: Q) -> Expr {
+    let meta = Meta::of(2, terms.iter().map(|(t, _)| t), &|h| {
+        for (_, c) in &terms {
+            hash_q(c, h);
+        }
+        hash_q(&constant, h);
+    });
+    Expr::Sum(Rc::new(Sum {
+        terms,
+        constant,
+        meta,
+    }))
+}
+
+fn prod_node(factors: Vec<(Expr, Q)>) -> Expr {
+    let meta = Meta::of(3, factors.iter().map(|(b, _)| b), &|h| {
+        for (_, x) in &factors {
+            hash_q(x, h);
+        }
+    });
+    Expr::Prod(Rc::new(Prod { factors, meta }))
+}
+
+fn pow_node(base: Expr, exponent: Expr) -> Expr {
+    let meta = Meta::of(4, [&base, &exponent].into_iter(), &|_| {});
+    Expr::Pow(Rc::new(Power {
+        base,
+        exponent,
+        meta,
+    }))
+}
+
+fn call_node(func: Func, arg: Expr) -> Expr {
+    let meta = Meta::of(5, std::iter::once(&arg), &|h| h.write_u8(func as u8));
+    Expr::Func(Rc::new(Call { func, arg, meta }))
 }
 
 /// The rational `n`.
@@ -189,13 +477,16 @@ impl Expr {
 
     /// Does the expression depend on `s`?
     pub fn contains(&self, s: Sym) -> bool {
+        if self.sym_mask() & sym_bit(s) == 0 {
+            return false;
+        }
         match self {
             Expr::Num(_) => false,
             Expr::Sym(t) => *t == s,
             Expr::Sum(sum) => sum.terms.iter().any(|(t, _)| t.contains(s)),
             Expr::Prod(p) => p.factors.iter().any(|(b, _)| b.contains(s)),
-            Expr::Pow(be) => be.0.contains(s) || be.1.contains(s),
-            Expr::Func(_, a) => a.contains(s),
+            Expr::Pow(p) => p.base.contains(s) || p.exponent.contains(s),
+            Expr::Func(c) => c.arg.contains(s),
         }
     }
 
@@ -206,8 +497,8 @@ impl Expr {
             Expr::Sym(t) => pred(*t),
             Expr::Sum(sum) => sum.terms.iter().any(|(t, _)| t.any_sym(pred)),
             Expr::Prod(p) => p.factors.iter().any(|(b, _)| b.any_sym(pred)),
-            Expr::Pow(be) => be.0.any_sym(pred) || be.1.any_sym(pred),
-            Expr::Func(_, a) => a.any_sym(pred),
+            Expr::Pow(p) => p.base.any_sym(pred) || p.exponent.any_sym(pred),
+            Expr::Func(c) => c.arg.any_sym(pred),
         }
     }
 
@@ -226,11 +517,11 @@ impl Expr {
             }
             Expr::Sum(sum) => sum.terms.iter().for_each(|(t, _)| t.collect_symbols(out)),
             Expr::Prod(p) => p.factors.iter().for_each(|(b, _)| b.collect_symbols(out)),
-            Expr::Pow(be) => {
-                be.0.collect_symbols(out);
-                be.1.collect_symbols(out);
+            Expr::Pow(p) => {
+                p.base.collect_symbols(out);
+                p.exponent.collect_symbols(out);
             }
-            Expr::Func(_, a) => a.collect_symbols(out),
+            Expr::Func(c) => c.arg.collect_symbols(out),
         }
     }
 
@@ -251,8 +542,8 @@ impl Expr {
                 .iter()
                 .map(|(b, e)| pow_f64(b.eval(env), e))
                 .product(),
-            Expr::Pow(be) => be.0.eval(env).powf(be.1.eval(env)),
-            Expr::Func(f, a) => f.apply(a.eval(env)),
+            Expr::Pow(p) => p.base.eval(env).powf(p.exponent.eval(env)),
+            Expr::Func(c) => c.func.apply(c.arg.eval(env)),
         }
     }
 }
@@ -311,7 +602,7 @@ fn make_sum(constant: Q, map: BTreeMap<Expr, Q>) -> Expr {
             .map(|(t, _)| t)
             .unwrap_or_else(Expr::zero);
     }
-    Expr::Sum(Rc::new(Sum { terms, constant }))
+    sum_node(terms, constant)
 }
 
 fn add_into(constant: &mut Q, map: &mut BTreeMap<Expr, Q>, e: &Expr, scale: &Q) {
@@ -546,7 +837,7 @@ fn make_prod(factors: Vec<(Expr, Q)>) -> Expr {
             .map(|(b, _)| b)
             .unwrap_or_else(Expr::one);
     }
-    Expr::Prod(Rc::new(Prod { factors }))
+    prod_node(factors)
 }
 
 /// `v^k` exactly, for moderate integer `k`; `None` for `0^negative` or huge
@@ -596,7 +887,7 @@ pub fn pow(base: &Expr, exponent: &Expr) -> Expr {
         if base.is_one() {
             return Expr::one();
         }
-        return Expr::Pow(Rc::new((base.clone(), exponent.clone())));
+        return pow_node(base.clone(), exponent.clone());
     };
     pow_rational(base, x)
 }
@@ -656,7 +947,7 @@ pub fn pow_rational(base: &Expr, x: &Q) -> Expr {
             }
             make_prod(vec![(base.clone(), x.clone())])
         }
-        Expr::Prod(_) => Expr::Pow(Rc::new((base.clone(), Expr::num(x.clone())))),
+        Expr::Prod(_) => pow_node(base.clone(), Expr::num(x.clone())),
         _ => make_prod(vec![(base.clone(), x.clone())]),
     }
 }
@@ -696,15 +987,18 @@ pub fn func(f: Func, arg: &Expr) -> Expr {
         (Func::Sin | Func::Tan, Some(v)) if v.is_zero() => Expr::zero(),
         (Func::Cos | Func::Exp, Some(v)) if v.is_zero() => Expr::one(),
         (Func::Ln, Some(v)) if v.is_one() => Expr::zero(),
-        _ => Expr::Func(f, Rc::new(arg.clone())),
+        _ => call_node(f, arg.clone()),
     }
 }
 
 /// `∂e/∂s`.
 pub fn diff(e: &Expr, s: Sym) -> Expr {
-    if !e.contains(s) {
+    // A subtree without `s` differentiates to zero; the mask says so
+    // without a walk (a walk per level would make a deep chain quadratic).
+    if e.sym_mask() & sym_bit(s) == 0 {
         return Expr::zero();
     }
+    count_work();
     match e {
         Expr::Num(_) => Expr::zero(),
         Expr::Sym(t) => {
@@ -732,26 +1026,40 @@ pub fn diff(e: &Expr, s: Sym) -> Expr {
             }
             add_all(terms)
         }
-        Expr::Pow(be) => {
+        Expr::Pow(p) => {
             // d(b^e) = b^e · (e' ln b + e b'/b)
-            let (b, x) = (&be.0, &be.1);
+            let (b, x) = (&p.base, &p.exponent);
             let inner = add(
                 &mul(&diff(x, s), &func(Func::Ln, b)),
                 &mul_all([x.clone(), diff(b, s), pow_rational(b, &q(-1))]),
             );
             mul(e, &inner)
         }
-        Expr::Func(f, a) => {
-            let da = diff(a, s);
-            let outer = match f {
-                Func::Sin => func(Func::Cos, a),
-                Func::Cos => neg(&func(Func::Sin, a)),
-                Func::Tan => add(&Expr::one(), &pow_rational(e, &q(2))),
-                Func::Exp => e.clone(),
-                Func::Ln => pow_rational(a, &q(-1)),
-            };
-            mul(&outer, &da)
+        Expr::Func(_) => {
+            // The chain rule along a whole chain f(g(h(…))) at once: one
+            // product of the outer derivatives, instead of a product per
+            // link rebuilt from the one below it.
+            let mut factors = Vec::new();
+            let mut link = e;
+            while let Expr::Func(c) = link {
+                factors.push(outer_derivative(c, link));
+                link = &c.arg;
+            }
+            factors.push(diff(link, s));
+            mul_all(factors)
         }
+    }
+}
+
+/// `f'(a)` for the call `e = f(a)`.
+fn outer_derivative(c: &Call, e: &Expr) -> Expr {
+    let a = &c.arg;
+    match c.func {
+        Func::Sin => func(Func::Cos, a),
+        Func::Cos => neg(&func(Func::Sin, a)),
+        Func::Tan => add(&Expr::one(), &pow_rational(e, &q(2))),
+        Func::Exp => e.clone(),
+        Func::Ln => pow_rational(a, &q(-1)),
     }
 }
 
@@ -774,8 +1082,8 @@ pub fn subs(e: &Expr, map: &dyn Fn(Sym) -> Option<Expr>) -> Expr {
                 .iter()
                 .map(|(b, x)| pow_rational(&subs(b, map), x)),
         ),
-        Expr::Pow(be) => pow(&subs(&be.0, map), &subs(&be.1, map)),
-        Expr::Func(f, a) => func(*f, &subs(a, map)),
+        Expr::Pow(p) => pow(&subs(&p.base, map), &subs(&p.exponent, map)),
+        Expr::Func(c) => func(c.func, &subs(&c.arg, map)),
     }
 }
 

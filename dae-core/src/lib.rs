@@ -16,6 +16,7 @@ pub mod expr;
 pub mod formulation;
 pub mod index;
 pub mod interp;
+pub mod lex;
 pub mod model;
 pub mod print;
 pub mod report;

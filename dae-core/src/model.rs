@@ -6,7 +6,7 @@ use crate::dsl::{Ast, BinOp, Errors, ModelAst, Name};
 use crate::expr::{self, Expr, Func, Sym};
 use crate::system::{VarKind, FORMULATION_NAMES};
 use proc_macro2::Span;
-use std::str::FromStr;
+use std::collections::HashMap;
 
 /// A parameter with its default.
 #[derive(Clone, Debug)]
@@ -93,17 +93,26 @@ pub struct Model {
 /// Names of the elementary functions.
 pub const FUNCTIONS: [&str; 6] = ["sin", "cos", "tan", "exp", "ln", "sqrt"];
 
+/// The name of time, which no parameter or unknown may take.
+pub const TIME: &str = "t";
+
 impl Model {
     /// Check a parsed model; every problem is reported, each at its token.
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
         let mut errors = Errors::default();
         let mut seen: Vec<(String, Span)> = Vec::new();
-        // Names declared twice: uses of them raise no further errors.
+        // Names declared twice or reserved: uses of them raise no further
+        // errors.
         let mut dupes: Vec<String> = Vec::new();
         let mut declare = |n: &Name, errors: &mut Errors| {
             if let Some((_, first)) = seen.iter().find(|(s, _)| *s == n.name) {
                 errors.push(n.span, format!("`{}` is declared twice", n.name));
                 errors.push(*first, format!("`{}` is first declared here", n.name));
+                dupes.push(n.name.clone());
+                return false;
+            }
+            if n.name == TIME {
+                errors.push(n.span, "`t` is reserved (time): choose another name");
                 dupes.push(n.name.clone());
                 return false;
             }
@@ -115,6 +124,7 @@ impl Model {
                         n.name
                     ),
                 );
+                dupes.push(n.name.clone());
                 return false;
             }
             seen.push((n.name.clone(), n.span));
@@ -308,7 +318,20 @@ impl Model {
             }
         }
         let mut invariants = Vec::new();
+        let mut invariant_names: HashMap<&str, Span> = HashMap::new();
         for inv in &ast.invariants {
+            if let Some(first) = invariant_names.get(inv.name.name.as_str()) {
+                errors.push(
+                    inv.name.span,
+                    format!("invariant `{}` is declared twice", inv.name.name),
+                );
+                errors.push(
+                    *first,
+                    format!("invariant `{}` is first declared here", inv.name.name),
+                );
+                continue;
+            }
+            invariant_names.insert(&inv.name.name, inv.name.span);
             if let Some(e) = scope.lower(&inv.expr, &mut errors) {
                 if e.any_sym(&|s| matches!(s, Sym::Der(_))) {
                     errors.push(inv.expr.span(), "invariants may not contain der()");
@@ -409,10 +432,7 @@ impl Model {
     /// Parse an expression in this model's names (e.g. a hand-derived
     /// constraint to compare with a derived one).
     pub fn parse_expr(&self, src: &str) -> Result<Expr, syn::Error> {
-        let tokens: Vec<proc_macro2::TokenTree> = proc_macro2::TokenStream::from_str(src)
-            .map_err(|e| syn::Error::new(e.span(), format!("cannot read expression: {e}")))?
-            .into_iter()
-            .collect();
+        let tokens: Vec<proc_macro2::TokenTree> = crate::dsl::lex(src)?.into_iter().collect();
         let mut errors = Errors::default();
         let ast = crate::dsl::parse_expr(&tokens, Span::call_site(), &mut errors);
         let scope = Scope {
@@ -440,7 +460,7 @@ impl Model {
 struct Scope<'a> {
     params: &'a [ParamDef],
     vars: &'a [VarDef],
-    /// Names declared twice (already reported).
+    /// Names declared twice or reserved (already reported).
     dupes: &'a [String],
 }
 
@@ -543,47 +563,93 @@ impl Scope<'_> {
                 let a = self.lower(l, errors);
                 let b = self.lower(r, errors);
                 let (a, b) = (a?, b?);
-                let has_der = |e: &Expr| e.any_sym(&|s| matches!(s, Sym::Der(_)));
-                Some(match op {
-                    BinOp::Add => expr::add(&a, &b),
-                    BinOp::Sub => expr::sub(&a, &b),
-                    BinOp::Mul => {
-                        if has_der(&a) && has_der(&b) {
-                            errors.push(
-                                *span,
-                                "product of two der() terms: der() must appear linearly",
-                            );
-                            return None;
-                        }
-                        expr::mul(&a, &b)
+                let (a_der, b_der) = (has_der(&a), has_der(&b));
+                binary(*op, &a, &b, (a_der, b_der), (*span, r.span()), errors)
+            }
+            Ast::Chain(first, rest) => {
+                // Every operand is lowered (each reports its own errors),
+                // then combined in a loop: a long chain costs no stack.
+                let first = self.lower(first, errors);
+                let operands: Vec<Option<Expr>> =
+                    rest.iter().map(|(_, r, _)| self.lower(r, errors)).collect();
+                let mut acc = first?;
+                let operands: Vec<Expr> = operands.into_iter().collect::<Option<_>>()?;
+                if matches!(rest.first(), Some((BinOp::Add | BinOp::Sub, ..))) {
+                    // One canonical sum of all terms, not a sum rebuilt per
+                    // term.
+                    let mut terms = Vec::with_capacity(operands.len() + 1);
+                    terms.push(acc);
+                    for ((op, ..), e) in rest.iter().zip(operands) {
+                        terms.push(if *op == BinOp::Sub { expr::neg(&e) } else { e });
                     }
-                    BinOp::Div => {
-                        if has_der(&b) {
-                            errors.push(
-                                r.span(),
-                                "division by a der() term: der() must appear linearly",
-                            );
-                            return None;
-                        }
-                        if b.is_zero() {
-                            errors.push(r.span(), "division by zero");
-                            return None;
-                        }
-                        expr::div(&a, &b)
-                    }
-                    BinOp::Pow => {
-                        if has_der(&a) || has_der(&b) {
-                            errors.push(*span, "power of a der() term: der() must appear linearly");
-                            return None;
-                        }
-                        if a.is_zero() && b.as_num().is_some_and(num_traits::Signed::is_negative) {
-                            errors.push(*span, "zero to a negative power");
-                            return None;
-                        }
-                        expr::pow(&a, &b)
-                    }
-                })
+                    return Some(expr::add_all(terms));
+                }
+                let mut acc_der = has_der(&acc);
+                for ((op, r, span), b) in rest.iter().zip(operands) {
+                    let b_der = has_der(&b);
+                    acc = binary(*op, &acc, &b, (acc_der, b_der), (*span, r.span()), errors)?;
+                    // A product can lose its der() (`der(x) * 0`): look
+                    // again, but only when there was one.
+                    acc_der = (acc_der || b_der) && has_der(&acc);
+                }
+                Some(acc)
             }
         }
     }
+}
+
+fn has_der(e: &Expr) -> bool {
+    e.any_sym(&|s| matches!(s, Sym::Der(_)))
+}
+
+/// `a op b` with the checks of the language; `ders` says whether `a` and
+/// `b` contain der(), `spans` are the operator's and `b`'s.
+fn binary(
+    op: BinOp,
+    a: &Expr,
+    b: &Expr,
+    ders: (bool, bool),
+    spans: (Span, Span),
+    errors: &mut Errors,
+) -> Option<Expr> {
+    let (span, b_span) = spans;
+    Some(match op {
+        BinOp::Add => expr::add(a, b),
+        BinOp::Sub => expr::sub(a, b),
+        BinOp::Mul => {
+            if ders.0 && ders.1 {
+                errors.push(
+                    span,
+                    "product of two der() terms: der() must appear linearly",
+                );
+                return None;
+            }
+            expr::mul(a, b)
+        }
+        BinOp::Div => {
+            if ders.1 {
+                errors.push(
+                    b_span,
+                    "division by a der() term: der() must appear linearly",
+                );
+                return None;
+            }
+            if b.is_zero() {
+                errors.push(b_span, "division by zero");
+                return None;
+            }
+            expr::div(a, b)
+        }
+        BinOp::Pow => {
+            if ders.0 || ders.1 {
+                errors.push(span, "power of a der() term: der() must appear linearly");
+                return None;
+            }
+            if a.is_zero() && b.as_num().is_some_and(num_traits::Signed::is_negative) {
+                errors.push(span, "zero to a negative power");
+                return None;
+            }
+            expr::pow(a, b)
+        }
+    })
 }

@@ -97,6 +97,27 @@ impl Printer<'_> {
         }
     }
 
+    /// A constant with its sign, as a whole expression: `3`, `-1/2`.
+    fn signed_num(&self, v: &Q) -> String {
+        if v.is_negative() {
+            format!("-{}", self.num(&v.abs()))
+        } else {
+            self.num(v)
+        }
+    }
+
+    /// A constant as an operand of `*` or `^`: bare when it is a
+    /// non-negative integer, parenthesised otherwise (`(1/2)`, `(-3)`).
+    fn num_atom(&self, v: &Q) -> String {
+        if v.denom().is_one() && !v.is_negative() {
+            return self.num(v);
+        }
+        match self.style {
+            Style::Text => format!("({})", self.signed_num(v)),
+            Style::Latex => format!("\\left({}\\right)", self.signed_num(v)),
+        }
+    }
+
     fn expr(&self, e: &Expr) -> String {
         match e {
             Expr::Sum(s) => {
@@ -131,13 +152,17 @@ impl Printer<'_> {
                 }
                 out
             }
-            Expr::Num(v) if v.is_negative() => format!("-{}", self.num(&v.abs())),
+            Expr::Num(v) => self.signed_num(v),
             _ => self.term(&q(1), e),
         }
     }
 
     /// `c · t` with `c > 0`, `t` not a sum.
     fn term(&self, c: &Q, t: &Expr) -> String {
+        if let Expr::Num(v) = t {
+            // A constant term is its own coefficient.
+            return self.signed_num(&(c * &**v));
+        }
         let (mut num, mut den): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
         if !c.numer().is_one() || t.is_one() {
             num.push(c.numer().to_string());
@@ -220,17 +245,19 @@ impl Printer<'_> {
     fn atom(&self, e: &Expr) -> String {
         match e {
             Expr::Sym(s) => self.sym(*s),
-            Expr::Num(v) if v.denom().is_one() && !v.is_negative() => self.num(v),
-            Expr::Func(f, a) => match self.style {
-                Style::Text => format!("{}({})", f.name(), self.expr(a)),
-                Style::Latex => format!("\\{}\\left({}\\right)", f.name(), self.expr(a)),
+            // Every constant is printed here, never through `expr` (which
+            // would come back to `atom` for a fraction).
+            Expr::Num(v) => self.num_atom(v),
+            Expr::Func(c) => match self.style {
+                Style::Text => format!("{}({})", c.func.name(), self.expr(&c.arg)),
+                Style::Latex => format!("\\{}\\left({}\\right)", c.func.name(), self.expr(&c.arg)),
             },
             Expr::Prod(p) if p.factors.len() == 1 && p.factors[0].1 == qr(1, 2) => {
                 self.power(&p.factors[0].0, &qr(1, 2))
             }
-            Expr::Pow(be) => match self.style {
-                Style::Text => format!("{}^({})", self.atom(&be.0), self.expr(&be.1)),
-                Style::Latex => format!("{}^{{{}}}", self.atom(&be.0), self.expr(&be.1)),
+            Expr::Pow(p) => match self.style {
+                Style::Text => format!("{}^({})", self.atom(&p.base), self.expr(&p.exponent)),
+                Style::Latex => format!("{}^{{{}}}", self.atom(&p.base), self.expr(&p.exponent)),
             },
             _ => match self.style {
                 Style::Text => format!("({})", self.expr(e)),

@@ -7,7 +7,7 @@
 //! Jacobian, say — are computed once. Node order is the depth-first order of
 //! the canonical expressions, hence deterministic.
 
-use crate::expr::{q_to_f64, Expr, Func, Sym};
+use crate::expr::{q_to_f64, Expr, Func, Sym, Q};
 use num_traits::{One, Signed, ToPrimitive};
 use std::collections::HashMap;
 
@@ -107,26 +107,62 @@ impl TapeBuilder {
     }
 
     /// Lower `e` and return its node.
+    ///
+    /// A walk with an explicit stack, so an expression of any height is
+    /// lowered in constant native stack; nodes come out in the order a
+    /// recursive depth-first walk would give them (each product factor's
+    /// power right after its base).
     pub fn node(&mut self, e: &Expr) -> NodeId {
-        if let Some(&id) = self.by_expr.get(e) {
-            return id;
+        enum Step<'a> {
+            /// Lower this expression (or find it lowered).
+            Visit(&'a Expr),
+            /// Its children are on the value stack: build the node.
+            Build(&'a Expr),
+            /// The base of a product factor is on the value stack: raise it.
+            Factor(&'a Q),
         }
-        let id = match e {
-            Expr::Num(v) => self.push(Op::Const(q_to_f64(v))),
-            Expr::Sym(s) => self.push(Op::Input(*s)),
-            Expr::Sum(s) => {
-                let terms: Vec<(f64, NodeId)> = s
-                    .terms
-                    .iter()
-                    .map(|(t, c)| (q_to_f64(c), self.node(t)))
-                    .collect();
-                self.push(Op::Add(q_to_f64(&s.constant), terms))
-            }
-            Expr::Prod(p) => {
-                let mut num = Vec::new();
-                let mut den = Vec::new();
-                for (b, x) in &p.factors {
-                    let nb = self.node(b);
+        let mut steps = vec![Step::Visit(e)];
+        let mut values: Vec<NodeId> = Vec::new();
+        while let Some(step) = steps.pop() {
+            match step {
+                Step::Visit(e) => {
+                    if let Some(&id) = self.by_expr.get(e) {
+                        values.push(id);
+                        continue;
+                    }
+                    match e {
+                        Expr::Num(v) => {
+                            let id = self.push(Op::Const(q_to_f64(v)));
+                            values.push(id);
+                        }
+                        Expr::Sym(s) => {
+                            let id = self.push(Op::Input(*s));
+                            values.push(id);
+                        }
+                        Expr::Sum(s) => {
+                            steps.push(Step::Build(e));
+                            steps.extend(s.terms.iter().rev().map(|(t, _)| Step::Visit(t)));
+                        }
+                        Expr::Prod(p) => {
+                            steps.push(Step::Build(e));
+                            for (b, x) in p.factors.iter().rev() {
+                                steps.push(Step::Factor(x));
+                                steps.push(Step::Visit(b));
+                            }
+                        }
+                        Expr::Pow(p) => {
+                            steps.push(Step::Build(e));
+                            steps.push(Step::Visit(&p.exponent));
+                            steps.push(Step::Visit(&p.base));
+                        }
+                        Expr::Func(c) => {
+                            steps.push(Step::Build(e));
+                            steps.push(Step::Visit(&c.arg));
+                        }
+                    }
+                }
+                Step::Factor(x) => {
+                    let nb = values.pop().unwrap_or_default();
                     let ax = x.abs();
                     let f = if ax.is_one() {
                         nb
@@ -140,6 +176,39 @@ impl TapeBuilder {
                     } else {
                         self.push(Op::Powf(nb, q_to_f64(&ax)))
                     };
+                    values.push(f);
+                }
+                Step::Build(e) => {
+                    let id = self.build(e, &mut values);
+                    self.by_expr.insert(e.clone(), id);
+                    values.push(id);
+                }
+            }
+        }
+        values.pop().unwrap_or_default()
+    }
+
+    /// The node of compound `e` whose children's nodes (product factors
+    /// already raised to their powers) end `values`.
+    fn build(&mut self, e: &Expr, values: &mut Vec<NodeId>) -> NodeId {
+        let mut children = |n: usize| values.split_off(values.len().saturating_sub(n));
+        match e {
+            Expr::Num(_) | Expr::Sym(_) => values.pop().unwrap_or_default(),
+            Expr::Sum(s) => {
+                let ids = children(s.terms.len());
+                let terms: Vec<(f64, NodeId)> = s
+                    .terms
+                    .iter()
+                    .zip(ids)
+                    .map(|((_, c), id)| (q_to_f64(c), id))
+                    .collect();
+                self.push(Op::Add(q_to_f64(&s.constant), terms))
+            }
+            Expr::Prod(p) => {
+                let ids = children(p.factors.len());
+                let mut num = Vec::new();
+                let mut den = Vec::new();
+                for ((_, x), f) in p.factors.iter().zip(ids) {
                     if x.is_negative() {
                         den.push(f);
                     } else {
@@ -160,18 +229,15 @@ impl TapeBuilder {
                     }
                 }
             }
-            Expr::Pow(be) => {
-                let a = self.node(&be.0);
-                let b = self.node(&be.1);
-                self.push(Op::Pow(a, b))
+            Expr::Pow(_) => {
+                let ids = children(2);
+                self.push(Op::Pow(ids[0], ids[1]))
             }
-            Expr::Func(f, a) => {
-                let na = self.node(a);
-                self.push(Op::Func(*f, na))
+            Expr::Func(c) => {
+                let ids = children(1);
+                self.push(Op::Func(c.func, ids[0]))
             }
-        };
-        self.by_expr.insert(e.clone(), id);
-        id
+        }
     }
 
     /// Add an output.

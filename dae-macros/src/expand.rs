@@ -460,6 +460,65 @@ mod tests {
         }
     }
 
+    /// Issue 9, defect 1: a function of a fraction used to crash rustc
+    /// (the row texts of the generated docs recursed forever).
+    #[test]
+    fn functions_of_fractions_expand() {
+        for rhs in ["sin(0.5)", "exp(3/2)", "sqrt(1/2)", "(3/2)^x"] {
+            let src = format!("C {{ differential {{ x }} equations {{ der(x) = {rhs}; }} }}");
+            let out = expand(TokenStream::from_str(&src).unwrap());
+            let file: syn::File = syn::parse2(out.clone()).unwrap_or_else(|e| panic!("{e}: {out}"));
+            assert!(!file.items.is_empty());
+            assert!(!out.to_string().contains("compile_error"), "{out}");
+        }
+    }
+
+    /// Issue 9, defect 2: the expansion of models at the nesting limit
+    /// runs in a quarter of an 8 MiB stack; past the limit it is one
+    /// `compile_error!`; a 20,000-term sum is a flat node.
+    #[test]
+    fn deep_and_long_models_expand_in_a_small_stack() {
+        let limit = dae_core::dsl::MAX_DEPTH;
+        let cases = [
+            (
+                format!("{}x{}", "sin(".repeat(limit), ")".repeat(limit)),
+                true,
+            ),
+            (format!("{}x{}", "(".repeat(limit), ")".repeat(limit)), true),
+            (vec!["x"; 20_000].join(" + "), true),
+            (
+                format!("{}x{}", "sin(".repeat(limit + 1), ")".repeat(limit + 1)),
+                false,
+            ),
+            (format!("{}x", "-".repeat(10_000)), false),
+        ];
+        for (rhs, ok) in cases {
+            let out = std::thread::Builder::new()
+                .stack_size(2 << 20)
+                .spawn(move || {
+                    let src =
+                        format!("C {{ differential {{ x }} equations {{ der(x) = {rhs}; }} }}");
+                    expand(TokenStream::from_str(&src).unwrap()).to_string()
+                })
+                .unwrap()
+                .join()
+                .unwrap();
+            if ok {
+                assert!(
+                    !out.contains("compile_error"),
+                    "{}",
+                    &out[..out.len().min(300)]
+                );
+            } else {
+                assert!(
+                    out.contains("expression nested too deep"),
+                    "{}",
+                    &out[..out.len().min(300)]
+                );
+            }
+        }
+    }
+
     #[test]
     fn tokens_are_counted_with_groups() {
         let t = TokenStream::from_str("a (b c) [d]").unwrap();
