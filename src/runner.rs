@@ -3,7 +3,7 @@
 //! counters, constraint residuals per level and invariant drift. Shared by
 //! `dae run` and `dae sweep`.
 
-use crate::reference::PendulumExact;
+use crate::reference::{PendulumExact, ReferenceError};
 use dae_core::system::{DaeSystem, Model};
 use dae_solvers::init::{self, InitMode, InitOptions};
 use dae_solvers::{Options, Problem, SolveError, Stats};
@@ -190,6 +190,36 @@ pub enum RunError {
     /// A reference the model cannot have.
     #[error("reference: {0}")]
     Reference(String),
+    /// The exact reference cannot be built from the scene's values: the
+    /// field to blame (`initial.x`, `parameters.g`, `time.end`, …) and why.
+    #[error("`{field}`: pendulum-exact reference: {source}")]
+    ReferenceInput {
+        /// The scene field, as `section.key`.
+        field: String,
+        /// What the reference refused.
+        source: ReferenceError,
+    },
+}
+
+impl RunError {
+    /// The scene field a bad-input error is about, where there is one.
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            RunError::ReferenceInput { field, .. } => Some(field),
+            _ => None,
+        }
+    }
+}
+
+/// The scene field (`initial.x`, `parameters.g`, `time.end`) of the input a
+/// reference error blames.
+fn reference_field(e: &ReferenceError) -> String {
+    match e.input() {
+        "theta0" | "x0" => "initial.x".into(),
+        "y0" => "initial.y".into(),
+        "t" => "time.end".into(),
+        p => format!("parameters.{p}"),
+    }
 }
 
 /// Variables compared against the pendulum reference, in its order.
@@ -233,7 +263,25 @@ pub fn pendulum_reference(
         param("g")?,
         param("m")?,
     )
-    .map_err(|e| RunError::Reference(e.to_string()))
+    .map_err(|source| RunError::ReferenceInput {
+        field: reference_field(&source),
+        source,
+    })
+}
+
+/// The reference must be defined over the whole horizon (the state is NaN
+/// beyond 2⁵¹ periods): checked once at `t_end − t0`, the furthest time.
+fn check_reference_horizon(reference: &PendulumExact, t0: f64, t_end: f64) -> Result<(), RunError> {
+    let t = t_end - t0;
+    if reference.state(t).iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        let source = ReferenceError::PhaseLost { t };
+        Err(RunError::ReferenceInput {
+            field: reference_field(&source),
+            source,
+        })
+    }
 }
 
 /// Run one integration. `Err` only for bad input; solver failures are an
@@ -241,6 +289,9 @@ pub fn pendulum_reference(
 pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
     let solver = dae_solvers::solver_by_name(spec.solver)
         .ok_or_else(|| RunError::UnknownSolver(spec.solver.into()))?;
+    if let Some(r) = spec.reference {
+        check_reference_horizon(r, spec.t0, spec.t_end)?;
+    }
     let sys = spec.model.formulation(spec.formulation)?;
     let info = sys.info().clone();
     solver

@@ -1,7 +1,7 @@
 //! `dae run [SCENE] [--solver NAME] [--formulation NAME] [--tol T] [--format json|text]`.
 
 use super::Failure;
-use crate::runner::{self, RunRecord, RunSpec};
+use crate::runner::{self, RunError, RunRecord, RunSpec};
 use crate::scene::{ReferenceKind, Scene};
 use dae_core::system::Model;
 use dae_solvers::init::InitMode;
@@ -64,6 +64,16 @@ pub fn load_model(scene: &Scene) -> Result<Box<dyn Model + Send + Sync>, Failure
     Ok(model)
 }
 
+/// A run that could not start, as a bad-input failure: errors about a
+/// scene field (an exact reference that cannot be built from the start,
+/// say) are prefixed with the field's place in the scene file.
+pub fn located(scene: &Scene, e: &RunError) -> Failure {
+    match e.field() {
+        Some(field) => Failure::input(format!("{}: {e}", scene.locate(field))),
+        None => Failure::input(format!("{}: {e}", scene.origin)),
+    }
+}
+
 /// Check a tolerance given on the command line.
 pub fn check_tol(tol: f64, flag: &str) -> Result<(), Failure> {
     if tol.is_finite() && tol > 0.0 {
@@ -115,10 +125,9 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         .map(|v| (v.name.clone(), v.value))
         .collect();
     let reference = match scene.reference {
-        ReferenceKind::PendulumExact => Some(
-            runner::pendulum_reference(&*model, &initial)
-                .map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?,
-        ),
+        ReferenceKind::PendulumExact => {
+            Some(runner::pendulum_reference(&*model, &initial).map_err(|e| located(&scene, &e))?)
+        }
         ReferenceKind::None => None,
     };
     let spec = RunSpec {
@@ -140,7 +149,7 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         samples: &[],
         repeats: 1,
     };
-    let record = runner::run(&spec).map_err(|e| Failure::input(e.to_string()))?;
+    let record = runner::run(&spec).map_err(|e| located(&scene, &e))?;
     let code = if record.status == "ok" { 0 } else { 3 };
     let out = match args.format {
         Format::Json => serde_json::to_string_pretty(&record).unwrap_or_default() + "\n",

@@ -127,7 +127,10 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&scene.name));
-    let report = sweep::run(&scene, &opts).map_err(|e| Failure::input(e.to_string()))?;
+    let report = sweep::run(&scene, &opts).map_err(|e| match &e {
+        sweep::SweepError::Run(r) => super::run::located(&scene, r),
+        _ => Failure::input(e.to_string()),
+    })?;
     let summary = sweep::Summary::of(&report);
     // An output directory that cannot be written is a bad `--out` (exit 2).
     let written =
