@@ -411,6 +411,46 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
     Ok(record)
 }
 
+/// Whether each output time is a check time (within `10⁻¹²(1 + |t|)`), by
+/// one merge of the two lists: `times` in increasing order (as a
+/// [`dae_solvers::Solution`] reports them), `checks` in any order (sorted
+/// here; a scene's are already strictly increasing). `O(n + m)` after the
+/// sort, where scanning the check list per output time was `O(n·m)`: 10⁵
+/// check times took 6.5 s, 5·10⁵ over two minutes.
+///
+/// ```
+/// use dae::runner::check_flags;
+///
+/// let times = [0.0, 0.5, 1.0, 1.5, 2.0];
+/// assert_eq!(
+///     check_flags(&times, &[2.0, 1.0 + 1e-13]),
+///     [false, false, true, false, true]
+/// );
+/// ```
+pub fn check_flags(times: &[f64], checks: &[f64]) -> Vec<bool> {
+    let mut sorted;
+    let checks = if checks.windows(2).all(|w| w[0] <= w[1]) {
+        checks
+    } else {
+        sorted = checks.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        &sorted[..]
+    };
+    let mut next = 0;
+    times
+        .iter()
+        .map(|&t| {
+            let slack = 1e-12 * (1.0 + t.abs());
+            // Check times below the window of t cannot match t or any
+            // later (larger) output time.
+            while next < checks.len() && checks[next] < t - slack {
+                next += 1;
+            }
+            next < checks.len() && checks[next] <= t + slack
+        })
+        .collect()
+}
+
 /// Errors, residuals and drift from the solution at the output times.
 fn measure(
     spec: &RunSpec<'_>,
@@ -427,17 +467,13 @@ fn measure(
     let mut inv = vec![0.0; n_inv];
     sys.invariants(spec.t0, y0, &mut inv0);
     let ref_idx: Vec<Option<usize>> = REF_NAMES.iter().map(|n| info.variable(n)).collect();
-    let is_check = |t: f64| {
-        spec.check
-            .iter()
-            .any(|c| (c - t).abs() <= 1e-12 * (1.0 + t.abs()))
-    };
+    let is_check = check_flags(&sol.t, spec.check);
     let (mut err, mut err_sum, mut err_lambda) = (0.0f64, 0.0f64, 0.0f64);
     let mut res = [None::<f64>; 3];
     let mut drift = vec![0.0f64; n_inv];
     let traj = &mut record.trajectory;
     traj.names = info.variables.iter().map(|v| v.name.clone()).collect();
-    for (t, y) in sol.t.iter().zip(&sol.y) {
+    for ((t, y), &is_check) in sol.t.iter().zip(&sol.y).zip(&is_check) {
         sys.constraints(*t, y, &mut g);
         let mut lev = [0.0f64; 3];
         for (c, gi) in info.constraints.iter().zip(&g) {
@@ -448,7 +484,8 @@ fn measure(
         sys.invariants(*t, y, &mut inv);
         let mut e_here = 0.0f64;
         if let Some(r) = spec.reference {
-            let exact = r.state(*t);
+            // The reference starts at its own t = 0: the scene's t0.
+            let exact = r.state(*t - spec.t0);
             let mut sum = 0.0;
             for (j, idx) in ref_idx.iter().enumerate() {
                 if let Some(i) = idx {
@@ -459,7 +496,7 @@ fn measure(
                     }
                 }
             }
-            if is_check(*t) {
+            if is_check {
                 err = err.max(e_here);
                 err_sum += sum;
                 if let Some(i) = ref_idx[4] {
@@ -467,7 +504,7 @@ fn measure(
                 }
             }
         }
-        if is_check(*t) {
+        if is_check {
             for (l, slot) in res.iter_mut().enumerate() {
                 if info.constraints.iter().any(|c| c.level as usize == l) {
                     *slot = Some(slot.unwrap_or(0.0).max(lev[l]));

@@ -178,3 +178,96 @@ fn reference_refuses_unrepresentable_starts_at_once() {
     }
 }
 
+// ------------------------------------- 2. the reference at a nonzero start
+
+/// With `time.start = 1` the exact solution was evaluated at `t`, not
+/// `t − t0`: "err": 2.0 for a run whose true error is 3e-9.
+#[test]
+fn nonzero_start_measures_against_the_shifted_reference() {
+    let shifted = scene_text(
+        "g = 13.7503716373294544",
+        "x = 1.0\ny = 0.0",
+        "start = 1.0\nend = 11.0\ncheck = [6.0, 11.0]",
+        "pendulum-exact",
+    );
+    let from_zero = scene_text(
+        "g = 13.7503716373294544",
+        "x = 1.0\ny = 0.0",
+        "end = 10.0\ncheck = [5.0, 10.0]",
+        "pendulum-exact",
+    );
+    let a = run_scene(
+        &Scene::parse(&shifted, "a.toml", None).unwrap(),
+        "radau5",
+        "ggl1",
+        1e-10,
+    );
+    let b = run_scene(
+        &Scene::parse(&from_zero, "b.toml", None).unwrap(),
+        "radau5",
+        "ggl1",
+        1e-10,
+    );
+    let (ea, eb) = (a.err.unwrap(), b.err.unwrap());
+    // The same motion, shifted by one second: the integrator sees the same
+    // problem up to the rounding of t, so the errors agree closely (both
+    // ~1e-9); they were 2.0 and 3e-9.
+    assert!(
+        ea < 1e-7 && eb < 1e-7,
+        "errors {ea:e} (from t = 1) and {eb:e}"
+    );
+    assert!(
+        (ea - eb).abs() <= 0.5 * eb.max(1e-10),
+        "errors {ea:e} (from t = 1) and {eb:e} (from t = 0) should agree"
+    );
+}
+
+// ------------------------------------------------ 3. quadratic check scan
+
+/// 200 000 check times: every output point scanned the whole check list
+/// (about 30 s here); a merge of the two sorted lists takes milliseconds.
+#[test]
+fn many_check_times_cost_linear_time() {
+    let n = 200_000;
+    let text = scene_text(
+        "g = 13.7503716373294544",
+        "x = 1.0\ny = 0.0",
+        &format!("end = 2.0\ncheck_every = {}", 2.0 / n as f64),
+        "pendulum-exact",
+    );
+    let scene = Scene::parse(&text, "many.toml", None).unwrap();
+    assert_eq!(scene.time.checks.len(), n);
+    let start = Instant::now();
+    let rec = run_scene(&scene, "radau5", "rcd0", 1e-6);
+    let took = start.elapsed();
+    assert_eq!(rec.status, "ok");
+    assert!(rec.err.unwrap() < 1e-4);
+    // Measured ~0.3 s (debug-opt2); the quadratic scan took ~30 s. The
+    // bound is generous for a loaded machine.
+    assert!(
+        took < Duration::from_secs(8),
+        "{n} check times took {took:?}"
+    );
+}
+
+/// The merge marks exactly the output times within 1e-12 of a check time,
+/// whatever the order of the checks.
+#[test]
+fn check_flags_match_the_pointwise_rule() {
+    let times: Vec<f64> = (0..=1000).map(|i| f64::from(i) * 0.01).collect();
+    let mut checks: Vec<f64> = (0..=100).map(|i| f64::from(i) * 0.1).collect();
+    checks.push(5.0 + 1e-13); // within the slack of 5.0: still 5.0
+    checks.push(7.005); // between two output times: matches neither
+    checks.reverse();
+    let flags = runner::check_flags(&times, &checks);
+    for (t, flag) in times.iter().zip(&flags) {
+        let pointwise = checks
+            .iter()
+            .any(|c| (c - t).abs() <= 1e-12 * (1.0 + t.abs()));
+        assert_eq!(*flag, pointwise, "t = {t}");
+    }
+    assert_eq!(flags.iter().filter(|f| **f).count(), 101);
+    assert!(runner::check_flags(&[], &checks).is_empty());
+    assert_eq!(runner::check_flags(&times[..3], &[]), [false; 3]);
+}
+
