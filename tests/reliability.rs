@@ -7,6 +7,7 @@ use dae::cli::run::load_model;
 use dae::prelude::*;
 use dae::runner::{self, RunSpec};
 use dae::scene::Scene;
+use dae::sweep::write::publish_dir;
 use dae::sweep::{self, SweepOptions};
 use dae_solvers::init::{self, InitMode};
 use std::process::{Command, Output, Stdio};
@@ -269,5 +270,212 @@ fn check_flags_match_the_pointwise_rule() {
     assert_eq!(flags.iter().filter(|f| **f).count(), 101);
     assert!(runner::check_flags(&[], &checks).is_empty());
     assert_eq!(runner::check_flags(&times[..3], &[]), [false; 3]);
+}
+
+// ---------------------------------------------- 4. atomic sweep output set
+
+fn tiny_sweep() -> (sweep::SweepReport, sweep::Summary) {
+    let scene = Scene::builtin("s01").unwrap();
+    let opts = SweepOptions {
+        solvers: vec!["radau5".into()],
+        formulations: vec!["rcd1".into()],
+        tolerances: vec![1e-5],
+        repeats: 1,
+        progress: false,
+        ..SweepOptions::from_scene(&scene)
+    };
+    let report = sweep::run(&scene, &opts).expect("the sweep runs");
+    let summary = sweep::Summary::of(&report);
+    (report, summary)
+}
+
+/// A write that fails midway (here: `index.html` cannot replace what is in
+/// the way) used to leave the new results.csv and results.json beside the
+/// old index.html. Now the previous set stays whole.
+#[test]
+fn failed_sweep_write_leaves_the_previous_output_whole() {
+    let (report, summary) = tiny_sweep();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s01");
+    std::fs::create_dir_all(out.join("index.html")).unwrap();
+    std::fs::write(out.join("results.csv"), "old csv").unwrap();
+    std::fs::write(out.join("results.json"), "old json").unwrap();
+    assert!(sweep::write_outputs(&report, &summary, &out).is_err());
+    assert_eq!(
+        std::fs::read_to_string(out.join("results.csv")).unwrap(),
+        "old csv"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("results.json")).unwrap(),
+        "old json"
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["index.html", "results.csv", "results.json"]);
+    // Nothing temporary is left beside the destination either.
+    let beside: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(beside, ["s01"]);
+}
+
+fn entries(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// A fill that fails half-way through the set: the previous set stays, and
+/// nothing is left beside it.
+#[test]
+fn publish_dir_keeps_the_old_set_when_the_fill_fails() {
+    let root = tempfile::tempdir().unwrap();
+    let dest = root.path().join("out");
+    std::fs::create_dir(&dest).unwrap();
+    std::fs::write(dest.join("results.csv"), "old").unwrap();
+    let r: Result<(), std::io::Error> = publish_dir(&dest, |staging| {
+        std::fs::write(staging.join("results.csv"), "new")?;
+        std::fs::write(staging.join("results.json"), "{\"half\":")?;
+        Err(std::io::Error::other("injected: disk full"))
+    });
+    assert!(r.is_err());
+    assert_eq!(entries(&dest), ["results.csv"]);
+    assert_eq!(
+        std::fs::read_to_string(dest.join("results.csv")).unwrap(),
+        "old"
+    );
+    assert_eq!(entries(root.path()), ["out"]);
+}
+
+/// A complete set replaces the old one as a whole (a stale figure goes).
+#[test]
+fn publish_dir_replaces_the_whole_set() {
+    let root = tempfile::tempdir().unwrap();
+    let dest = root.path().join("out");
+    std::fs::create_dir(&dest).unwrap();
+    std::fs::write(dest.join("stale.svg"), "old figure").unwrap();
+    let r: Result<u8, std::io::Error> = publish_dir(&dest, |staging| {
+        std::fs::write(staging.join("index.html"), "new")?;
+        Ok(7)
+    });
+    assert_eq!(r.unwrap(), 7);
+    assert_eq!(entries(&dest), ["index.html"]);
+    assert_eq!(entries(root.path()), ["out"]);
+}
+
+/// A run killed while writing leaves its staging directory (clearly named)
+/// beside the destination; the next run removes it. A directory with files
+/// a sweep does not write is not replaced at all.
+#[test]
+fn sweep_output_leftovers_are_cleaned_and_foreign_directories_kept() {
+    let (report, summary) = tiny_sweep();
+    let root = tempfile::tempdir().unwrap();
+    let out = root.path().join("s01");
+    let killed = root.path().join(".s01.dae-sweep-new-99999-0");
+    std::fs::create_dir(&killed).unwrap();
+    std::fs::write(killed.join(".solution.svg.tmp-99999-3.svg"), "<svg").unwrap();
+    let written = sweep::write_outputs(&report, &summary, &out).unwrap();
+    assert!(written
+        .files
+        .iter()
+        .all(|f| f.parent() == Some(&*out) && f.is_file()));
+    assert_eq!(entries(root.path()), ["s01"]);
+    assert!(entries(&out).iter().all(|n| !n.starts_with('.')));
+    for f in ["results.csv", "results.json", "index.html"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+
+    let mine = root.path().join("mine");
+    std::fs::create_dir(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "my notes").unwrap();
+    let err = sweep::write_outputs(&report, &summary, &mine).unwrap_err();
+    assert!(matches!(err, sweep::SweepError::NotOurs { .. }), "{err}");
+    assert!(err.to_string().contains("notes.txt"), "{err}");
+    assert_eq!(entries(&mine), ["notes.txt"]);
+}
+
+/// `dae sweep` killed part-way: the previous output directory is intact
+/// (whenever the kill lands) and the next run leaves nothing beside it.
+#[test]
+fn killed_sweep_leaves_the_previous_output_intact() {
+    let root = tempfile::tempdir().unwrap();
+    let out = root.path().join("s01");
+    let out_s = out.display().to_string();
+    let tiny = [
+        "sweep",
+        "s01",
+        "--solvers",
+        "radau5",
+        "--formulations",
+        "rcd1",
+        "--tols",
+        "1e-5",
+        "--repeats",
+        "1",
+        "--quiet",
+        "--out",
+        &out_s,
+    ];
+    let o = dae(&tiny);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let before: Vec<(String, Vec<u8>)> = entries(&out)
+        .into_iter()
+        .map(|n| {
+            let bytes = std::fs::read(out.join(&n)).unwrap();
+            (n, bytes)
+        })
+        .collect();
+    for delay_ms in [150, 600] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_dae"))
+            .args([
+                "sweep",
+                "s01",
+                "--tols",
+                "1e-5,1e-6",
+                "--repeats",
+                "1",
+                "--quiet",
+                "--out",
+                &out_s,
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(delay_ms));
+        let _ = child.kill();
+        let _ = child.wait();
+        let after: Vec<(String, Vec<u8>)> = entries(&out)
+            .into_iter()
+            .map(|n| {
+                let bytes = std::fs::read(out.join(&n)).unwrap();
+                (n, bytes)
+            })
+            .collect();
+        // Killed before it published: the old set, byte for byte. (Had it
+        // finished, a whole new set: results.json would differ but be whole.)
+        if after != before {
+            assert_eq!(
+                entries(&out),
+                before.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>()
+            );
+            let json = std::fs::read_to_string(out.join("results.json")).unwrap();
+            assert!(serde_json::from_str::<serde_json::Value>(&json).is_ok());
+        }
+        // Only clearly named leftovers beside it.
+        for n in entries(root.path()) {
+            assert!(n == "s01" || n.starts_with(".s01.dae-sweep-"), "{n}");
+        }
+    }
+    let o = dae(&tiny);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(entries(root.path()), ["s01"]);
 }
 
