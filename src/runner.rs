@@ -32,7 +32,9 @@ pub struct RunSpec<'a> {
     pub solver: &'a str,
     /// Formulation name.
     pub formulation: &'a str,
-    /// Tolerance (`RTOL = ATOL`).
+    /// Tolerance (`RTOL = ATOL`), in `[100 ε, 1)`
+    /// ([`dae_solvers::options::check_uniform`]; [`RunError::Tolerance`]
+    /// otherwise).
     pub tol: f64,
     /// Project inconsistent initial values (default) or refuse them.
     pub init_mode: InitMode,
@@ -171,6 +173,17 @@ pub enum RunError {
     /// Unknown solver.
     #[error("unknown solver `{0}` (known: {known})", known = dae_solvers::SOLVER_NAMES.join(", "))]
     UnknownSolver(String),
+    /// A tolerance outside [`dae_solvers::options::check_uniform`].
+    #[error(
+        "tolerance {tol:e} {issue}; tolerances (RTOL = ATOL) must be in {}",
+        dae_solvers::options::uniform_range()
+    )]
+    Tolerance {
+        /// The value given.
+        tol: f64,
+        /// What is wrong with it.
+        issue: dae_solvers::options::ToleranceIssue,
+    },
     /// Formulation problem.
     #[error(transparent)]
     Formulation(#[from] dae_core::system::FormulationError),
@@ -289,6 +302,10 @@ fn check_reference_horizon(reference: &PendulumExact, t0: f64, t_end: f64) -> Re
 pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
     let solver = dae_solvers::solver_by_name(spec.solver)
         .ok_or_else(|| RunError::UnknownSolver(spec.solver.into()))?;
+    dae_solvers::options::check_uniform(spec.tol).map_err(|issue| RunError::Tolerance {
+        tol: spec.tol,
+        issue,
+    })?;
     if let Some(r) = spec.reference {
         check_reference_horizon(r, spec.t0, spec.t_end)?;
     }

@@ -195,13 +195,20 @@ pub enum SceneError {
         /// Why.
         reason: String,
     },
-    /// A tolerance that is NaN, infinite, not positive or not below 1.
-    #[error("{at}: `sweep.tolerances`: tolerance {value:e} must be a finite number in (0, 1)")]
+    /// A tolerance outside the library's rule
+    /// ([`dae_solvers::options::check_uniform`]): NaN, infinite, not
+    /// positive, below `100 ε` or not below 1.
+    #[error(
+        "{at}: `sweep.tolerances`: tolerance {value:e} {issue}; tolerances (RTOL = ATOL) must be in {}",
+        dae_solvers::options::uniform_range()
+    )]
     InvalidTolerance {
         /// Where.
         at: Location,
         /// The value.
         value: f64,
+        /// What is wrong with it.
+        issue: dae_solvers::options::ToleranceIssue,
     },
     /// `time.end` not after `time.start`.
     #[error("{at}: `time.end` = {end} must be greater than `time.start` = {start}")]
@@ -391,7 +398,8 @@ pub struct Sweep {
     pub solvers: Vec<String>,
     /// Formulation names, each in [`KNOWN_FORMULATIONS`].
     pub formulations: Vec<String>,
-    /// Tolerances (`RTOL = ATOL`), each finite in `(0, 1)`.
+    /// Tolerances (`RTOL = ATOL`), each in `[100 ε, 1)`
+    /// ([`dae_solvers::options::check_uniform`]).
     pub tolerances: Vec<f64>,
 }
 
@@ -1115,8 +1123,8 @@ impl Source<'_> {
                 for item in list {
                     let at = self.at(&item.span());
                     let value = item.into_inner();
-                    if !(value.is_finite() && value > 0.0 && value < 1.0) {
-                        return Err(SceneError::InvalidTolerance { at, value });
+                    if let Err(issue) = dae_solvers::options::check_uniform(value) {
+                        return Err(SceneError::InvalidTolerance { at, value, issue });
                     }
                     if out.contains(&value) {
                         return Err(SceneError::Duplicate {

@@ -479,3 +479,96 @@ fn killed_sweep_leaves_the_previous_output_intact() {
     assert_eq!(entries(root.path()), ["s01"]);
 }
 
+// ------------------------------------------------------- 5. tolerances
+
+/// `--tol 1` and `--tol 2` ran (bdf: exit 0, error ≈ 1) although scenes
+/// refuse tolerances outside (0, 1).
+#[test]
+fn cli_tolerances_follow_the_scene_rule() {
+    for tol in ["1", "2", "1e300", "1e-16", "1e-30"] {
+        let o = dae(&["run", "s01", "--solver", "bdf", "--tol", tol]);
+        assert_eq!(o.status.code(), Some(2), "--tol {tol}: {}", stderr(&o));
+        assert!(stderr(&o).contains("--tol"), "{}", stderr(&o));
+        let o = dae(&["sweep", "s01", "--tols", &format!("1e-6,{tol}"), "--quiet"]);
+        assert_eq!(o.status.code(), Some(2), "--tols {tol}: {}", stderr(&o));
+    }
+}
+
+fn pendulum_start(form: &str) -> (BoxedSystem, Vec<f64>) {
+    let model = dae::models::load("pendulum").unwrap();
+    let sys = model.formulation(form).unwrap();
+    let n = sys.info().unknowns();
+    let mut y = vec![0.0; n];
+    y[sys.info().variable("x").unwrap()] = 1.0;
+    let start = init::consistent(&*sys, 0.0, &y, &Default::default()).unwrap();
+    (sys, start.y)
+}
+
+/// The library accepted `tol = 1e300` and returned Ok with x = −29.3 on a
+/// unit pendulum; and BDF at 1e-16 ground on to the step limit (~17 s).
+#[test]
+fn library_refuses_tolerances_it_cannot_honour() {
+    for form in ["rcd0", "ggl1"] {
+        let (sys, y0) = pendulum_start(form);
+        let problem = Problem {
+            system: &*sys,
+            t0: 0.0,
+            y0: &y0,
+            t_end: 20.0,
+        };
+        for name in ["radau5", "bdf"] {
+            let solver = dae_solvers::solver_by_name(name).unwrap();
+            for tol in [1e300, 1.0, 1e-16, 1e-30] {
+                let start = Instant::now();
+                let r = solver.solve(&problem, &Options::with_tol(tol));
+                let e = match r {
+                    Ok(s) => panic!("{name} {form} tol {tol:e}: Ok, x = {:?}", s.last()),
+                    Err(e) => e,
+                };
+                assert!(
+                    start.elapsed() < Duration::from_secs(1),
+                    "{name}: slow refusal"
+                );
+                assert_eq!(e.t(), None, "{name} {form} tol {tol:e}: {e}");
+                let msg = e.to_string();
+                assert!(msg.contains("rtol"), "{msg}");
+                assert!(msg.contains(&format!("{tol:e}")), "{msg}");
+            }
+        }
+    }
+}
+
+/// Per-component relative tolerances follow the same rule and name the
+/// component; a purely absolute tolerance (rtol = 0) is still allowed.
+#[test]
+fn per_component_tolerances_name_the_component() {
+    use dae_solvers::options::{Tol, ToleranceIssue};
+    let mut options = Options::with_tol(1e-8);
+    options.tol.rtol = Tol::PerComponent(vec![1e-8, 1e-8, 1e-20, 1e-8, 1e-8]);
+    let err = options.validate(5, 0.0, 1.0).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            SolveError::ToleranceOutOfRange {
+                name: "rtol",
+                index: Some(2),
+                issue: ToleranceIssue::BelowRoundOff,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(err.to_string().starts_with("rtol[2] = 1e-20"), "{err}");
+    assert_eq!(err.kind(), "tolerance_out_of_range");
+    options.tol.rtol = Tol::Scalar(0.0);
+    assert!(options.validate(5, 0.0, 1.0).is_ok());
+    // The uniform rule is exactly what Options::with_tol validates.
+    for tol in [1e-14, 2.3e-14, 0.5, 0.999_999, 1.0] {
+        assert_eq!(
+            dae_solvers::options::check_uniform(tol).is_ok(),
+            Options::with_tol(tol).validate(5, 0.0, 1.0).is_ok(),
+            "{tol:e}"
+        );
+    }
+}
+

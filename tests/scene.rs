@@ -297,6 +297,9 @@ fn bad_tolerances() {
         ("-1e-6", "-1e-6"),
         ("0.0", "0e0"),
         ("1.5", "1.5e0"),
+        // The library's rule, shared with --tol: not 1, not below 100 ε.
+        ("1.0", "1e0"),
+        ("1e-16", "1e-16"),
     ] {
         let err = expect_err(
             &with_line(19, &format!("tolerances = [1e-6, {value}]")),

@@ -28,7 +28,8 @@ pub struct RunArgs {
     /// Formulation (default: the scene's first that the solver accepts).
     #[arg(long)]
     pub formulation: Option<String>,
-    /// Tolerance, RTOL = ATOL (default 1e-8).
+    /// Tolerance, RTOL = ATOL (default 1e-8), in [2.2e-14, 1) like scene
+    /// tolerances.
     #[arg(long, default_value_t = 1e-8, allow_negative_numbers = true)]
     pub tol: f64,
     /// Output format.
@@ -74,15 +75,16 @@ pub fn located(scene: &Scene, e: &RunError) -> Failure {
     }
 }
 
-/// Check a tolerance given on the command line.
+/// Check a tolerance given on the command line: the rule of the library
+/// and of scene files, [`dae_solvers::options::check_uniform`] (`RTOL =
+/// ATOL = tol` in `[100 ε, 1)`).
 pub fn check_tol(tol: f64, flag: &str) -> Result<(), Failure> {
-    if tol.is_finite() && tol > 0.0 {
-        Ok(())
-    } else {
-        Err(Failure::input(format!(
-            "{flag} {tol}: a tolerance must be positive and finite"
-        )))
-    }
+    dae_solvers::options::check_uniform(tol).map_err(|issue| {
+        Failure::input(format!(
+            "{flag} {tol:e}: the tolerance {issue}; tolerances (RTOL = ATOL) must be in {}",
+            dae_solvers::options::uniform_range()
+        ))
+    })
 }
 
 /// Run one scene; `Ok((output, exit code))`.

@@ -33,7 +33,8 @@ pub struct SweepArgs {
     /// Formulations, comma-separated (default: the scene's).
     #[arg(long, value_delimiter = ',')]
     pub formulations: Option<Vec<String>>,
-    /// Tolerances RTOL = ATOL, comma-separated (default: the scene's).
+    /// Tolerances RTOL = ATOL, comma-separated (default: the scene's), each
+    /// in [2.2e-14, 1).
     #[arg(long, value_delimiter = ',')]
     pub tols: Option<Vec<f64>>,
     /// Timed integrations per run, at most (a run is timed again only while

@@ -75,7 +75,7 @@ pub struct SweepOptions {
     pub solvers: Vec<String>,
     /// Formulation names (each one of the eight).
     pub formulations: Vec<String>,
-    /// Tolerances, `RTOL = ATOL`.
+    /// Tolerances, `RTOL = ATOL`, each in `[100 ε, 1)`.
     pub tolerances: Vec<f64>,
     /// Timed integrations per run (median reported); at least 1.
     pub repeats: usize,
@@ -117,11 +117,16 @@ pub enum SweepError {
         /// The name given.
         name: String,
     },
-    /// A tolerance that is not positive and finite.
-    #[error("tolerance {tol}: a tolerance must be positive and finite")]
+    /// A tolerance outside [`dae_solvers::options::check_uniform`].
+    #[error(
+        "tolerance {tol:e} {issue}; tolerances (RTOL = ATOL) must be in {}",
+        dae_solvers::options::uniform_range()
+    )]
     BadTolerance {
         /// The value given.
         tol: f64,
+        /// What is wrong with it.
+        issue: dae_solvers::options::ToleranceIssue,
     },
     /// Nothing to sweep.
     #[error("nothing to sweep: no {what} given")]
@@ -381,12 +386,9 @@ pub fn validate(opts: &SweepOptions) -> Result<(), SweepError> {
     {
         return Err(SweepError::UnknownFormulation { name: f.clone() });
     }
-    if let Some(t) = opts
-        .tolerances
-        .iter()
-        .find(|t| !(t.is_finite() && **t > 0.0))
-    {
-        return Err(SweepError::BadTolerance { tol: *t });
+    for &tol in &opts.tolerances {
+        dae_solvers::options::check_uniform(tol)
+            .map_err(|issue| SweepError::BadTolerance { tol, issue })?;
     }
     Ok(())
 }
