@@ -295,6 +295,26 @@ pub enum SceneError {
         /// The repeated entry.
         name: String,
     },
+    /// The model a scene names is a directory, not a model file.
+    #[error("{at}: `model`: `{}` is a directory, not a model file", path.display())]
+    ModelIsDirectory {
+        /// Where.
+        at: Location,
+        /// The resolved path.
+        path: PathBuf,
+    },
+    /// The model a scene names is neither a built-in model nor a file.
+    #[error(
+        "{at}: `model`: \"{name}\" is neither a built-in model (built-in: {}) nor a model file \
+         (a path to a .dae file, relative to the scene file)",
+        crate::models::BUILTIN_MODELS.join(", ")
+    )]
+    UnknownModel {
+        /// Where.
+        at: Location,
+        /// The value given.
+        name: String,
+    },
     /// The model file a scene names does not exist.
     #[error("{at}: `model`: model file `{}` does not exist", path.display())]
     ModelNotFound {
@@ -901,8 +921,7 @@ impl Source<'_> {
                 reason: "must name a built-in model or a .dae file".into(),
             });
         }
-        let is_path = value.ends_with(".dae") || value.contains('/') || value.contains('\\');
-        if !is_path {
+        if crate::models::BUILTIN_MODELS.contains(&value) {
             return Ok(ModelSource::Builtin(value.to_string()));
         }
         let given = Path::new(value);
@@ -910,13 +929,23 @@ impl Source<'_> {
             Some(base) if given.is_relative() => base.join(given),
             _ => given.to_path_buf(),
         };
-        if !path.is_file() {
-            return Err(SceneError::ModelNotFound {
-                at: self.at(&raw.span()),
-                path,
-            });
+        let at = self.at(&raw.span());
+        if path.is_dir() {
+            return Err(SceneError::ModelIsDirectory { at, path });
         }
-        Ok(ModelSource::File(path))
+        if path.is_file() {
+            return Ok(ModelSource::File(path));
+        }
+        let looks_like_path =
+            value.ends_with(".dae") || value.contains('/') || value.contains('\\');
+        if looks_like_path {
+            Err(SceneError::ModelNotFound { at, path })
+        } else {
+            Err(SceneError::UnknownModel {
+                at,
+                name: value.to_string(),
+            })
+        }
     }
 
     fn time(&self, raw: Spanned<RawTime>) -> Result<TimeSpec, SceneError> {

@@ -572,3 +572,55 @@ fn per_component_tolerances_name_the_component() {
     }
 }
 
+// ------------------------------------------------------- 6. messages
+
+/// A directory given as the model was reported as "does not exist".
+#[test]
+fn model_directory_is_reported_as_a_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("models.dae")).unwrap();
+    let text = scene_text("g = 9.81", "x = 1.0", "end = 1.0", "none")
+        .replace("\"pendulum\"", "\"models.dae\"");
+    let path = dir.path().join("s.toml");
+    std::fs::write(&path, text).unwrap();
+    let msg = Scene::load(&path).unwrap_err().to_string();
+    assert!(msg.contains("is a directory"), "{msg}");
+    assert!(!msg.contains("does not exist"), "{msg}");
+    assert!(
+        msg.starts_with(&format!("{}:2:9:", path.display())),
+        "{msg}"
+    );
+}
+
+/// `model = "pendlum"` (neither a path nor a built-in model) failed later
+/// without the scene file, field or line.
+#[test]
+fn unknown_model_name_names_the_field_and_place() {
+    let text = scene_text("g = 9.81", "x = 1.0", "end = 1.0", "none")
+        .replace("\"pendulum\"", "\"pendlum\"");
+    let err = Scene::parse(&text, "t.toml", None)
+        .expect_err("an unknown model is a scene error")
+        .to_string();
+    assert!(err.starts_with("t.toml:2:9:"), "{err}");
+    assert!(err.contains("`model`") && err.contains("pendlum"), "{err}");
+    assert!(err.contains("pendulum"), "lists the built-in models: {err}");
+}
+
+/// `dae derive` says the same: a directory is a directory, an unknown
+/// name is neither a built-in model nor a file.
+#[test]
+fn derive_names_directories_and_unknown_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().display().to_string();
+    let o = dae(&["derive", &d]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("is a directory"), "{}", stderr(&o));
+    let o = dae(&["derive", "pendlum"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("neither a built-in model (built-in: pendulum)"),
+        "{}",
+        stderr(&o)
+    );
+}
+
