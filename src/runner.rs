@@ -126,6 +126,11 @@ pub struct RunRecord {
     pub err_sum: Option<f64>,
     /// Max over check times of the multiplier's error.
     pub err_lambda: Option<f64>,
+    /// Does the answer deserve the tolerance? (See [`Accuracy`].) `null`
+    /// for a run that did not reach the end.
+    pub accuracy: Option<Accuracy>,
+    /// What the verdict rests on, in one line (`null` with it).
+    pub accuracy_note: Option<String>,
     /// Integration time in seconds (median of the repeats).
     pub tsim_s: f64,
     /// Work counters.
@@ -141,6 +146,77 @@ pub struct RunRecord {
     #[serde(skip)]
     pub trajectory: Trajectory,
 }
+
+/// The accuracy verdict of a run that reached the end of its horizon.
+///
+/// Reaching the end (`status = "ok"`) says nothing about the answer: a BDF
+/// run released at 179.99° ends with an error of 4.9–11 at tolerances where
+/// 1e-4 would be honest, and used to be reported as plain "ok". The
+/// verdict says whether the tolerance bought the accuracy it names.
+///
+/// * With a reference: [`Accurate`](Accuracy::Accurate) iff at every check
+///   time the error of the differential unknowns is at most
+///   [`ACCURATE_FACTOR`]` · tol · max(1, |y*|)`, `|y*|` the largest of those
+///   unknowns in the exact solution there (the scale the error weights
+///   `atol + rtol |y|` use with `RTOL = ATOL = tol`; for a solution of
+///   order one — the paper's pendulum at a check time — the rule reads
+///   `err ≤ 100 · tol`). Otherwise [`Inaccurate`](Accuracy::Inaccurate).
+///   Why 100: the tolerance bounds the error made in each step, and the
+///   global error is what the steps' errors accumulate to over the horizon;
+///   a good method on a well-conditioned problem keeps it within one or two
+///   orders of magnitude of the tolerance over the horizons measured here
+///   (RADAU5 on the paper's S01: within 75 · tol on every formulation but
+///   the index-3 `ori2`). Beyond 100 · tol the tolerance no longer describes
+///   the answer.
+/// * Without a reference: [`Unverified`](Accuracy::Unverified), or
+///   [`Suspect`](Accuracy::Suspect) when the position- or velocity-level
+///   constraint residual reaches [`SUSPECT_FACTOR`]` · tol`, or an
+///   invariant drifts by `SUSPECT_FACTOR · tol · max(1, |I(t0)|)` —
+///   orders of magnitude beyond what the tolerance allows, so the answer
+///   is very likely wrong even though nothing checks it. (The
+///   acceleration level is left out: it carries the multipliers, whose
+///   scale can be huge for stiff parameters.)
+///
+/// The verdict never changes the exit code of `dae run` (0 for a run that
+/// reached the end); the text output and the sweep's tables flag it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Accuracy {
+    /// Error within `100 · tol · max(1, |y*|)` at every check time.
+    Accurate,
+    /// Error beyond it somewhere.
+    Inaccurate,
+    /// No reference; residuals and drift unremarkable.
+    Unverified,
+    /// No reference, and residuals or drift ≥ `1e4 · tol` (scaled).
+    Suspect,
+}
+
+impl Accuracy {
+    /// The name used in JSON and CSV.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Accuracy::Accurate => "accurate",
+            Accuracy::Inaccurate => "inaccurate",
+            Accuracy::Unverified => "unverified",
+            Accuracy::Suspect => "suspect",
+        }
+    }
+
+    /// Whether the verdict is a warning (inaccurate or suspect).
+    pub fn is_warning(self) -> bool {
+        matches!(self, Accuracy::Inaccurate | Accuracy::Suspect)
+    }
+}
+
+/// A run with a reference is accurate iff its scaled error is at most
+/// `ACCURATE_FACTOR · tol` (see [`Accuracy`]).
+pub const ACCURATE_FACTOR: f64 = 100.0;
+
+/// A run without a reference is suspect when a constraint residual or an
+/// invariant drift reaches `SUSPECT_FACTOR · tol` (scaled; see
+/// [`Accuracy`]).
+pub const SUSPECT_FACTOR: f64 = 1e4;
 
 /// What initialisation changed, in short.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -338,6 +414,8 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
         err: None,
         err_sum: None,
         err_lambda: None,
+        accuracy: None,
+        accuracy_note: None,
         tsim_s: 0.0,
         stats: Stats::default(),
         residuals: Residuals::default(),
@@ -486,6 +564,9 @@ fn measure(
     let ref_idx: Vec<Option<usize>> = REF_NAMES.iter().map(|n| info.variable(n)).collect();
     let is_check = check_flags(&sol.t, spec.check);
     let (mut err, mut err_sum, mut err_lambda) = (0.0f64, 0.0f64, 0.0f64);
+    // Largest error relative to max(1, |y*|) over the check times, and
+    // where: the accuracy verdict's measure.
+    let (mut err_scaled, mut worst_t) = (0.0f64, spec.t0);
     let mut res = [None::<f64>; 3];
     let mut drift = vec![0.0f64; n_inv];
     let traj = &mut record.trajectory;
@@ -514,6 +595,11 @@ fn measure(
                 }
             }
             if is_check {
+                let scale = exact[..4].iter().fold(1.0f64, |m, v| m.max(v.abs()));
+                if e_here / scale > err_scaled || e_here.is_nan() {
+                    err_scaled = e_here / scale;
+                    worst_t = *t;
+                }
                 err = err.max(e_here);
                 err_sum += sum;
                 if let Some(i) = ref_idx[4] {
@@ -554,4 +640,68 @@ fn measure(
         level2: res[2],
     };
     record.invariant_drift = Named(info.invariants.iter().cloned().zip(drift).collect());
+    let inv_scale: Vec<f64> = inv0.iter().map(|v| v.abs().max(1.0)).collect();
+    let (accuracy, note) = verdict(spec, record, err_scaled, worst_t, &inv_scale);
+    record.accuracy = Some(accuracy);
+    record.accuracy_note = Some(note);
+}
+
+/// The accuracy verdict and its one-line reason (see [`Accuracy`]).
+fn verdict(
+    spec: &RunSpec<'_>,
+    record: &RunRecord,
+    err_scaled: f64,
+    worst_t: f64,
+    inv_scale: &[f64],
+) -> (Accuracy, String) {
+    let tol = spec.tol;
+    if spec.reference.is_some() {
+        let bound = ACCURATE_FACTOR * tol;
+        // NaN compares false: a NaN error is not accurate.
+        return if err_scaled <= bound {
+            (
+                Accuracy::Accurate,
+                format!("err within {ACCURATE_FACTOR}·tol·max(1, |y*|) at every check time"),
+            )
+        } else {
+            (
+                Accuracy::Inaccurate,
+                format!(
+                    "err/max(1, |y*|) = {err_scaled:.2e} at t = {worst_t} is {:.0}·tol, beyond the \
+                     {ACCURATE_FACTOR}·tol an accurate run keeps to",
+                    err_scaled / tol
+                ),
+            )
+        };
+    }
+    let bound = SUSPECT_FACTOR * tol;
+    let mut excess: Vec<String> = Vec::new();
+    for level in 0..2 {
+        if let Some(r) = record.residuals.level(level) {
+            if r >= bound || r.is_nan() {
+                excess.push(format!("level-{level} constraint residual {r:.2e}"));
+            }
+        }
+    }
+    for ((name, d), scale) in record.invariant_drift.0.iter().zip(inv_scale) {
+        if *d >= bound * scale || d.is_nan() {
+            excess.push(format!("drift of {name} {d:.2e} (scale {scale:.2e})"));
+        }
+    }
+    if excess.is_empty() {
+        (
+            Accuracy::Unverified,
+            format!(
+                "no reference; constraint residuals and invariant drift below {SUSPECT_FACTOR:.0e}·tol"
+            ),
+        )
+    } else {
+        (
+            Accuracy::Suspect,
+            format!(
+                "no reference, but {} at or above {SUSPECT_FACTOR:.0e}·tol (scaled)",
+                excess.join(", ")
+            ),
+        )
+    }
 }

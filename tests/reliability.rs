@@ -624,3 +624,149 @@ fn derive_names_directories_and_unknown_models() {
     );
 }
 
+// ----------------------------------------------- 7. accuracy verdict
+
+/// The pendulum released at 179.99°, on g = 9.81: bdf's error is far above
+/// its tolerance but was reported as plain "ok".
+const NEAR_TOP: &str = "x = 1.7453292431344840e-4\ny = 0.9999999847691291";
+
+#[test]
+fn confident_wrong_answers_are_flagged() {
+    let text = scene_text("g = 9.81", NEAR_TOP, "end = 5.0", "pendulum-exact");
+    let (_dir, path) = scene_file("top.toml", &text);
+    for (solver, tol, verdict) in [
+        ("bdf", "1e-6", "inaccurate"),
+        ("bdf", "1e-3", "inaccurate"),
+        ("radau5", "1e-6", "accurate"),
+    ] {
+        let args = [
+            "run",
+            &path,
+            "--solver",
+            solver,
+            "--formulation",
+            "rcd0",
+            "--tol",
+            tol,
+        ];
+        let o = dae(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let v = json(&o);
+        assert_eq!(v["status"], "ok");
+        assert_eq!(v["accuracy"], verdict, "{solver} {tol}: {v}");
+        let mut text_args = args.to_vec();
+        text_args.extend(["--format", "text"]);
+        let o = dae(&text_args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let shown = stdout(&o).contains("INACCURATE");
+        assert_eq!(shown, verdict == "inaccurate", "{}", stdout(&o));
+    }
+}
+
+/// g/L = 1e6 released near the top: bdf's error was ~1e3 and its energy
+/// drift 6e5, reported as "ok". With the reference: inaccurate; without
+/// one, the residuals give it away: suspect. radau5 on the benign S01 start
+/// without a reference: unverified.
+#[test]
+fn stiff_wrong_answers_are_inaccurate_or_suspect() {
+    let run = |parameters: &str, initial: &str, reference: &str, solver: &str| {
+        let text = scene_text(parameters, initial, "end = 0.05", reference);
+        let scene = Scene::parse(&text, "stiff.toml", None).unwrap();
+        let model = load_model(&scene).unwrap_or_else(|f| panic!("{}", f.message));
+        let initial: Vec<(String, f64)> = scene
+            .initial
+            .iter()
+            .map(|v| (v.name.clone(), v.value))
+            .collect();
+        let reference = (reference == "pendulum-exact")
+            .then(|| runner::pendulum_reference(&*model, &initial).unwrap());
+        let rec = runner::run(&RunSpec {
+            scene: &scene.name,
+            model: &*model,
+            initial: &initial,
+            t0: 0.0,
+            t_end: scene.time.end,
+            check: &scene.time.checks,
+            reference: reference.as_ref(),
+            solver,
+            formulation: "rcd0",
+            tol: 1e-6,
+            init_mode: InitMode::Project,
+            samples: &[],
+            repeats: 1,
+        })
+        .unwrap();
+        assert_eq!(rec.status, "ok", "{:?}", rec.error);
+        rec
+    };
+    let rec = run("g = 9.81e6", NEAR_TOP, "pendulum-exact", "bdf");
+    assert_eq!(
+        rec.accuracy,
+        Some(runner::Accuracy::Inaccurate),
+        "{:?}",
+        rec.accuracy_note
+    );
+    let rec = run("g = 9.81e6", NEAR_TOP, "none", "bdf");
+    assert_eq!(
+        rec.accuracy,
+        Some(runner::Accuracy::Suspect),
+        "{:?}",
+        rec.accuracy_note
+    );
+    assert!(rec.accuracy_note.unwrap().contains("residual"));
+    let rec = run("g = 13.75", "x = 1.0\ny = 0.0", "none", "radau5");
+    assert_eq!(
+        rec.accuracy,
+        Some(runner::Accuracy::Unverified),
+        "{:?}",
+        rec.accuracy_note
+    );
+}
+
+/// The sweep's tables carry the verdict next to "reached the end": the
+/// success matrix (text and index.html), results.csv and results.json.
+#[test]
+fn sweep_tables_show_the_verdict() {
+    let scene = Scene::builtin("s01").unwrap();
+    let opts = SweepOptions {
+        solvers: vec!["radau5".into(), "bdf".into()],
+        formulations: vec!["rcd0".into()],
+        tolerances: vec![1e-5],
+        repeats: 1,
+        progress: false,
+        ..SweepOptions::from_scene(&scene)
+    };
+    let report = sweep::run(&scene, &opts).unwrap();
+    let summary = sweep::Summary::of(&report);
+    // S01 at 1e-5: radau5 within 100·tol, bdf about 1e3·tol off.
+    let cell = |s| summary.success.cell(s, "rcd0").unwrap().label();
+    assert_eq!(
+        (cell("radau5"), cell("bdf")),
+        ("X 1/1".into(), "X 0/1".into())
+    );
+    let text = sweep::table::text_report(&report, &summary);
+    assert!(text.contains("1 of 2 finished runs accurate"), "{text}");
+    assert!(text.contains("INACCURATE"), "{text}");
+    let root = tempfile::tempdir().unwrap();
+    let out = root.path().join("s01");
+    sweep::write_outputs(&report, &summary, &out).unwrap();
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(&head[4..6], ["status", "accuracy"]);
+    assert!(
+        csv.lines().nth(1).unwrap().contains(",ok,accurate,"),
+        "{csv}"
+    );
+    assert!(
+        csv.lines().nth(2).unwrap().contains(",ok,inaccurate,"),
+        "{csv}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["runs"][1]["accuracy"], "inaccurate");
+    assert_eq!(json["success"]["rows"][1]["cells"][0]["inaccurate"], 1);
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("<small class=\"bad\">0/1</small>"), "{html}");
+    assert!(html.contains("<small>1/1</small>"));
+}
+

@@ -167,13 +167,26 @@ fn opt(v: Option<f64>) -> String {
 /// Human-readable summary of one run.
 pub fn text(r: &RunRecord) -> String {
     let mut s = String::new();
+    // A finished run whose answer is wrong says so on its first line.
+    let flag = match r.accuracy {
+        Some(a) if a.is_warning() => format!(" — {}", a.as_str().to_uppercase()),
+        _ => String::new(),
+    };
     let _ = writeln!(
         s,
-        "{} {}({}) tol {:e}: {}",
+        "{} {}({}) tol {:e}: {}{flag}",
         r.scene, r.solver, r.formulation, r.tol, r.status
     );
     if let Some(e) = &r.error {
         let _ = writeln!(s, "  error: {} ({})", e.message, e.kind);
+    }
+    if let (Some(a), Some(note)) = (r.accuracy, &r.accuracy_note) {
+        let label = if a.is_warning() {
+            format!("WARNING: {}", a.as_str().to_uppercase())
+        } else {
+            a.as_str().to_string()
+        };
+        let _ = writeln!(s, "  accuracy: {label} ({note})");
     }
     let _ = writeln!(s, "  t_end {}  tsim {:.3e} s", r.t_end, r.tsim_s);
     let vals: Vec<String> = r
