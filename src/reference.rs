@@ -806,7 +806,8 @@ mod tests {
         assert_eq!(pow2_at_least(0.3), Some(0.5));
         assert_eq!(pow2_at_least(0.25), Some(0.25));
         // The whole range, including where a doubling search never ended.
-        assert_eq!(pow2_at_least(1e308), Some(2f64.powi(1023)));
+        assert_eq!(pow2_at_least(8e307), Some(2f64.powi(1023)));
+        assert_eq!(pow2_at_least(1e308), None); // 2^1024 overflows
         assert_eq!(pow2_at_least(2f64.powi(1023)), Some(2f64.powi(1023)));
         assert_eq!(pow2_at_least(f64::MAX), None);
         assert_eq!(pow2_at_least(f64::MIN_POSITIVE), Some(f64::MIN_POSITIVE));
