@@ -27,6 +27,21 @@ pub enum ModelError {
         /// The I/O error.
         source: std::io::Error,
     },
+    /// The path is a directory.
+    #[error("model file {path} is a directory, not a model file")]
+    IsDirectory {
+        /// The path given.
+        path: String,
+    },
+    /// Neither a built-in model nor an existing file.
+    #[error(
+        "no model `{spec}`: neither a built-in model (built-in: {}) nor an existing model file",
+        BUILTIN_MODELS.join(", ")
+    )]
+    NotFound {
+        /// What was given.
+        spec: String,
+    },
     /// The model text has errors (rendered with `file:line:column`).
     #[error("{0}")]
     Invalid(String),
@@ -49,7 +64,15 @@ pub fn source(spec: &str) -> Result<ModelSource, ModelError> {
             text: PENDULUM_SOURCE.to_string(),
         });
     }
-    let text = std::fs::read_to_string(Path::new(spec)).map_err(|source| ModelError::Io {
+    let path = Path::new(spec);
+    if path.is_dir() {
+        return Err(ModelError::IsDirectory { path: spec.into() });
+    }
+    let looks_like_path = spec.ends_with(".dae") || spec.contains('/') || spec.contains('\\');
+    if !looks_like_path && !path.exists() {
+        return Err(ModelError::NotFound { spec: spec.into() });
+    }
+    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
         path: spec.to_string(),
         source,
     })?;

@@ -103,14 +103,56 @@ pub enum ReferenceError {
         /// The relative tolerance applied, [`START_RADIUS_RTOL`].
         tol: f64,
     },
-    /// `g` and `L` are valid but `√(g/L)` or the period over- or underflows.
-    #[error("sqrt(g/L) = sqrt({g}/{length}) or the period 4K/sqrt(g/L) is not representable")]
+    /// A start coordinate so large that the start point's distance from
+    /// the pivot overflows.
+    #[error("start point (x0, y0) = ({x0:e}, {y0:e}) is too far from the pivot to be represented")]
+    StartNotRepresentable {
+        /// Start abscissa.
+        x0: f64,
+        /// Start ordinate.
+        y0: f64,
+    },
+    /// A time so far from the start (more than 2⁵¹ periods) that the phase
+    /// is lost even in double-double arithmetic: [`PendulumExact::state`]
+    /// gives NaNs there.
+    #[error("the exact solution cannot be evaluated {t:e} s after the start: beyond 2^51 periods the phase is lost")]
+    PhaseLost {
+        /// Time after the start.
+        t: f64,
+    },
+    /// `g`, `L` and `m` are valid but `√(g/L)`, the period, or a value of
+    /// the motion (the speed at the bottom, the multiplier) over- or
+    /// underflows in double precision.
+    #[error(
+        "with g = {g:e}, L = {length:e}, m = {mass:e} the motion is not representable in double \
+         precision: sqrt(g/L), the period 4K/sqrt(g/L), the speed or the multiplier overflows or underflows"
+    )]
     Unrepresentable {
         /// Gravity.
         g: f64,
         /// Rod length.
         length: f64,
+        /// Mass.
+        mass: f64,
     },
+}
+
+impl ReferenceError {
+    /// The input to blame, in the reference's own names: `"theta0"`,
+    /// `"x0"`, `"y0"`, `"g"`, `"l"`, `"m"`, or `"t"` (a time too far from the
+    /// start).
+    pub fn input(&self) -> &'static str {
+        match self {
+            ReferenceError::AngleOutOfRange { .. } => "theta0",
+            ReferenceError::InvalidParameter { name, .. }
+            | ReferenceError::NonFiniteStart { name, .. } => name,
+            ReferenceError::NotOnCircle { .. } | ReferenceError::StartNotRepresentable { .. } => {
+                "x0"
+            }
+            ReferenceError::Unrepresentable { .. } => "l",
+            ReferenceError::PhaseLost { .. } => "t",
+        }
+    }
 }
 
 /// Relative tolerance on `|√(x0² + y0²) − L|` accepted by
@@ -244,8 +286,10 @@ impl PendulumExact {
             return Err(ReferenceError::AngleOutOfRange { theta0 });
         }
         // Scale by max(|x0|, |y0|) so the squares neither overflow nor
-        // underflow; the scaling by a power of two is exact.
-        let scale = pow2_at_least(x0.abs().max(y0.abs()));
+        // underflow; the scaling by a power of two is exact. (x0 > 0 here.)
+        let Some(scale) = pow2_at_least(x0.abs().max(y0.abs())) else {
+            return Err(ReferenceError::StartNotRepresentable { x0, y0 });
+        };
         let (xs, ys) = (x0 / scale, y0 / scale);
         let r_s = Dd::from_prod(xs, xs).add(Dd::from_prod(ys, ys)).sqrt();
         let radius = r_s.hi * scale;
@@ -294,8 +338,22 @@ impl PendulumExact {
             cos_theta0,
         };
         let period = p.period();
-        if !(omega.hi.is_finite() && omega.hi > 0.0 && period.is_finite() && period > 0.0) {
-            return Err(ReferenceError::Unrepresentable { g, length: l });
+        // The largest values of the motion: the start, and the bottom of
+        // the swing (u = 0: the greatest speed and multiplier). Anything that
+        // overflows there (L² or (Lθ')² in λ, say) is refused now rather
+        // than returned later as NaN or ∞.
+        let representable = omega.hi.is_finite()
+            && omega.hi > 0.0
+            && period.is_finite()
+            && period > 0.0
+            && p.state(0.0).iter().all(|v| v.is_finite())
+            && p.state_from(0.0, 1.0, 1.0).iter().all(|v| v.is_finite());
+        if !representable {
+            return Err(ReferenceError::Unrepresentable {
+                g,
+                length: l,
+                mass: m,
+            });
         }
         Ok(p)
     }
@@ -396,6 +454,11 @@ impl PendulumExact {
         let Some((sn, cn, dn)) = self.jacobi_at(t) else {
             return [f64::NAN; 5];
         };
+        self.state_from(sn, cn, dn)
+    }
+
+    /// `[x, y, v, w, λ]` from the Jacobi functions of the phase.
+    fn state_from(&self, sn: f64, cn: f64, dn: f64) -> [f64; 5] {
         let (k, l) = (self.k.hi, self.l);
         let sin_theta = 2.0 * k * sn * dn;
         // cos θ = 1 − 2k²sn² = cos θ₀ + 2k²cn²: the second form is exact
@@ -564,19 +627,37 @@ fn landen(u: f64, k: f64, kc: f64) -> (f64, f64, f64) {
     (sn, cn, dn)
 }
 
-/// Smallest power of two ≥ `v` (for `v > 0`, finite), used for exact scaling.
-fn pow2_at_least(v: f64) -> f64 {
+/// Smallest power of two `≥ v`, used for exact scaling; `None` when `v` is
+/// not finite and positive or the power is above `f64::MAX` (`v > 2¹⁰²³`).
+///
+/// Read off the exponent bits, not searched for: a doubling search from 1
+/// reached infinity for `v > 2¹⁰²³` and then halved infinity forever.
+fn pow2_at_least(v: f64) -> Option<f64> {
     if !(v.is_finite() && v > 0.0) {
-        return 1.0;
+        return None;
     }
-    let mut p = 1.0f64;
-    while p < v {
-        p *= 2.0;
+    let bits = v.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let fraction = bits & ((1u64 << 52) - 1);
+    // v = 1.f·2^(biased − 1023), or f·2^−1074 for a subnormal (biased = 0).
+    let e = if biased == 0 {
+        let bits_used = 64 - fraction.leading_zeros() as i32; // ≥ 1: v > 0
+        -1074
+            + if fraction.is_power_of_two() {
+                bits_used - 1
+            } else {
+                bits_used
+            }
+    } else {
+        biased - 1023 + i32::from(fraction != 0)
+    };
+    if e > 1023 {
+        None
+    } else if e >= -1022 {
+        Some(f64::from_bits(((e + 1023) as u64) << 52))
+    } else {
+        Some(f64::from_bits(1u64 << (e + 1074)))
     }
-    while p * 0.5 >= v {
-        p *= 0.5;
-    }
-    p
 }
 
 /// `sin x` in double-double by its Taylor series, for `0 ≤ x ≤ π/2`
@@ -720,8 +801,25 @@ mod tests {
 
     #[test]
     fn pow2_scaling() {
-        assert_eq!(pow2_at_least(1.0), 1.0);
-        assert_eq!(pow2_at_least(3.0), 4.0);
-        assert_eq!(pow2_at_least(0.3), 0.5);
+        assert_eq!(pow2_at_least(1.0), Some(1.0));
+        assert_eq!(pow2_at_least(3.0), Some(4.0));
+        assert_eq!(pow2_at_least(0.3), Some(0.5));
+        assert_eq!(pow2_at_least(0.25), Some(0.25));
+        // The whole range, including where a doubling search never ended.
+        assert_eq!(pow2_at_least(8e307), Some(2f64.powi(1023)));
+        assert_eq!(pow2_at_least(1e308), None); // 2^1024 overflows
+        assert_eq!(pow2_at_least(2f64.powi(1023)), Some(2f64.powi(1023)));
+        assert_eq!(pow2_at_least(f64::MAX), None);
+        assert_eq!(pow2_at_least(f64::MIN_POSITIVE), Some(f64::MIN_POSITIVE));
+        assert_eq!(pow2_at_least(5e-324), Some(5e-324));
+        assert_eq!(pow2_at_least(3.0 * 5e-324), Some(4.0 * 5e-324));
+        assert_eq!(pow2_at_least(1e-310), Some(2f64.powi(-1029)));
+        for v in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(pow2_at_least(v), None);
+        }
+        for v in [1e-300, 7.0, 1e100, 123.456e200] {
+            let p = pow2_at_least(v).unwrap();
+            assert!(p >= v && p * 0.5 < v, "{v}: {p}");
+        }
     }
 }

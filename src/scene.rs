@@ -66,6 +66,14 @@ pub const BUILTIN_SCENES: [&str; 2] = ["s01", "s02"];
 /// Upper bound on the number of check times a scene may ask for.
 pub const MAX_CHECK_TIMES: usize = 10_000_000;
 
+/// Largest magnitude of a number in `[parameters]`, `[initial]` and
+/// `[time]`: `1e150`, so that squares and pairwise products of scene values
+/// (`x² + y²`, `L²`, `m·g·y`, `end − start`) stay finite. A larger value is
+/// refused naming its field ([`SceneError::TooLarge`]); it could only
+/// overflow somewhere downstream (an `x = 1e308` start once hung the exact
+/// reference).
+pub const MAX_ABS_VALUE: f64 = 1e150;
+
 const S01_TOML: &str = include_str!("../scenes/s01.toml");
 const S02_TOML: &str = include_str!("../scenes/s02.toml");
 
@@ -162,6 +170,21 @@ pub enum SceneError {
         /// The value.
         value: f64,
     },
+    /// A finite number too large to be used ([`MAX_ABS_VALUE`]).
+    #[error(
+        "{at}: `{field}` = {value:e} is too large: scene values must have magnitude at most {max:e} so that \
+         their squares and products stay finite"
+    )]
+    TooLarge {
+        /// Where.
+        at: Location,
+        /// `section.key`.
+        field: String,
+        /// The value.
+        value: f64,
+        /// [`MAX_ABS_VALUE`].
+        max: f64,
+    },
     /// A value that is well-typed but unusable.
     #[error("{at}: `{field}` {reason}")]
     InvalidValue {
@@ -172,13 +195,20 @@ pub enum SceneError {
         /// Why.
         reason: String,
     },
-    /// A tolerance that is NaN, infinite, not positive or not below 1.
-    #[error("{at}: `sweep.tolerances`: tolerance {value:e} must be a finite number in (0, 1)")]
+    /// A tolerance outside the library's rule
+    /// ([`dae_solvers::options::check_uniform`]): NaN, infinite, not
+    /// positive, below `100 ε` or not below 1.
+    #[error(
+        "{at}: `sweep.tolerances`: tolerance {value:e} {issue}; tolerances (RTOL = ATOL) must be in {}",
+        dae_solvers::options::uniform_range()
+    )]
     InvalidTolerance {
         /// Where.
         at: Location,
         /// The value.
         value: f64,
+        /// What is wrong with it.
+        issue: dae_solvers::options::ToleranceIssue,
     },
     /// `time.end` not after `time.start`.
     #[error("{at}: `time.end` = {end} must be greater than `time.start` = {start}")]
@@ -263,6 +293,26 @@ pub enum SceneError {
         /// `sweep.solvers`, …
         field: String,
         /// The repeated entry.
+        name: String,
+    },
+    /// The model a scene names is a directory, not a model file.
+    #[error("{at}: `model`: `{}` is a directory, not a model file", path.display())]
+    ModelIsDirectory {
+        /// Where.
+        at: Location,
+        /// The resolved path.
+        path: PathBuf,
+    },
+    /// The model a scene names is neither a built-in model nor a file.
+    #[error(
+        "{at}: `model`: \"{name}\" is neither a built-in model (built-in: {}) nor a model file \
+         (a path to a .dae file, relative to the scene file)",
+        crate::models::BUILTIN_MODELS.join(", ")
+    )]
+    UnknownModel {
+        /// Where.
+        at: Location,
+        /// The value given.
         name: String,
     },
     /// The model file a scene names does not exist.
@@ -368,7 +418,8 @@ pub struct Sweep {
     pub solvers: Vec<String>,
     /// Formulation names, each in [`KNOWN_FORMULATIONS`].
     pub formulations: Vec<String>,
-    /// Tolerances (`RTOL = ATOL`), each finite in `(0, 1)`.
+    /// Tolerances (`RTOL = ATOL`), each in `[100 ε, 1)`
+    /// ([`dae_solvers::options::check_uniform`]).
     pub tolerances: Vec<f64>,
 }
 
@@ -402,6 +453,11 @@ pub struct Scene {
     pub reference: ReferenceKind,
     /// Sweep grid.
     pub sweep: Sweep,
+    /// Where `model`, `time`, `time.start`, `time.end` and `reference.kind`
+    /// are in the text, for problems found after parsing ([`Scene::locate`]).
+    /// Entries are `(field, line, column)`; the file is [`Scene::origin`].
+    #[serde(skip)]
+    pub places: Vec<(String, usize, usize)>,
 }
 
 impl Scene {
@@ -514,6 +570,50 @@ impl Scene {
             }
         }
         Ok(())
+    }
+
+    /// Where a field (`initial.x`, `parameters.g`, `time.end`, `model`,
+    /// `reference.kind`, …) is in the scene text, for problems found after
+    /// parsing (an exact reference that cannot be built from the start, …).
+    /// A field the scene does not give (a model default, say) is located at
+    /// its table (`time`) or at `reference.kind`, else at the file's first
+    /// line.
+    ///
+    /// ```
+    /// let s = dae::scene::Scene::builtin("s01").unwrap();
+    /// assert_eq!(s.locate("initial.x").to_string(), "<built-in s01>:12:1");
+    /// assert_eq!(s.locate("time.end").to_string(), "<built-in s01>:18:7");
+    /// ```
+    pub fn locate(&self, field: &str) -> Location {
+        let named = |list: &[NamedValue], name: &str| {
+            list.iter()
+                .find(|e| e.name == name)
+                .map(|e| self.location(e))
+        };
+        let place = |f: &str| {
+            self.places
+                .iter()
+                .find(|(k, ..)| k == f)
+                .map(|&(_, line, column)| Location {
+                    origin: self.origin.clone(),
+                    line,
+                    column,
+                })
+        };
+        let found = if let Some(name) = field.strip_prefix("initial.") {
+            named(&self.initial, name)
+        } else if let Some(name) = field.strip_prefix("parameters.") {
+            named(&self.parameters, name)
+        } else {
+            place(field).or_else(|| field.split_once('.').and_then(|(table, _)| place(table)))
+        };
+        found
+            .or_else(|| place("reference.kind"))
+            .unwrap_or_else(|| Location {
+                origin: self.origin.clone(),
+                line: 1,
+                column: 1,
+            })
     }
 
     fn location(&self, entry: &NamedValue) -> Location {
@@ -690,16 +790,24 @@ impl Source<'_> {
         }
     }
 
+    /// A finite number of magnitude at most [`MAX_ABS_VALUE`].
     fn finite(&self, field: &str, v: &Spanned<f64>) -> Result<f64, SceneError> {
         let value = *v.get_ref();
-        if value.is_finite() {
-            Ok(value)
-        } else {
+        if !value.is_finite() {
             Err(SceneError::NotFinite {
                 at: self.at(&v.span()),
                 field: field.to_string(),
                 value,
             })
+        } else if value.abs() > MAX_ABS_VALUE {
+            Err(SceneError::TooLarge {
+                at: self.at(&v.span()),
+                field: field.to_string(),
+                value,
+                max: MAX_ABS_VALUE,
+            })
+        } else {
+            Ok(value)
         }
     }
 
@@ -731,6 +839,12 @@ impl Source<'_> {
         }
         let model_raw = raw.model.ok_or_else(|| self.missing("model", None))?;
         let model = self.model(&model_raw, base_dir)?;
+        let mut places = Vec::new();
+        let mut place = |field: &str, span: Range<usize>| {
+            let at = self.at(&span);
+            places.push((field.to_string(), at.line, at.column));
+        };
+        place("model", model_raw.span());
         let parameters = match raw.parameters {
             Some(p) => self.named("parameters", p)?,
             None => Vec::new(),
@@ -746,6 +860,15 @@ impl Source<'_> {
             });
         }
         let time_raw = raw.time.ok_or_else(|| self.missing("time", None))?;
+        place("time", time_raw.span());
+        for (field, value) in [
+            ("time.start", &time_raw.get_ref().start),
+            ("time.end", &time_raw.get_ref().end),
+        ] {
+            if let Some(v) = value {
+                place(field, v.span());
+            }
+        }
         let time = self.time(time_raw)?;
         let reference = match raw.reference {
             None => ReferenceKind::None,
@@ -755,6 +878,7 @@ impl Source<'_> {
                     .into_inner()
                     .kind
                     .ok_or_else(|| self.missing("reference.kind", Some(&span)))?;
+                place("reference.kind", kind.span());
                 match kind.get_ref().as_str() {
                     "pendulum-exact" => ReferenceKind::PendulumExact,
                     "none" => ReferenceKind::None,
@@ -780,6 +904,7 @@ impl Source<'_> {
             time,
             reference,
             sweep,
+            places,
         })
     }
 
@@ -796,8 +921,7 @@ impl Source<'_> {
                 reason: "must name a built-in model or a .dae file".into(),
             });
         }
-        let is_path = value.ends_with(".dae") || value.contains('/') || value.contains('\\');
-        if !is_path {
+        if crate::models::BUILTIN_MODELS.contains(&value) {
             return Ok(ModelSource::Builtin(value.to_string()));
         }
         let given = Path::new(value);
@@ -805,13 +929,23 @@ impl Source<'_> {
             Some(base) if given.is_relative() => base.join(given),
             _ => given.to_path_buf(),
         };
-        if !path.is_file() {
-            return Err(SceneError::ModelNotFound {
-                at: self.at(&raw.span()),
-                path,
-            });
+        let at = self.at(&raw.span());
+        if path.is_dir() {
+            return Err(SceneError::ModelIsDirectory { at, path });
         }
-        Ok(ModelSource::File(path))
+        if path.is_file() {
+            return Ok(ModelSource::File(path));
+        }
+        let looks_like_path =
+            value.ends_with(".dae") || value.contains('/') || value.contains('\\');
+        if looks_like_path {
+            Err(SceneError::ModelNotFound { at, path })
+        } else {
+            Err(SceneError::UnknownModel {
+                at,
+                name: value.to_string(),
+            })
+        }
     }
 
     fn time(&self, raw: Spanned<RawTime>) -> Result<TimeSpec, SceneError> {
@@ -1018,8 +1152,8 @@ impl Source<'_> {
                 for item in list {
                     let at = self.at(&item.span());
                     let value = item.into_inner();
-                    if !(value.is_finite() && value > 0.0 && value < 1.0) {
-                        return Err(SceneError::InvalidTolerance { at, value });
+                    if let Err(issue) = dae_solvers::options::check_uniform(value) {
+                        return Err(SceneError::InvalidTolerance { at, value, issue });
                     }
                     if out.contains(&value) {
                         return Err(SceneError::Duplicate {

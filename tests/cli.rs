@@ -148,6 +148,8 @@ fn run_honours_the_json_contract() {
         "err",
         "err_sum",
         "err_lambda",
+        "accuracy",
+        "accuracy_note",
         "tsim_s",
         "stats",
         "residuals",
@@ -155,6 +157,7 @@ fn run_honours_the_json_contract() {
     ] {
         assert!(v.get(k).is_some(), "missing {k}");
     }
+    assert_eq!(v["accuracy"], "accurate", "{v}");
     assert_eq!(v["status"], "ok");
     assert!(v["error"].is_null());
     assert_eq!(v["t_end"], 20.0);

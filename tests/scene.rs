@@ -297,6 +297,9 @@ fn bad_tolerances() {
         ("-1e-6", "-1e-6"),
         ("0.0", "0e0"),
         ("1.5", "1.5e0"),
+        // The library's rule, shared with --tol: not 1, not below 100 ε.
+        ("1.0", "1e0"),
+        ("1e-16", "1e-16"),
     ] {
         let err = expect_err(
             &with_line(19, &format!("tolerances = [1e-6, {value}]")),
@@ -377,6 +380,41 @@ fn non_finite_values() {
     let err = expect_err(&with_line(4, "g = inf"), "parameters.g", 4);
     assert!(matches!(err, SceneError::NotFinite { .. }), "{err}");
     expect_err(&with_line(5, "l = -inf"), "parameters.l", 5);
+}
+
+/// Finite but absurd: magnitudes above 1e150 overflow when squared or
+/// multiplied (an `x = 1e308` start hung the exact reference).
+#[test]
+fn absurdly_large_values_name_the_field() {
+    for (line, text, field) in [
+        (7, "x = 1e308", "initial.x"),
+        (8, "y = -1e151", "initial.y"),
+        (4, "g = 1e200", "parameters.g"),
+        (12, "end = 1e300", "time.end"),
+        (12, "start = -1e200\nend = 1.0", "time.start"),
+        (13, "check_every = 1e160", "time.check_every"),
+    ] {
+        let err = expect_err(&with_line(line, text), field, line);
+        assert!(matches!(err, SceneError::TooLarge { .. }), "{err}");
+        assert!(err.to_string().contains("1e150"), "{err}");
+    }
+    // The bound itself is accepted.
+    assert!(parse(&with_line(4, "g = 1e150")).is_ok());
+}
+
+#[test]
+fn fields_are_located_after_parsing() {
+    let s = parse(BASE).unwrap();
+    assert_eq!(s.locate("initial.y").to_string(), "t.toml:8:1");
+    assert_eq!(s.locate("parameters.l").to_string(), "t.toml:5:1");
+    assert_eq!(s.locate("time.end").to_string(), "t.toml:12:7");
+    assert_eq!(s.locate("model").to_string(), "t.toml:2:9");
+    // Not in the file: its table, else `reference.kind`.
+    assert_eq!(
+        s.locate("time.start").to_string(),
+        s.locate("time").to_string()
+    );
+    assert_eq!(s.locate("parameters.m").to_string(), "t.toml:15:8");
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //! targets, the paper comparison, whole-file writing (with injected
 //! failures), and two small end-to-end sweeps into a temporary directory.
 
-use dae::runner::{ErrorInfo, Named, Residuals, RunRecord, Trajectory};
+use dae::runner::{Accuracy, ErrorInfo, Named, Residuals, RunRecord, Trajectory};
 use dae::scene::Scene;
 use dae::sweep::paper::{self, PaperCell, PaperTable, Verdict};
 use dae::sweep::pareto::{self, Point};
@@ -28,6 +28,13 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
         err,
         err_sum: err.map(|e| 2.0 * e),
         err_lambda: err.map(|e| e / 2.0),
+        // The runner's rule for a solution of order one.
+        accuracy: Some(match err {
+            Some(e) if e <= 100.0 * tol => Accuracy::Accurate,
+            Some(_) => Accuracy::Inaccurate,
+            None => Accuracy::Unverified,
+        }),
+        accuracy_note: Some("test".into()),
         tsim_s: tsim,
         stats: Stats {
             steps: 100,
@@ -59,6 +66,8 @@ fn failed(solver: &str, formulation: &str, tol: f64) -> RunRecord {
         err: None,
         err_sum: None,
         err_lambda: None,
+        accuracy: None,
+        accuracy_note: None,
         t_end: 1.5,
         ..rec(solver, formulation, tol, 0.5, None)
     }
@@ -124,7 +133,7 @@ fn grid() -> (Vec<String>, Vec<String>, Vec<Pair>, Vec<SweepRun>) {
     let runs = vec![
         run(rec("radau5", "rcd1", 1e-5, 0.01, Some(1e-4))),
         run(rec("radau5", "rcd1", 1e-6, 0.02, Some(1e-5))),
-        run(rec("bdf", "rcd1", 1e-5, 0.01, Some(1e-3))),
+        run(rec("bdf", "rcd1", 1e-5, 0.01, Some(1e-2))),
         run(failed("bdf", "rcd1", 1e-6)),
         run(failed("bdf", "psi0", 1e-5)),
         run(failed("bdf", "psi0", 1e-6)),
@@ -174,13 +183,19 @@ fn success_matrix_marks_reasons_and_counts() {
         lines[0].split_whitespace().collect::<Vec<_>>(),
         ["rcd1", "ovd0", "psi0"]
     );
+    // The mark, then how many of the runs were accurate: radau5's two
+    // runs are (err ≤ 100·tol), bdf's one finished run is not.
     assert_eq!(
         lines[1].split_whitespace().collect::<Vec<_>>(),
-        ["radau5", "X", "-1", "-2"]
+        ["radau5", "X", "2/2", "-1", "-2"]
     );
     assert_eq!(
         lines[2].split_whitespace().collect::<Vec<_>>(),
-        ["bdf", "x", "-1", "o"]
+        ["bdf", "x", "0/2", "-1", "o"]
+    );
+    assert_eq!(
+        (c("bdf", "rcd1").accurate, c("bdf", "rcd1").inaccurate),
+        (0, 1)
     );
     assert!(text.contains("-1: overdetermined: solver needs a square system"));
     assert!(text.contains("-2: not provided by the model"));
@@ -203,13 +218,17 @@ fn efficiency_rows_show_values_and_failures() {
     assert_eq!(ok[0], "radau5(rcd1)");
     assert_eq!(ok[1], "1e-5");
     assert_eq!(ok[2], "ok");
-    assert_eq!(ok[3], "1.0e-02"); // tsim
-    assert_eq!(ok[4], "1.0e-04"); // err
-    assert_eq!(ok[5], "2.0e-04"); // err_sum
-    assert_eq!(ok[7], "100"); // steps
-    assert_eq!(ok[11], "95"); // factorisations
-    assert_eq!(ok[14], "-"); // no level-2 residual
-    assert_eq!(ok[15], "1.0e-07"); // drift
+    assert_eq!(ok[3], "accurate"); // next to the status
+    assert_eq!(ok[4], "1.0e-02"); // tsim
+    assert_eq!(ok[5], "1.0e-04"); // err
+    assert_eq!(ok[6], "2.0e-04"); // err_sum
+    assert_eq!(ok[8], "100"); // steps
+    assert_eq!(ok[12], "95"); // factorisations
+    assert_eq!(ok[15], "-"); // no level-2 residual
+    assert_eq!(ok[16], "1.0e-07"); // drift
+                                   // Finished but wrong: flagged in capitals.
+    assert_eq!(rows[3][0], "bdf(rcd1)");
+    assert_eq!(rows[3][3], "INACCURATE");
     let bad = &rows[4];
     assert_eq!(bad[0], "bdf(rcd1)");
     assert_eq!(bad[2], "step_size_too_small at t=1.5000");

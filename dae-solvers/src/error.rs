@@ -62,6 +62,25 @@ pub enum SolveError {
     /// ([`crate::Solver::accepts`]).
     #[error("not applicable: {0}")]
     NotApplicable(#[from] NotApplicable),
+    /// A well-formed tolerance the method cannot honour: a relative
+    /// tolerance below `100 ε` or not below 1 (the rule is on
+    /// [`crate::Options`]).
+    #[error(
+        "{name}{} = {value:e} {issue}; relative tolerances must be 0 or in [{min:.1e}, {max})",
+        index.map_or_else(String::new, |i| format!("[{i}]")),
+        min = crate::options::RTOL_MIN,
+        max = crate::options::RTOL_MAX
+    )]
+    ToleranceOutOfRange {
+        /// `"rtol"`.
+        name: &'static str,
+        /// The component, for per-component tolerances.
+        index: Option<usize>,
+        /// The value given.
+        value: f64,
+        /// What is wrong with it.
+        issue: crate::options::ToleranceIssue,
+    },
     /// The problem or the options are invalid (negative tolerance, wrong
     /// length, `t_end <= t0`, a formulation the solver cannot take, …).
     #[error("invalid input: {what}")]
@@ -82,6 +101,7 @@ impl SolveError {
             SolveError::StepLimit { .. } => "step_limit",
             SolveError::InconsistentInitialValues { .. } => "inconsistent_initial_values",
             SolveError::NotApplicable(_) => "not_applicable",
+            SolveError::ToleranceOutOfRange { .. } => "tolerance_out_of_range",
             SolveError::InvalidInput { .. } => "invalid_input",
         }
     }

@@ -1,6 +1,7 @@
 //! Tolerances and solver options (the error weights and the norm are `core::weights`).
 
 use crate::error::SolveError;
+use serde::Serialize;
 
 /// A tolerance: one value for every component or one per component.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,7 +20,7 @@ impl Tol {
         }
     }
 
-    fn check(&self, name: &str, n: usize) -> Result<(), SolveError> {
+    fn check(&self, name: &'static str, n: usize) -> Result<(), SolveError> {
         let values: &[f64] = match self {
             Tol::Scalar(v) => std::slice::from_ref(v),
             Tol::PerComponent(v) => {
@@ -35,16 +36,122 @@ impl Tol {
         for (i, &v) in values.iter().enumerate() {
             if !v.is_finite() || v < 0.0 {
                 return Err(SolveError::invalid(format!(
-                    "{name}[{i}] = {v} must be finite and non-negative"
+                    "{name}[{i}] = {v:e} must be finite and non-negative"
                 )));
+            }
+            if name == "rtol" {
+                if let Err(issue) = check_relative(v) {
+                    return Err(SolveError::ToleranceOutOfRange {
+                        name,
+                        index: match self {
+                            Tol::Scalar(_) => None,
+                            Tol::PerComponent(_) => Some(i),
+                        },
+                        value: v,
+                        issue,
+                    });
+                }
             }
         }
         Ok(())
     }
 }
 
+/// The smallest relative tolerance a solver accepts: `100 ε ≈ 2.2·10⁻¹⁴`.
+///
+/// A step's local error is estimated from differences of values near
+/// `|y|`, each rounded to `ε|y|/2`; below about `100 ε` that estimate is
+/// dominated by round-off, so a smaller tolerance cannot be met, only
+/// chased: BDF at `1e-16` took 20 million ever smaller steps before its
+/// step limit, and RADAU5 silently floored it to `100 ε`. Refusing it
+/// says so instead. See [`Options`] for the whole rule.
+pub const RTOL_MIN: f64 = 100.0 * f64::EPSILON;
+
+/// Relative tolerances must be below this (exclusive): at 1 or more the
+/// error test accepts an error as large as the solution itself, so a
+/// "successful" run can be anything (tol 1e300 gave `x = −29.3` on a unit
+/// pendulum).
+pub const RTOL_MAX: f64 = 1.0;
+
+/// Why a tolerance value is refused (see [`Options`] for the rule).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ToleranceIssue {
+    /// NaN or infinite.
+    #[error("is not a finite number")]
+    NotFinite,
+    /// Below zero.
+    #[error("is negative")]
+    Negative,
+    /// Zero where a positive value is needed (a uniform tolerance).
+    #[error("is zero")]
+    Zero,
+    /// Positive but below [`RTOL_MIN`].
+    #[error(
+        "is below 100·ε ≈ 2.2e-14, the smallest relative tolerance double precision can honour"
+    )]
+    BelowRoundOff,
+    /// At or above [`RTOL_MAX`].
+    #[error("is not below 1: a relative tolerance of 100% or more controls nothing")]
+    NotBelowOne,
+}
+
+/// The rule for one relative tolerance: `0` (a purely absolute tolerance
+/// for that component) or `RTOL_MIN ≤ rtol < RTOL_MAX`.
+///
+/// ```
+/// use dae_solvers::options::{check_relative, ToleranceIssue};
+///
+/// assert!(check_relative(1e-8).is_ok() && check_relative(0.0).is_ok());
+/// assert_eq!(check_relative(1e-16), Err(ToleranceIssue::BelowRoundOff));
+/// assert_eq!(check_relative(1.0), Err(ToleranceIssue::NotBelowOne));
+/// ```
+pub fn check_relative(rtol: f64) -> Result<(), ToleranceIssue> {
+    if !rtol.is_finite() {
+        Err(ToleranceIssue::NotFinite)
+    } else if rtol < 0.0 {
+        Err(ToleranceIssue::Negative)
+    } else if rtol == 0.0 {
+        Ok(())
+    } else if rtol < RTOL_MIN {
+        Err(ToleranceIssue::BelowRoundOff)
+    } else if rtol >= RTOL_MAX {
+        Err(ToleranceIssue::NotBelowOne)
+    } else {
+        Ok(())
+    }
+}
+
+/// The rule for a uniform tolerance `RTOL = ATOL = tol` (the paper's
+/// convention, used by `dae run --tol`, `dae sweep --tols` and scene
+/// files): `RTOL_MIN ≤ tol < RTOL_MAX`. This is [`check_relative`] without
+/// the purely absolute case, so [`Options::with_tol`] validates exactly
+/// when this returns `Ok`.
+///
+/// ```
+/// use dae_solvers::options::{check_uniform, ToleranceIssue};
+///
+/// assert!(check_uniform(1e-12).is_ok());
+/// assert_eq!(check_uniform(0.0), Err(ToleranceIssue::Zero));
+/// assert_eq!(check_uniform(2.0), Err(ToleranceIssue::NotBelowOne));
+/// assert_eq!(check_uniform(f64::NAN), Err(ToleranceIssue::NotFinite));
+/// ```
+pub fn check_uniform(tol: f64) -> Result<(), ToleranceIssue> {
+    if tol == 0.0 {
+        return Err(ToleranceIssue::Zero);
+    }
+    check_relative(tol)
+}
+
+/// The accepted range of a uniform tolerance, for messages:
+/// `[2.2e-14, 1)`.
+pub fn uniform_range() -> String {
+    format!("[{RTOL_MIN:.1e}, {RTOL_MAX})")
+}
+
 /// Relative and absolute tolerances. The error weight of component `i` is
-/// `1 / (atol_i + rtol_i |y_i|)`.
+/// `1 / (atol_i + rtol_i |y_i|)`. The values a solver accepts are stated
+/// on [`Options`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tolerances {
     /// Relative tolerance.
@@ -62,9 +169,11 @@ impl Tolerances {
         }
     }
 
-    /// Check the tolerances against a system with `n` unknowns: every value
-    /// finite and non-negative, lengths matching, and for each component
-    /// `rtol + atol > 0`.
+    /// Check the tolerances against a system with `n` unknowns: lengths
+    /// matching, every value finite and non-negative, and for each
+    /// component `rtol + atol > 0` ([`SolveError::InvalidInput`] otherwise);
+    /// every relative tolerance `0` or in `[RTOL_MIN, RTOL_MAX)`
+    /// ([`SolveError::ToleranceOutOfRange`] otherwise). See [`Options`].
     pub fn validate(&self, n: usize) -> Result<(), SolveError> {
         self.rtol.check("rtol", n)?;
         self.atol.check("atol", n)?;
@@ -97,6 +206,38 @@ impl Default for Tolerances {
 
 /// Solver options. Tunables are fields with a [`Default`], so new options do
 /// not break callers.
+///
+/// # Tolerances
+///
+/// Every solver validates [`Options::tol`] before it starts, with one rule
+/// (the command line and scene files apply the same rule to their uniform
+/// `RTOL = ATOL = tol` through [`check_uniform`]):
+///
+/// * every `rtol_i` and `atol_i` finite and non-negative, `rtol_i + atol_i
+///   > 0`, lengths matching the system — else [`SolveError::InvalidInput`];
+/// * every `rtol_i` either `0` (a purely absolute tolerance for that
+///   component) or in `[RTOL_MIN, RTOL_MAX)` = `[100 ε, 1)` ≈ `[2.2e-14,
+///   1)` — else [`SolveError::ToleranceOutOfRange`], naming `rtol`, the
+///   component (for per-component tolerances) and the value.
+///
+/// Tolerances are never clamped silently: below `100 ε` the error
+/// estimate is round-off and cannot be met (BDF used to grind to its step
+/// limit; RADAU5 floored the value without a word), and at `1` or more it
+/// accepts anything. `atol_i` has the units of component `i`, so it has no
+/// bound besides being finite; a purely absolute tolerance (`rtol_i = 0`)
+/// below the round-off of the component's magnitude cannot be detected in
+/// advance and is the caller's responsibility.
+///
+/// ```
+/// use dae_solvers::{Options, SolveError};
+///
+/// assert!(Options::with_tol(1e-10).validate(5, 0.0, 1.0).is_ok());
+/// for tol in [1e-16, 1.0, 1e300] {
+///     let err = Options::with_tol(tol).validate(5, 0.0, 1.0).unwrap_err();
+///     assert!(matches!(err, SolveError::ToleranceOutOfRange { name: "rtol", .. }));
+///     assert!(err.to_string().contains(&format!("rtol = {tol:e}")));
+/// }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
     /// Error tolerances.

@@ -1,7 +1,7 @@
 //! `dae run [SCENE] [--solver NAME] [--formulation NAME] [--tol T] [--format json|text]`.
 
 use super::Failure;
-use crate::runner::{self, RunRecord, RunSpec};
+use crate::runner::{self, RunError, RunRecord, RunSpec};
 use crate::scene::{ReferenceKind, Scene};
 use dae_core::system::Model;
 use dae_solvers::init::InitMode;
@@ -28,7 +28,8 @@ pub struct RunArgs {
     /// Formulation (default: the scene's first that the solver accepts).
     #[arg(long)]
     pub formulation: Option<String>,
-    /// Tolerance, RTOL = ATOL (default 1e-8).
+    /// Tolerance, RTOL = ATOL (default 1e-8), in [2.2e-14, 1) like scene
+    /// tolerances.
     #[arg(long, default_value_t = 1e-8, allow_negative_numbers = true)]
     pub tol: f64,
     /// Output format.
@@ -64,15 +65,26 @@ pub fn load_model(scene: &Scene) -> Result<Box<dyn Model + Send + Sync>, Failure
     Ok(model)
 }
 
-/// Check a tolerance given on the command line.
-pub fn check_tol(tol: f64, flag: &str) -> Result<(), Failure> {
-    if tol.is_finite() && tol > 0.0 {
-        Ok(())
-    } else {
-        Err(Failure::input(format!(
-            "{flag} {tol}: a tolerance must be positive and finite"
-        )))
+/// A run that could not start, as a bad-input failure: errors about a
+/// scene field (an exact reference that cannot be built from the start,
+/// say) are prefixed with the field's place in the scene file.
+pub fn located(scene: &Scene, e: &RunError) -> Failure {
+    match e.field() {
+        Some(field) => Failure::input(format!("{}: {e}", scene.locate(field))),
+        None => Failure::input(format!("{}: {e}", scene.origin)),
     }
+}
+
+/// Check a tolerance given on the command line: the rule of the library
+/// and of scene files, [`dae_solvers::options::check_uniform`] (`RTOL =
+/// ATOL = tol` in `[100 ε, 1)`).
+pub fn check_tol(tol: f64, flag: &str) -> Result<(), Failure> {
+    dae_solvers::options::check_uniform(tol).map_err(|issue| {
+        Failure::input(format!(
+            "{flag} {tol:e}: the tolerance {issue}; tolerances (RTOL = ATOL) must be in {}",
+            dae_solvers::options::uniform_range()
+        ))
+    })
 }
 
 /// Run one scene; `Ok((output, exit code))`.
@@ -115,10 +127,9 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         .map(|v| (v.name.clone(), v.value))
         .collect();
     let reference = match scene.reference {
-        ReferenceKind::PendulumExact => Some(
-            runner::pendulum_reference(&*model, &initial)
-                .map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?,
-        ),
+        ReferenceKind::PendulumExact => {
+            Some(runner::pendulum_reference(&*model, &initial).map_err(|e| located(&scene, &e))?)
+        }
         ReferenceKind::None => None,
     };
     let spec = RunSpec {
@@ -140,7 +151,7 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         samples: &[],
         repeats: 1,
     };
-    let record = runner::run(&spec).map_err(|e| Failure::input(e.to_string()))?;
+    let record = runner::run(&spec).map_err(|e| located(&scene, &e))?;
     let code = if record.status == "ok" { 0 } else { 3 };
     let out = match args.format {
         Format::Json => serde_json::to_string_pretty(&record).unwrap_or_default() + "\n",
@@ -156,13 +167,26 @@ fn opt(v: Option<f64>) -> String {
 /// Human-readable summary of one run.
 pub fn text(r: &RunRecord) -> String {
     let mut s = String::new();
+    // A finished run whose answer is wrong says so on its first line.
+    let flag = match r.accuracy {
+        Some(a) if a.is_warning() => format!(" — {}", a.as_str().to_uppercase()),
+        _ => String::new(),
+    };
     let _ = writeln!(
         s,
-        "{} {}({}) tol {:e}: {}",
+        "{} {}({}) tol {:e}: {}{flag}",
         r.scene, r.solver, r.formulation, r.tol, r.status
     );
     if let Some(e) = &r.error {
         let _ = writeln!(s, "  error: {} ({})", e.message, e.kind);
+    }
+    if let (Some(a), Some(note)) = (r.accuracy, &r.accuracy_note) {
+        let label = if a.is_warning() {
+            format!("WARNING: {}", a.as_str().to_uppercase())
+        } else {
+            a.as_str().to_string()
+        };
+        let _ = writeln!(s, "  accuracy: {label} ({note})");
     }
     let _ = writeln!(s, "  t_end {}  tsim {:.3e} s", r.t_end, r.tsim_s);
     let vals: Vec<String> = r

@@ -8,6 +8,11 @@
 //! the figures (SVG and PNG) and `index.html` to `DIR` (default
 //! `out/<scene name in lower case>`). `dae` without arguments runs
 //! `dae sweep s01 --out out/s01`.
+//!
+//! `DIR` is written as one set: into a staging directory beside it, renamed
+//! into place when complete. An existing `DIR` is replaced whole, and only
+//! if it holds nothing but a sweep's outputs (checked before the sweep
+//! runs); see [`sweep::write_outputs`].
 
 use super::run::Format;
 use super::Failure;
@@ -28,7 +33,8 @@ pub struct SweepArgs {
     /// Formulations, comma-separated (default: the scene's).
     #[arg(long, value_delimiter = ',')]
     pub formulations: Option<Vec<String>>,
-    /// Tolerances RTOL = ATOL, comma-separated (default: the scene's).
+    /// Tolerances RTOL = ATOL, comma-separated (default: the scene's), each
+    /// in [2.2e-14, 1).
     #[arg(long, value_delimiter = ',')]
     pub tols: Option<Vec<f64>>,
     /// Timed integrations per run, at most (a run is timed again only while
@@ -39,7 +45,9 @@ pub struct SweepArgs {
     #[arg(long, default_value_t = 1)]
     pub jobs: usize,
     /// Output directory (default: out/<scene name in lower case>, e.g.
-    /// out/s01; `dae` without arguments writes to out/s01).
+    /// out/s01; `dae` without arguments writes to out/s01). Replaced as a
+    /// whole when the sweep is complete; refused if it holds files a sweep
+    /// does not write.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// What to print on stdout: the text tables or the results JSON.
@@ -127,7 +135,12 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&scene.name));
-    let report = sweep::run(&scene, &opts).map_err(|e| Failure::input(e.to_string()))?;
+    // Refuse an output directory the sweep may not replace before the work.
+    sweep::check_replaceable(&dir).map_err(|e| Failure::input(format!("--out: {e}")))?;
+    let report = sweep::run(&scene, &opts).map_err(|e| match &e {
+        sweep::SweepError::Run(r) => super::run::located(&scene, r),
+        _ => Failure::input(e.to_string()),
+    })?;
     let summary = sweep::Summary::of(&report);
     // An output directory that cannot be written is a bad `--out` (exit 2).
     let written =

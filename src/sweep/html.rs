@@ -3,7 +3,7 @@
 
 use super::paper::Verdict;
 use super::plot::Figure;
-use super::table::{efficiency_rows, paper_cell, sci, tol_label, Mark};
+use super::table::{accuracy_line, efficiency_rows, paper_cell, sci, tol_label, Mark};
 use super::{Summary, SweepReport};
 use std::fmt::Write;
 
@@ -30,7 +30,8 @@ text-align:right;white-space:nowrap}th{background:#f3f3f3}td.l,th.l{text-align:l
 td.X{background:#d8f0d8}td.x{background:#fff3c4}td.o{background:#f8d0d0}td.na{background:#eee;color:#666}\
 td.fail{color:#a00}td.more{background:#d8f0d8}td.eq{background:#eef}td.behind{background:#f8d0d0}\
 figure{margin:1.5em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.9em;color:#444}\
-.note{background:#fff8e0;border-left:4px solid #e0b000;padding:.4em .8em}.scroll{overflow-x:auto}\
+.note{background:#fff8e0;border-left:4px solid #e0b000;padding:.4em .8em}\
+small.bad{color:#a00;font-weight:bold}.scroll{overflow-x:auto}\
 code{background:#f3f3f3;padding:0 .2em}";
 
 fn table(rows: &[Vec<String>], left_cols: usize) -> String {
@@ -74,12 +75,20 @@ fn success_html(summary: &Summary) -> String {
                         Mark::Some => "x",
                         _ => "o",
                     };
+                    let warn = c.inaccurate + c.suspect > 0;
                     let _ = write!(
                         s,
-                        "<td class=\"{class}\" title=\"{} of {} tolerances\">{}</td>",
+                        "<td class=\"{class}\" title=\"reached the end at {} of {} tolerances; accurate {}, \
+                         inaccurate {}, unverified {}, suspect {}\">{}<br><small{}>{}</small></td>",
                         c.ok,
                         c.runs,
-                        mark.symbol()
+                        c.accurate,
+                        c.inaccurate,
+                        c.unverified,
+                        c.suspect,
+                        mark.symbol(),
+                        if warn { " class=\"bad\"" } else { "" },
+                        esc(&c.accuracy_label())
                     );
                 }
             }
@@ -195,6 +204,7 @@ pub fn index(
     }
     s.push_str("<h2>Success matrix</h2>\n");
     s.push_str(&success_html(summary));
+    let _ = writeln!(s, "<p class=\"note\">{}</p>", esc(&accuracy_line(report)));
     if report.has_reference() {
         s.push_str(
             "<h2>The trade</h2>\n<p>Both summaries use <code>err</code>, the largest pointwise error of the \

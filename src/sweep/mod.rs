@@ -10,8 +10,8 @@
 //! it), runs every applicable pair at every tolerance with
 //! [`crate::runner::run`] and returns a [`SweepReport`]. [`Summary::of`]
 //! derives the tables; [`write_outputs`] writes `results.csv`,
-//! `results.json`, the figures and `index.html`, each file whole
-//! ([`write::atomic_write`]).
+//! `results.json`, the figures and `index.html` as one set
+//! ([`write::publish_dir`]: a staging directory renamed into place).
 //!
 //! # Timing
 //! `tsim_s` is the median of `repeats` timed integrations of the same run
@@ -75,7 +75,7 @@ pub struct SweepOptions {
     pub solvers: Vec<String>,
     /// Formulation names (each one of the eight).
     pub formulations: Vec<String>,
-    /// Tolerances, `RTOL = ATOL`.
+    /// Tolerances, `RTOL = ATOL`, each in `[100 ε, 1)`.
     pub tolerances: Vec<f64>,
     /// Timed integrations per run (median reported); at least 1.
     pub repeats: usize,
@@ -117,11 +117,16 @@ pub enum SweepError {
         /// The name given.
         name: String,
     },
-    /// A tolerance that is not positive and finite.
-    #[error("tolerance {tol}: a tolerance must be positive and finite")]
+    /// A tolerance outside [`dae_solvers::options::check_uniform`].
+    #[error(
+        "tolerance {tol:e} {issue}; tolerances (RTOL = ATOL) must be in {}",
+        dae_solvers::options::uniform_range()
+    )]
     BadTolerance {
         /// The value given.
         tol: f64,
+        /// What is wrong with it.
+        issue: dae_solvers::options::ToleranceIssue,
     },
     /// Nothing to sweep.
     #[error("nothing to sweep: no {what} given")]
@@ -138,6 +143,21 @@ pub enum SweepError {
     /// A worker thread panicked.
     #[error("a sweep worker thread panicked")]
     WorkerPanicked,
+    /// The output directory holds something a sweep did not write, so it
+    /// is not replaced (see [`write_outputs`]).
+    #[error(
+        "will not replace {}: {}; a sweep replaces its output directory as a whole, so give a new or \
+         empty directory, or one that holds only a sweep's outputs",
+        dir.display(),
+        if entry.is_empty() { "it is not a directory".to_string() } else { format!("it holds `{entry}`, which dae sweep does not write") }
+    )]
+    NotOurs {
+        /// The output directory.
+        dir: PathBuf,
+        /// The first entry that is not a sweep output (empty: `dir` is not a
+        /// directory).
+        entry: String,
+    },
     /// A file could not be written.
     #[error("cannot write {path}: {source}")]
     Write {
@@ -366,12 +386,9 @@ pub fn validate(opts: &SweepOptions) -> Result<(), SweepError> {
     {
         return Err(SweepError::UnknownFormulation { name: f.clone() });
     }
-    if let Some(t) = opts
-        .tolerances
-        .iter()
-        .find(|t| !(t.is_finite() && **t > 0.0))
-    {
-        return Err(SweepError::BadTolerance { tol: *t });
+    for &tol in &opts.tolerances {
+        dae_solvers::options::check_uniform(tol)
+            .map_err(|issue| SweepError::BadTolerance { tol, issue })?;
     }
     Ok(())
 }
@@ -772,18 +789,111 @@ fn write_file(dir: &Path, name: &str, bytes: &[u8], out: &mut Outputs) -> Result
     Ok(())
 }
 
+/// Whether `name` is a file `dae sweep` writes into its output directory
+/// (`results.csv`, `results.json`, `index.html`, figures as `.svg` and
+/// `.png`), or a temporary file of an older version of it (`.NAME.tmp-…`).
+pub fn is_output_name(name: &str) -> bool {
+    matches!(name, "results.csv" | "results.json" | "index.html")
+        || name.ends_with(".svg")
+        || name.ends_with(".png")
+        || (name.starts_with('.') && name.contains(".tmp-"))
+}
+
+/// `Ok` when `dir` may be replaced by a sweep's output: it does not exist,
+/// or it is a directory holding only files a sweep writes
+/// ([`is_output_name`]). Anything else — a subdirectory, a file of the
+/// user's — is [`SweepError::NotOurs`], so a sweep never deletes what it
+/// did not write.
+pub fn check_replaceable(dir: &Path) -> Result<(), SweepError> {
+    let io = |source| SweepError::Write {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(_) if dir.exists() && !dir.is_dir() => {
+            return Err(SweepError::NotOurs {
+                dir: dir.to_path_buf(),
+                entry: String::new(),
+            })
+        }
+        Err(e) => return Err(io(e)),
+    };
+    for entry in entries {
+        let entry = entry.map_err(io)?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let is_file = entry.file_type().map_err(io)?.is_file();
+        if !(is_file && is_output_name(&name)) {
+            return Err(SweepError::NotOurs {
+                dir: dir.to_path_buf(),
+                entry: name,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Why [`write::publish_dir`] failed: the filling or the publishing.
+enum Staged {
+    Fill(SweepError),
+    Io(std::io::Error),
+}
+
+impl From<std::io::Error> for Staged {
+    fn from(e: std::io::Error) -> Self {
+        Staged::Io(e)
+    }
+}
+
 /// Write `results.csv`, `results.json`, the figures (SVG and PNG) and
-/// `index.html` into `dir` (created if needed). A figure that cannot be
-/// drawn is a note in `index.html`, not an error.
+/// `index.html` as one set into `dir`. A figure that cannot be drawn is a
+/// note in `index.html`, not an error.
+///
+/// The set is atomic ([`write::publish_dir`]): everything is written into a
+/// staging directory `.<dir name>.dae-sweep-new-…` beside `dir` and renamed
+/// to `dir` only when complete, so a failed or killed sweep leaves the
+/// previous output whole and nothing partial in `dir`. An existing `dir` is
+/// replaced as a whole — files of an earlier sweep that this one does not
+/// write (a figure of a solver no longer swept) are gone — and only if it
+/// holds nothing but sweep outputs ([`check_replaceable`]); otherwise the
+/// sweep refuses before writing. Leftovers of a killed run beside `dir`
+/// are removed by the next one.
 pub fn write_outputs(
     report: &SweepReport,
     summary: &Summary,
     dir: &Path,
 ) -> Result<Outputs, SweepError> {
-    std::fs::create_dir_all(dir).map_err(|source| SweepError::Write {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    check_replaceable(dir)?;
+    let published = write::publish_dir(dir, |staging: &Path| {
+        fill_outputs(report, summary, staging).map_err(Staged::Fill)
+    });
+    let mut out = match published {
+        Ok(out) => out,
+        Err(Staged::Fill(e)) => return Err(e),
+        Err(Staged::Io(source)) => {
+            return Err(SweepError::Write {
+                path: dir.to_path_buf(),
+                source,
+            })
+        }
+    };
+    // The files were written in the staging directory: report them where
+    // they are now.
+    for f in &mut out.files {
+        if let Some(name) = f.file_name() {
+            *f = dir.join(name);
+        }
+    }
+    Ok(out)
+}
+
+/// Every output file into `dir` (an empty staging directory).
+fn fill_outputs(
+    report: &SweepReport,
+    summary: &Summary,
+    dir: &Path,
+) -> Result<Outputs, SweepError> {
     let mut out = Outputs::default();
     let csv = table::results_csv(report).map_err(|source| SweepError::Write {
         path: dir.join("results.csv"),

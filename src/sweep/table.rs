@@ -4,7 +4,7 @@
 use super::paper::{Comparison, PaperCell};
 use super::pareto::{Point, Target};
 use super::{Pair, Summary, SweepReport};
-use crate::runner::RunRecord;
+use crate::runner::{Accuracy, RunRecord, ACCURATE_FACTOR, SUSPECT_FACTOR};
 use serde::Serialize;
 use std::borrow::Borrow;
 use std::fmt::Write;
@@ -60,6 +60,14 @@ pub struct SuccessCell {
     pub ok: usize,
     /// Runs (tolerances).
     pub runs: usize,
+    /// Runs judged accurate (see [`crate::runner::Accuracy`]).
+    pub accurate: usize,
+    /// Runs judged inaccurate.
+    pub inaccurate: usize,
+    /// Runs without a reference, unremarkable.
+    pub unverified: usize,
+    /// Runs without a reference whose residuals or drift are suspect.
+    pub suspect: usize,
     /// Why the pair is not applicable.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
@@ -87,7 +95,38 @@ pub struct SuccessMatrix {
 
 /// The legend of the success matrix.
 pub const SUCCESS_LEGEND: &str = "X: successful at every tolerance, x: at some, o: at none, -: not applicable \
-                                  (reason given); successful = the integration reached the end of the horizon";
+                                  (reason given); successful = the integration reached the end of the horizon. \
+                                  After the mark, the accuracy of the runs that did: n/m = n of m tolerances \
+                                  accurate (err <= 100·tol·max(1, |y*|) at every check time), ? = no reference \
+                                  to verify against, !k = k runs suspect (constraint residual or invariant drift \
+                                  >= 1e4·tol)";
+
+impl SuccessCell {
+    /// The accuracy after the mark (see [`SUCCESS_LEGEND`]): `n/m`, `?`,
+    /// `!k`; empty for a not-applicable cell or when no run finished.
+    pub fn accuracy_label(&self) -> String {
+        let finished = self.accurate + self.inaccurate + self.unverified + self.suspect;
+        if self.reason.is_some() || finished == 0 {
+            String::new()
+        } else if self.accurate + self.inaccurate > 0 {
+            format!("{}/{}", self.accurate, self.runs)
+        } else if self.suspect > 0 {
+            format!("!{}", self.suspect)
+        } else {
+            "?".into()
+        }
+    }
+
+    /// The mark and the accuracy, as the text matrix shows them (`X 6/8`).
+    pub fn label(&self) -> String {
+        let acc = self.accuracy_label();
+        if acc.is_empty() {
+            self.mark.symbol().into()
+        } else {
+            format!("{} {acc}", self.mark.symbol())
+        }
+    }
+}
 
 impl SuccessMatrix {
     /// The cell of a solver and formulation.
@@ -136,7 +175,11 @@ pub fn success_matrix<R: Borrow<RunRecord>>(
                         .iter()
                         .map(Borrow::borrow)
                         .filter(|r| &r.solver == s && &r.formulation == f);
+                    let mut verdicts = [0usize; 4];
                     let (ok, n) = mine.fold((0, 0), |(ok, n), r| {
+                        if let Some(a) = r.accuracy {
+                            verdicts[a as usize] += 1;
+                        }
                         (ok + usize::from(r.status == "ok"), n + 1)
                     });
                     let mark = if reason.is_some() {
@@ -149,6 +192,10 @@ pub fn success_matrix<R: Borrow<RunRecord>>(
                         mark,
                         ok,
                         runs: n,
+                        accurate: verdicts[Accuracy::Accurate as usize],
+                        inaccurate: verdicts[Accuracy::Inaccurate as usize],
+                        unverified: verdicts[Accuracy::Unverified as usize],
+                        suspect: verdicts[Accuracy::Suspect as usize],
                         reason,
                     }
                 })
@@ -238,7 +285,7 @@ pub fn success_text(m: &SuccessMatrix) -> String {
                     "-{}",
                     reasons.iter().position(|x| x == why).map_or(0, |i| i + 1)
                 ),
-                None => c.mark.symbol().into(),
+                None => c.label(),
             });
         }
         rows.push(row);
@@ -252,10 +299,11 @@ pub fn success_text(m: &SuccessMatrix) -> String {
 }
 
 /// Column headers of the efficiency table.
-pub const EFFICIENCY_HEADER: [&str; 16] = [
+pub const EFFICIENCY_HEADER: [&str; 17] = [
     "pair",
     "tol",
     "status",
+    "accuracy",
     "tsim_s",
     "err",
     "err_sum",
@@ -296,6 +344,11 @@ pub fn efficiency_rows<R: Borrow<RunRecord>>(runs: &[R]) -> Vec<Vec<String>> {
             format!("{}({})", r.solver, r.formulation),
             tol_label(r.tol),
             status,
+            match r.accuracy {
+                Some(a) if a.is_warning() => a.as_str().to_uppercase(),
+                Some(a) => a.as_str().to_string(),
+                None => "-".into(),
+            },
             if ok { sci(Some(r.tsim_s)) } else { "-".into() },
             val(r.err),
             val(r.err_sum),
@@ -436,6 +489,7 @@ pub fn text_report(report: &SweepReport, summary: &Summary) -> String {
     let _ = writeln!(s, "{}\n", report.scale_line());
     let _ = writeln!(s, "Success matrix");
     s.push_str(&success_text(&summary.success));
+    let _ = writeln!(s, "{}", accuracy_line(report));
     let _ = writeln!(s, "\nEfficiency (err: max pointwise error of the differential unknowns over the check times; err_sum: sum over check times of all unknowns' errors; |gk|: largest constraint residual of level k; drift: |{}(t) - {}(t0)|)",
         report.invariants.first().map_or("I", String::as_str),
         report.invariants.first().map_or("I", String::as_str));
@@ -466,6 +520,34 @@ pub fn text_report(report: &SweepReport, summary: &Summary) -> String {
     s
 }
 
+/// One line on the accuracy verdicts of the finished runs (shared by the
+/// terminal report and index.html).
+pub fn accuracy_line(report: &SweepReport) -> String {
+    let finished: Vec<Accuracy> = report
+        .runs
+        .iter()
+        .filter_map(|r| r.record.accuracy)
+        .collect();
+    let count = |a: Accuracy| finished.iter().filter(|v| **v == a).count();
+    if report.has_reference() {
+        format!(
+            "Accuracy: {} of {} finished runs accurate (err <= {ACCURATE_FACTOR}·tol·max(1, |y*|) at every check \
+             time), {} INACCURATE: reaching the end is not being right.",
+            count(Accuracy::Accurate),
+            finished.len(),
+            count(Accuracy::Inaccurate)
+        )
+    } else {
+        format!(
+            "Accuracy: no reference, {} of {} finished runs unverified, {} SUSPECT (constraint residual or invariant \
+             drift >= {SUSPECT_FACTOR:.0e}·tol).",
+            count(Accuracy::Unverified),
+            finished.len(),
+            count(Accuracy::Suspect)
+        )
+    }
+}
+
 /// `results.csv`: one row per run.
 pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
@@ -475,6 +557,8 @@ pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
         "formulation",
         "tol",
         "status",
+        "accuracy",
+        "accuracy_note",
         "error_kind",
         "error_message",
         "t_end",
@@ -508,6 +592,9 @@ pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
             r.formulation.clone(),
             format!("{:e}", r.tol),
             r.status.to_string(),
+            r.accuracy
+                .map_or_else(String::new, |a| a.as_str().to_string()),
+            r.accuracy_note.clone().unwrap_or_default(),
             r.error
                 .as_ref()
                 .map_or_else(String::new, |e| e.kind.clone()),
