@@ -12,6 +12,7 @@ pub mod models;
 pub mod reference;
 pub mod runner;
 pub mod scene;
+pub mod stability;
 pub mod sweep;
 
 /// Everything a user of the macro and the solvers needs.

@@ -42,6 +42,10 @@ pub struct RunSpec<'a> {
     pub samples: &'a [f64],
     /// Repeat the timed integration this many times (median reported).
     pub repeats: usize,
+    /// Bound on the accepted steps of each integration (`None`: the
+    /// library's [`Options::max_steps`]); a run stopped there is a
+    /// `step_limit` error record, not a hang.
+    pub max_steps: Option<usize>,
 }
 
 /// Error information of a failed run.
@@ -457,9 +461,11 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
     let mut output_times: Vec<f64> = spec.check.iter().chain(spec.samples).copied().collect();
     output_times.sort_by(f64::total_cmp);
     output_times.dedup();
+    let defaults = Options::with_tol(spec.tol);
     let options = Options {
         output_times,
-        ..Options::with_tol(spec.tol)
+        max_steps: spec.max_steps.unwrap_or(defaults.max_steps),
+        ..defaults
     };
     let problem = Problem {
         system: &sys,

@@ -150,6 +150,7 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         },
         samples: &[],
         repeats: 1,
+        max_steps: None,
     };
     let record = runner::run(&spec).map_err(|e| located(&scene, &e))?;
     let code = if record.status == "ok" { 0 } else { 3 };

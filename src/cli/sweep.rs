@@ -17,6 +17,7 @@
 use super::run::Format;
 use super::Failure;
 use crate::scene::Scene;
+use crate::stability;
 use crate::sweep::{self, SweepOptions};
 use dae_solvers::init::InitMode;
 use std::path::PathBuf;
@@ -59,6 +60,17 @@ pub struct SweepArgs {
     /// Do not draw the progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Build the stability map instead: every scene of DIR (default
+    /// scenes/extremes) × its solvers × formulations × tolerances, each run
+    /// bounded by --max-steps; writes map.txt, map.json, map.svg and
+    /// map.png to --out (default out/extremes). --solvers and --tols
+    /// restrict every case; the SCENE argument is not used.
+    #[arg(long, value_name = "DIR", num_args = 0..=1,
+          default_missing_value = "scenes/extremes")]
+    pub extremes: Option<PathBuf>,
+    /// Step limit of each run of the stability map.
+    #[arg(long, default_value_t = crate::stability::MAP_MAX_STEPS)]
+    pub max_steps: usize,
 }
 
 impl Default for SweepArgs {
@@ -75,6 +87,8 @@ impl Default for SweepArgs {
             format: Format::Text,
             strict_init: false,
             quiet: false,
+            extremes: None,
+            max_steps: crate::stability::MAP_MAX_STEPS,
         }
     }
 }
@@ -106,6 +120,9 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
         for t in tols {
             super::run::check_tol(*t, "--tols")?;
         }
+    }
+    if let Some(dir) = &args.extremes {
+        return extremes(args, dir);
     }
     if args.repeats == 0 {
         return Err(Failure::input(
@@ -169,6 +186,52 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
             ));
             s
         }
+    };
+    Ok((out, 0))
+}
+
+/// `dae sweep --extremes [DIR]`: the stability map.
+fn extremes(args: &SweepArgs, cases: &std::path::Path) -> Result<(String, i32), Failure> {
+    if args.max_steps == 0 {
+        return Err(Failure::input("--max-steps 0: at least one step is needed"));
+    }
+    if args.formulations.is_some() {
+        return Err(Failure::input(
+            "--formulations: the stability map runs every formulation of each case",
+        ));
+    }
+    let files = stability::case_files(cases)
+        .map_err(|e| Failure::input(format!("--extremes: {e}")))?;
+    if files.is_empty() {
+        return Err(Failure::input(format!(
+            "--extremes {}: no scene files (*.toml) there",
+            cases.display()
+        )));
+    }
+    let opts = stability::MapOptions {
+        jobs: args.jobs.max(1),
+        max_steps: args.max_steps,
+        solvers: args.solvers.clone(),
+        tolerances: args.tols.clone(),
+        progress: !args.quiet,
+    };
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join("extremes"));
+    sweep::check_replaceable(&dir).map_err(|e| Failure::input(format!("--out: {e}")))?;
+    let map = stability::build(&files, &opts).map_err(|e| Failure::input(e.to_string()))?;
+    let files = stability::write(&map, &dir).map_err(|e| Failure::input(e.to_string()))?;
+    let out = match args.format {
+        Format::Json => {
+            eprintln!("wrote {} files to {}", files.len(), dir.display());
+            stability::json(&map)
+        }
+        Format::Text => format!(
+            "{}\nWrote map.txt, map.json, map.svg and map.png to {}\n",
+            stability::text(&map),
+            dir.display()
+        ),
     };
     Ok((out, 0))
 }

@@ -85,6 +85,11 @@ pub struct SweepOptions {
     pub init_mode: InitMode,
     /// Show a progress bar on stderr (only drawn when stderr is a terminal).
     pub progress: bool,
+    /// Bound on the accepted steps of each run (`None`: the library's).
+    pub max_steps: Option<usize>,
+    /// Sample the solution at the figure tolerance for the figures
+    /// (`false`: no figure samples, e.g. for the stability map).
+    pub figures: bool,
 }
 
 impl SweepOptions {
@@ -98,6 +103,8 @@ impl SweepOptions {
             jobs: 1,
             init_mode: InitMode::Project,
             progress: true,
+            max_steps: None,
+            figures: true,
         }
     }
 }
@@ -157,6 +164,14 @@ pub enum SweepError {
         /// The first entry that is not a sweep output (empty: `dir` is not a
         /// directory).
         entry: String,
+    },
+    /// A file or directory could not be read.
+    #[error("cannot read {path}: {source}")]
+    Read {
+        /// What was read.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
     },
     /// A file could not be written.
     #[error("cannot write {path}: {source}")]
@@ -441,6 +456,7 @@ struct Ctx<'a> {
     init_mode: InitMode,
     samples: Vec<f64>,
     repeats: usize,
+    max_steps: Option<usize>,
 }
 
 impl Ctx<'_> {
@@ -459,6 +475,7 @@ impl Ctx<'_> {
             init_mode: self.init_mode,
             samples,
             repeats: 1,
+            max_steps: self.max_steps,
         })
     }
 
@@ -538,7 +555,7 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
                 solver: p.solver.clone(),
                 formulation: p.formulation.clone(),
                 tol,
-                figure: paper::same_tol(tol, fig_tol),
+                figure: opts.figures && paper::same_tol(tol, fig_tol),
             })
         })
         .collect();
@@ -549,6 +566,7 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
         init_mode: opts.init_mode,
         samples: sample_times(scene),
         repeats: opts.repeats.max(1),
+        max_steps: opts.max_steps,
     };
     let runs = if opts.jobs <= 1 {
         sequential(&ctx, &*model, &jobs, opts.progress)?
@@ -793,7 +811,10 @@ fn write_file(dir: &Path, name: &str, bytes: &[u8], out: &mut Outputs) -> Result
 /// (`results.csv`, `results.json`, `index.html`, figures as `.svg` and
 /// `.png`), or a temporary file of an older version of it (`.NAME.tmp-…`).
 pub fn is_output_name(name: &str) -> bool {
-    matches!(name, "results.csv" | "results.json" | "index.html")
+    matches!(
+        name,
+        "results.csv" | "results.json" | "index.html" | "map.txt" | "map.json"
+    )
         || name.ends_with(".svg")
         || name.ends_with(".png")
         || (name.starts_with('.') && name.contains(".tmp-"))
