@@ -943,6 +943,13 @@ pub fn pow_rational(base: &Expr, x: &Q) -> Expr {
                         }
                         return acc;
                     }
+                    if (2..=POWER_EXPANSION_LIMIT).contains(&-k) {
+                        // `s^-k` is `1/(s^k)` with `s^k` expanded as above,
+                        // so that `1/(x+y)^2` has one canonical form however
+                        // it was built.
+                        let expanded = pow_rational(base, &-x);
+                        return pow_rational(&expanded, &q(-1));
+                    }
                 }
             }
             make_prod(vec![(base.clone(), x.clone())])

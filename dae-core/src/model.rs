@@ -6,7 +6,7 @@ use crate::dsl::{Ast, BinOp, Errors, ModelAst, Name};
 use crate::expr::{self, Expr, Func, Sym};
 use crate::system::{VarKind, FORMULATION_NAMES};
 use proc_macro2::Span;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// A parameter with its default.
 #[derive(Clone, Debug)]
@@ -100,20 +100,21 @@ impl Model {
     /// Check a parsed model; every problem is reported, each at its token.
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
         let mut errors = Errors::default();
-        let mut seen: Vec<(String, Span)> = Vec::new();
+        // Hash maps for lookups only (never iterated): linear in the names.
+        let mut seen: HashMap<String, Span> = HashMap::new();
         // Names declared twice or reserved: uses of them raise no further
         // errors.
-        let mut dupes: Vec<String> = Vec::new();
+        let mut dupes: HashSet<String> = HashSet::new();
         let mut declare = |n: &Name, errors: &mut Errors| {
-            if let Some((_, first)) = seen.iter().find(|(s, _)| *s == n.name) {
+            if let Some(first) = seen.get(&n.name) {
                 errors.push(n.span, format!("`{}` is declared twice", n.name));
                 errors.push(*first, format!("`{}` is first declared here", n.name));
-                dupes.push(n.name.clone());
+                dupes.insert(n.name.clone());
                 return false;
             }
             if n.name == TIME {
                 errors.push(n.span, "`t` is reserved (time): choose another name");
-                dupes.push(n.name.clone());
+                dupes.insert(n.name.clone());
                 return false;
             }
             if FUNCTIONS.contains(&n.name.as_str()) || n.name == "der" {
@@ -124,10 +125,10 @@ impl Model {
                         n.name
                     ),
                 );
-                dupes.push(n.name.clone());
+                dupes.insert(n.name.clone());
                 return false;
             }
-            seen.push((n.name.clone(), n.span));
+            seen.insert(n.name.clone(), n.span);
             true
         };
         let mut params = Vec::new();
@@ -173,11 +174,7 @@ impl Model {
             );
         }
 
-        let scope = Scope {
-            params: &params,
-            vars: &vars,
-            dupes: &dupes,
-        };
+        let scope = Scope::new(&params, &vars, dupes);
         let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
         let mut constraints = Vec::new();
         // An equation that failed to lower already has its error; counting
@@ -435,11 +432,7 @@ impl Model {
         let tokens: Vec<proc_macro2::TokenTree> = crate::dsl::lex(src)?.into_iter().collect();
         let mut errors = Errors::default();
         let ast = crate::dsl::parse_expr(&tokens, Span::call_site(), &mut errors);
-        let scope = Scope {
-            params: &self.params,
-            vars: &self.vars,
-            dupes: &[],
-        };
+        let scope = Scope::new(&self.params, &self.vars, HashSet::new());
         let e = ast.and_then(|a| scope.lower(&a, &mut errors));
         match e {
             Some(e) => errors.finish(e),
@@ -458,19 +451,29 @@ impl Model {
 }
 
 struct Scope<'a> {
-    params: &'a [ParamDef],
     vars: &'a [VarDef],
+    /// Every declared name.
+    names: HashMap<&'a str, Sym>,
     /// Names declared twice or reserved (already reported).
-    dupes: &'a [String],
+    dupes: HashSet<String>,
 }
 
-impl Scope<'_> {
-    fn lookup(&self, name: &str) -> Option<Sym> {
-        if let Some(i) = self.vars.iter().position(|v| v.name == name) {
-            return Some(Sym::Var(i as u32));
+impl<'a> Scope<'a> {
+    fn new(params: &'a [ParamDef], vars: &'a [VarDef], dupes: HashSet<String>) -> Self {
+        let mut names = HashMap::new();
+        for (k, p) in params.iter().enumerate() {
+            names.insert(p.name.as_str(), Sym::Param(k as u32));
         }
-        if let Some(k) = self.params.iter().position(|p| p.name == name) {
-            return Some(Sym::Param(k as u32));
+        // Declared names are unique (a second declaration is not kept).
+        for (i, v) in vars.iter().enumerate() {
+            names.insert(v.name.as_str(), Sym::Var(i as u32));
+        }
+        Scope { vars, names, dupes }
+    }
+
+    fn lookup(&self, name: &str) -> Option<Sym> {
+        if let Some(s) = self.names.get(name) {
+            return Some(*s);
         }
         (name == "t").then_some(Sym::Time)
     }
@@ -500,7 +503,12 @@ impl Scope<'_> {
                 }
                 if name == "der" {
                     return match &args[0] {
-                        Ast::Ident(v, vspan) => match self.vars.iter().position(|d| &d.name == v) {
+                        Ast::Ident(v, vspan) => match self.names.get(v.as_str()).and_then(|s| {
+                            match s {
+                                Sym::Var(i) => Some(*i as usize),
+                                _ => None,
+                            }
+                        }) {
                             Some(i) if self.vars[i].kind == VarKind::Differential => {
                                 Some(Expr::der(i))
                             }

@@ -236,8 +236,18 @@ impl Printer<'_> {
             }
         };
         match self.style {
-            Style::Text => format!("{}^{}", self.atom(b), exp),
-            Style::Latex => format!("{}^{{{}}}", self.atom(b), exp),
+            Style::Text => format!("{}^{}", self.base(b), exp),
+            Style::Latex => format!("{}^{{{}}}", self.base(b), exp),
+        }
+    }
+
+    /// The base of a power: an atom, parenthesised when it is itself a
+    /// power (`^` groups to the right, so `(x^y)^3` needs them).
+    fn base(&self, b: &Expr) -> String {
+        match (b, self.style) {
+            (Expr::Pow(_), Style::Text) => format!("({})", self.atom(b)),
+            (Expr::Pow(_), Style::Latex) => format!("\\left({}\\right)", self.atom(b)),
+            _ => self.atom(b),
         }
     }
 
@@ -256,8 +266,8 @@ impl Printer<'_> {
                 self.power(&p.factors[0].0, &qr(1, 2))
             }
             Expr::Pow(p) => match self.style {
-                Style::Text => format!("{}^({})", self.atom(&p.base), self.expr(&p.exponent)),
-                Style::Latex => format!("{}^{{{}}}", self.atom(&p.base), self.expr(&p.exponent)),
+                Style::Text => format!("{}^({})", self.base(&p.base), self.expr(&p.exponent)),
+                Style::Latex => format!("{}^{{{}}}", self.base(&p.base), self.expr(&p.exponent)),
             },
             _ => match self.style {
                 Style::Text => format!("({})", self.expr(e)),
