@@ -73,6 +73,7 @@ fn bdf_defaults_equal_the_runner_on_the_spherical_pendulum_ggl1() {
         init_mode: InitMode::Project,
         samples: &[],
         repeats: 1,
+        max_steps: None,
     })
     .expect("the runner runs");
     assert_eq!(record.status, "ok");

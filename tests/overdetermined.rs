@@ -69,6 +69,7 @@ fn run(scene: &Scene, solver: &str, formulation: &str, tol: f64) -> Result<RunRe
         init_mode: InitMode::Project,
         samples: &[],
         repeats: 1,
+        max_steps: None,
     })
 }
 

@@ -94,6 +94,7 @@ fn run_scene(scene: &Scene, solver: &str, formulation: &str, tol: f64) -> runner
         init_mode: InitMode::Project,
         samples: &[],
         repeats: 1,
+        max_steps: None,
     })
     .expect("the run starts")
 }
@@ -694,6 +695,7 @@ fn stiff_wrong_answers_are_inaccurate_or_suspect() {
             init_mode: InitMode::Project,
             samples: &[],
             repeats: 1,
+            max_steps: None,
         })
         .unwrap();
         assert_eq!(rec.status, "ok", "{:?}", rec.error);
