@@ -23,6 +23,25 @@
 //!
 //! The period is `T = 4K(k)/ω`.
 //!
+//! # Any start: swings and loops
+//!
+//! [`PendulumExact::from_state`] takes any point on the circle and any
+//! tangent velocity. With `θ'₀ = (x0 w0 − y0 v0)/L²` the modulus is
+//! `k² = sin²(θ₀/2) + θ'₀²/(4ω²)` (energy `E = m g L (2k² − 1)`):
+//!
+//! ```text
+//! k < 1, swing:  sin(θ/2) = k·sn(u | k²),  cos(θ/2) = dn(u | k²),    θ' = ±2kω·cn(u | k²),   u = u₀ ± ωt
+//! k > 1, loop:   sin(θ/2) = sn(u | 1/k²),  cos(θ/2) = cn(u | 1/k²),  θ' = ±2kω·dn(u | 1/k²), u = u₀ ± kωt
+//! ```
+//!
+//! (the loop with the reciprocal modulus `1/k`, Lawden §5.2; the sign is
+//! that of `θ'₀`). A loop's revolution takes `2K(1/k)/(kω)`. The phase `u₀`
+//! is the incomplete integral `F(φ₀ | m)`, by Carlson's `R_F`; the release
+//! at rest is the case `u₀ = K`, `u = K − ωt` above, computed exactly as
+//! before. `k = 1` (the separatrix: upright at rest, or just the speed to
+//! creep up to the top) has no periodic solution and is refused, within
+//! [`SEPARATRIX_GAP`]; just off it both motions stay exact.
+//!
 //! # Numerics
 //!
 //! * `K(k) = π / (2·AGM(1, k'))` (Abramowitz & Stegun 17.6), evaluated in
@@ -78,10 +97,10 @@ pub enum ReferenceError {
         /// The offending value.
         value: f64,
     },
-    /// A start coordinate is not finite.
-    #[error("start coordinate {name} = {value} is not finite")]
+    /// A start coordinate or velocity is not finite.
+    #[error("start value {name} = {value} is not finite")]
     NonFiniteStart {
-        /// `"x0"` or `"y0"`.
+        /// `"x0"`, `"y0"`, `"v0"` or `"w0"`.
         name: &'static str,
         /// The offending value.
         value: f64,
@@ -102,6 +121,38 @@ pub enum ReferenceError {
         length: f64,
         /// The relative tolerance applied, [`START_RADIUS_RTOL`].
         tol: f64,
+    },
+    /// The start velocity is not tangent to the circle: a motion on the rod
+    /// has `x0·v0 + y0·w0 = 0`.
+    #[error(
+        "start velocity (v0, w0) = ({v0:e}, {w0:e}) is not tangent to the circle: its radial part \
+         (x0 v0 + y0 w0)/r = {radial:e} exceeds {tol:e} of the speed"
+    )]
+    VelocityNotTangent {
+        /// Start velocity, abscissa.
+        v0: f64,
+        /// Start velocity, ordinate.
+        w0: f64,
+        /// Radial velocity.
+        radial: f64,
+        /// The relative tolerance applied, [`START_RADIUS_RTOL`].
+        tol: f64,
+    },
+    /// The start is on the separatrix (`k = 1`, e.g. at rest at the top, or
+    /// with exactly the speed to reach it), to the precision of the
+    /// computation ([`SEPARATRIX_GAP`]): the pendulum creeps toward the
+    /// upright position and whether it swings back or loops is not
+    /// determined.
+    #[error(
+        "the start is on the separatrix: k^2 - 1 = {k2_minus_1:e}, within {gap:e} of the energy that just \
+         reaches the top (upright at rest, or exactly the speed to creep up to it); there is no exact \
+         reference there"
+    )]
+    NearSeparatrix {
+        /// `k² − 1`.
+        k2_minus_1: f64,
+        /// [`SEPARATRIX_GAP`].
+        gap: f64,
     },
     /// A start coordinate so large that the start point's distance from
     /// the pivot overflows.
@@ -146,9 +197,10 @@ impl ReferenceError {
             ReferenceError::AngleOutOfRange { .. } => "theta0",
             ReferenceError::InvalidParameter { name, .. }
             | ReferenceError::NonFiniteStart { name, .. } => name,
-            ReferenceError::NotOnCircle { .. } | ReferenceError::StartNotRepresentable { .. } => {
-                "x0"
-            }
+            ReferenceError::NotOnCircle { .. }
+            | ReferenceError::StartNotRepresentable { .. }
+            | ReferenceError::NearSeparatrix { .. } => "x0",
+            ReferenceError::VelocityNotTangent { .. } => "v0",
             ReferenceError::Unrepresentable { .. } => "l",
             ReferenceError::PhaseLost { .. } => "t",
         }
@@ -179,17 +231,54 @@ pub struct PendulumExact {
     g: f64,
     l: f64,
     m: f64,
-    /// Modulus `k = sin(θ₀/2)`.
+    /// Modulus `k`: `k² = sin²(θ₀/2) + θ'₀²/(4ω²)` (`sin(θ₀/2)` for a
+    /// release at rest); above 1 for a loop.
     k: Dd,
-    /// Complementary modulus `k' = cos(θ₀/2)`.
+    /// Complementary modulus `k' = √(1 − k²)` of a swing (`cos(θ₀/2)` for
+    /// a release at rest); 0 for a loop.
     kc: Dd,
     /// `ω = √(g/L)`.
     omega: Dd,
-    /// Complete elliptic integral of the first kind `K(k)`.
+    /// Complete elliptic integral of the first kind of the Jacobi modulus:
+    /// `K(k)` for a swing, `K(1/k)` for a loop.
     big_k: Dd,
-    /// `cos θ₀ = k'² − k²`, rounded once.
+    /// `k'² − k² = 1 − 2k²`, rounded once: the cosine of the amplitude of
+    /// a swing (`cos θ₀` for a release at rest); `E = −m g L · cos_amp`.
     cos_theta0: f64,
+    /// Swing or loop.
+    motion: Motion,
+    /// Phase at `t = 0`; `u(t) = u0 + dir · rate · t`.
+    u0: Dd,
+    /// `ω` for a swing, `kω` for a loop.
+    rate: Dd,
+    /// `±1`: the sense in which the phase runs.
+    dir: f64,
+    /// The Jacobi modulus and its complement in `f64`: `(k, k')` for a
+    /// swing, `(1/k, √(1 − 1/k²))` for a loop.
+    jk: f64,
+    jkc: f64,
 }
+
+/// How the pendulum moves: to and fro, or over the top.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Motion {
+    /// Oscillation about the bottom (`k < 1`): `sin(θ/2) = k·sn(u | k²)`.
+    Swing,
+    /// Rotation over the top (`k > 1`): `sin(θ/2) = sn(u | 1/k²)`,
+    /// `cos(θ/2) = cn(u | 1/k²)`.
+    Loop,
+}
+
+/// Starts whose `|k² − 1|` is at most this are refused
+/// ([`ReferenceError::NearSeparatrix`]): `k²` is formed in double-double
+/// (≈ 32 digits), so within `10⁻²⁸` of 1 its distance from the separatrix,
+/// which sets the period (`K ≈ ln(4/√|1 − k²|)`), is not known to even
+/// three digits, nor whether the pendulum swings back or goes over the
+/// top. Outside it the reference stays exact: tested at `k² − 1 = ±10⁻¹⁰`
+/// and `±4.4·10⁻¹⁶` (the speeds one ulp either side of the critical one)
+/// against RADAU5 while the pendulum climbs, and for energy and the
+/// constraints up to `t = 10⁴`.
+pub const SEPARATRIX_GAP: f64 = 1e-28;
 
 impl fmt::Debug for PendulumExact {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -202,6 +291,9 @@ impl fmt::Debug for PendulumExact {
             .field("k_complement", &self.kc.hi)
             .field("omega", &self.omega.hi)
             .field("big_k", &self.big_k.hi)
+            .field("motion", &self.motion)
+            .field("u0", &self.u0.hi)
+            .field("dir", &self.dir)
             .finish()
     }
 }
@@ -244,7 +336,7 @@ impl PendulumExact {
         check_param("m", m)?;
         let k = sin_dd(Dd::from(theta0).mul_f64(0.5));
         let kc = sin_dd(PI_DD.sub(Dd::from(theta0)).mul_f64(0.5));
-        Self::build(theta0, k, kc, g, l, m)
+        Self::build_rest(theta0, k, kc, g, l, m)
     }
 
     /// The pendulum released at rest from the point `(x0, y0)` (pivot at the
@@ -315,10 +407,199 @@ impl PendulumExact {
             let kc = Dd::from(xs).div(two_r.mul(k));
             (k, kc)
         };
-        Self::build(theta0, k, kc, g, l, m)
+        Self::build_rest(theta0, k, kc, g, l, m)
     }
 
-    fn build(theta0: f64, k: Dd, kc: Dd, g: f64, l: f64, m: f64) -> Result<Self, ReferenceError> {
+    /// The pendulum started from any point `(x0, y0)` on the circle with
+    /// any tangent velocity `(v0, w0)`: it swings (`k < 1`) or loops over
+    /// the top (`k > 1`), with
+    ///
+    /// ```text
+    /// k² = sin²(θ₀/2) + θ'₀²/(4ω²),   θ'₀ = (x0 w0 − y0 v0)/r²,   ω = √(g/L)
+    /// swing: sin(θ/2) = k·sn(u | k²),  cos(θ/2) = dn(u | k²),   θ' = ±2kω·cn(u | k²),  u = u₀ ± ωt
+    /// loop:  sin(θ/2) = sn(u | 1/k²),  cos(θ/2) = cn(u | 1/k²), θ' = ±2kω·dn(u | 1/k²), u = u₀ ± kωt
+    /// ```
+    ///
+    /// (Lawden §5.2; the sign is that of `θ'₀`), the phase `u₀` an
+    /// incomplete elliptic integral of the first kind `F(φ₀ | m)` by
+    /// Carlson's `R_F`. `k²` and `k² − 1` are formed in double-double
+    /// from the inputs, and so are the phase and its reduction, as for the
+    /// release at rest. A release at rest right of the vertical is exactly
+    /// [`from_start`](Self::from_start).
+    ///
+    /// The velocity must be tangent up to [`START_RADIUS_RTOL`] of the
+    /// speed; a start within [`SEPARATRIX_GAP`] of `k = 1` (upright at
+    /// rest, or with exactly the speed to creep up to it) is
+    /// [`ReferenceError::NearSeparatrix`].
+    ///
+    /// ```
+    /// use dae::reference::{Motion, PendulumExact};
+    ///
+    /// // From the bottom at speed 10 on g = 9.81: over the top.
+    /// let p = PendulumExact::from_state(0.0, -1.0, 10.0, 0.0, 1.0, 9.81, 1.0).unwrap();
+    /// assert_eq!(p.motion(), Motion::Loop);
+    /// assert!(p.modulus() > 1.0);
+    /// let [x, y, v, w, _] = p.state(0.0);
+    /// assert!(x.abs() < 1e-15 && (y + 1.0).abs() < 1e-15 && (v - 10.0).abs() < 1e-14 && w.abs() < 1e-15);
+    /// // After one revolution it is back.
+    /// let [x, y, v, ..] = p.state(p.period());
+    /// assert!(x.abs() < 1e-13 && (y + 1.0).abs() < 1e-13 && (v - 10.0).abs() < 1e-12);
+    /// ```
+    pub fn from_state(
+        x0: f64,
+        y0: f64,
+        v0: f64,
+        w0: f64,
+        l: f64,
+        g: f64,
+        m: f64,
+    ) -> Result<Self, ReferenceError> {
+        for (name, value) in [("x0", x0), ("y0", y0), ("v0", v0), ("w0", w0)] {
+            if !value.is_finite() {
+                return Err(ReferenceError::NonFiniteStart { name, value });
+            }
+        }
+        if v0 == 0.0 && w0 == 0.0 && x0 > 0.0 {
+            return Self::from_start(x0, y0, l, g, m);
+        }
+        check_param("g", g)?;
+        check_param("l", l)?;
+        check_param("m", m)?;
+        let theta0 = x0.atan2(-y0);
+        let not_on_circle = |radius: f64| ReferenceError::NotOnCircle {
+            x0,
+            y0,
+            radius,
+            length: l,
+            tol: START_RADIUS_RTOL,
+        };
+        let far = x0.abs().max(y0.abs());
+        if far == 0.0 {
+            return Err(not_on_circle(0.0));
+        }
+        let Some(scale) = pow2_at_least(far) else {
+            return Err(ReferenceError::StartNotRepresentable { x0, y0 });
+        };
+        let (xs, ys) = (x0 / scale, y0 / scale);
+        let r_s = Dd::from_prod(xs, xs).add(Dd::from_prod(ys, ys)).sqrt();
+        let radius = r_s.hi * scale;
+        if !((radius - l).abs() <= START_RADIUS_RTOL * l) {
+            return Err(not_on_circle(radius));
+        }
+        // The velocity must be along the circle: radial part within the
+        // tolerance of the speed.
+        let radial = Dd::from_prod(xs, v0).add(Dd::from_prod(ys, w0)).div(r_s).hi;
+        if !(radial.abs() <= START_RADIUS_RTOL * v0.hypot(w0)) {
+            return Err(ReferenceError::VelocityNotTangent {
+                v0,
+                w0,
+                radial,
+                tol: START_RADIUS_RTOL,
+            });
+        }
+        // Half angles: c = cos(θ₀/2) ≥ 0, s = sin(θ₀/2) with the sign of x0,
+        // each from the formula free of cancellation on its side.
+        let two_r = r_s.mul_f64(2.0);
+        let (s, c) = if ys <= 0.0 {
+            let c = r_s.sub(Dd::from(ys)).div(two_r).sqrt();
+            (Dd::from(xs).div(two_r.mul(c)), c)
+        } else {
+            let s_abs = r_s.add(Dd::from(ys)).div(two_r).sqrt();
+            let s = if xs < 0.0 { s_abs.neg() } else { s_abs };
+            (s, Dd::from(xs.abs()).div(two_r.mul(s_abs)))
+        };
+        // θ'₀ = (x0 w0 − y0 v0)/r², and q = θ'₀/(2ω): k² = s² + q².
+        let omega = Dd::from(g).div(Dd::from(l)).sqrt();
+        let theta_dot0 = Dd::from_prod(xs, w0)
+            .sub(Dd::from_prod(ys, v0))
+            .div(r_s.mul(r_s))
+            .div(Dd::from(scale));
+        let q = theta_dot0.div(omega.mul_f64(2.0));
+        let k2 = s.mul(s).add(q.mul(q));
+        let unrepresentable = ReferenceError::Unrepresentable {
+            g,
+            length: l,
+            mass: m,
+        };
+        if !(k2.hi.is_finite() && omega.hi.is_finite() && omega.hi > 0.0) {
+            return Err(unrepresentable);
+        }
+        let d = k2.sub(Dd::from(1.0)); // k² − 1, exactly as far as dd goes
+        if d.hi.abs() <= SEPARATRIX_GAP {
+            return Err(ReferenceError::NearSeparatrix {
+                k2_minus_1: d.hi,
+                gap: SEPARATRIX_GAP,
+            });
+        }
+        let k = k2.sqrt();
+        let dir = if theta_dot0.hi < 0.0 { -1.0 } else { 1.0 };
+        let cos_theta0 = Dd::from(1.0).sub(k2.mul_f64(2.0)).hi;
+        let p = if d.hi < 0.0 {
+            // Swing: sn(u₀) = s/k, cn(u₀) = |q|/k (θ'₀ = 2kω·dir·cn(u₀)),
+            // dn(u₀) = c; u₀ = F(φ₀ | k²) = sin φ₀ · R_F(cos²φ₀, 1 − k² sin²φ₀, 1).
+            let kc = d.neg().sqrt();
+            let big_k = complete_k_dd(kc);
+            let u0 = if k.hi == 0.0 {
+                0.0 // at rest at the bottom: any phase
+            } else {
+                let cos_phi = q.div(k).hi;
+                s.div(k).hi * carlson_rf(cos_phi * cos_phi, c.hi * c.hi, 1.0)
+            };
+            PendulumExact {
+                theta0,
+                g,
+                l,
+                m,
+                k,
+                kc,
+                omega,
+                big_k,
+                cos_theta0,
+                motion: Motion::Swing,
+                u0: Dd::from(u0),
+                rate: omega,
+                dir,
+                jk: k.hi,
+                jkc: kc.hi,
+            }
+        } else {
+            // Loop: Jacobi modulus κ = 1/k, κ' = √(k² − 1)/k; sn(u₀) = s,
+            // cn(u₀) = c ≥ 0, dn(u₀) = |q|/k; u₀ = F(θ₀/2 | κ²) = s·R_F(c², 1 − s²/k², 1).
+            let kappa = Dd::from(1.0).div(k);
+            let kappa_c = d.sqrt().div(k);
+            let big_k = complete_k_dd(kappa_c);
+            let dn0 = q.div(k).hi;
+            let u0 = s.hi * carlson_rf(c.hi * c.hi, dn0 * dn0, 1.0);
+            PendulumExact {
+                theta0,
+                g,
+                l,
+                m,
+                k,
+                kc: Dd::from(0.0),
+                omega,
+                big_k,
+                cos_theta0,
+                motion: Motion::Loop,
+                u0: Dd::from(u0),
+                rate: omega.mul(k),
+                dir,
+                jk: kappa.hi,
+                jkc: kappa_c.hi,
+            }
+        };
+        Self::checked(p)
+    }
+
+    /// Released at rest: `u = K − ωt` (the turning point at `t = 0`).
+    fn build_rest(
+        theta0: f64,
+        k: Dd,
+        kc: Dd,
+        g: f64,
+        l: f64,
+        m: f64,
+    ) -> Result<Self, ReferenceError> {
         let valid = theta0 > 0.0 && theta0 < std::f64::consts::PI && kc.hi > 0.0 && k.hi >= 0.0;
         if !valid {
             return Err(ReferenceError::AngleOutOfRange { theta0 });
@@ -326,7 +607,7 @@ impl PendulumExact {
         let omega = Dd::from(g).div(Dd::from(l)).sqrt();
         let big_k = complete_k_dd(kc);
         let cos_theta0 = kc.mul(kc).sub(k.mul(k)).hi;
-        let p = PendulumExact {
+        Self::checked(PendulumExact {
             theta0,
             g,
             l,
@@ -336,7 +617,18 @@ impl PendulumExact {
             omega,
             big_k,
             cos_theta0,
-        };
+            motion: Motion::Swing,
+            u0: big_k,
+            rate: omega,
+            dir: -1.0,
+            jk: k.hi,
+            jkc: kc.hi,
+        })
+    }
+
+    /// Refuse a motion whose values cannot be represented.
+    fn checked(p: PendulumExact) -> Result<Self, ReferenceError> {
+        let (g, l, m, omega) = (p.g, p.l, p.m, p.omega);
         let period = p.period();
         // The largest values of the motion: the start, and the bottom of
         // the swing (u = 0: the greatest speed and multiplier). Anything that
@@ -378,9 +670,15 @@ impl PendulumExact {
         self.m
     }
 
-    /// Modulus `k = sin(θ₀/2)`.
+    /// Modulus `k` (`sin(θ₀/2)` for a release at rest; `k² = sin²(θ₀/2) +
+    /// θ'₀²/(4ω²)` in general; above 1 for a loop).
     pub fn modulus(&self) -> f64 {
         self.k.hi
+    }
+
+    /// Whether the pendulum swings or loops over the top.
+    pub fn motion(&self) -> Motion {
+        self.motion
     }
 
     /// Angular frequency scale `ω = √(g/L)` (not the frequency of the swing,
@@ -389,12 +687,14 @@ impl PendulumExact {
         self.omega.hi
     }
 
-    /// Complete elliptic integral of the first kind `K(k)`.
+    /// Complete elliptic integral of the first kind of the Jacobi modulus:
+    /// `K(k)` for a swing, `K(1/k)` for a loop.
     pub fn quarter_period_k(&self) -> f64 {
         self.big_k.hi
     }
 
-    /// Period `T = 4K(k)/ω` of the swing.
+    /// Period: `T = 4K(k)/ω` of a swing, `T = 2K(1/k)/(kω)` of one
+    /// revolution of a loop.
     ///
     /// ```
     /// use dae::reference::PendulumExact;
@@ -405,36 +705,59 @@ impl PendulumExact {
     /// assert!((p.period() - t0 * (1.0 + 1e-6 / 16.0)).abs() < 1e-12);
     /// ```
     pub fn period(&self) -> f64 {
-        self.big_k.mul_f64(4.0).div(self.omega).hi
+        let quarters = match self.motion {
+            Motion::Swing => 4.0,
+            Motion::Loop => 2.0,
+        };
+        self.big_k.mul_f64(quarters).div(self.rate).hi
     }
 
     /// Total energy `E = ½m(v² + w²) + m g y`, conserved along the motion;
-    /// equals `−m g L cos θ₀ = m g L (k² − k'²)`.
+    /// equals `m g L (2k² − 1)` (`−m g L cos θ₀` for a release at rest).
     pub fn energy(&self) -> f64 {
         -self.m * self.g * self.l * self.cos_theta0
     }
 
-    /// Jacobi functions `(sn, cn, dn)` of `u = K − ωt`, with `u` reduced in
-    /// double-double arithmetic.
+    /// Jacobi functions `(sn, cn, dn)` of `u = u0 ± rate·t` (`K − ωt` for a
+    /// release at rest), with `u` formed and reduced in double-double
+    /// arithmetic.
     fn jacobi_at(&self, t: f64) -> Option<(f64, f64, f64)> {
         if !t.is_finite() {
             return None;
         }
-        let u = self.big_k.sub(self.omega.mul_f64(t));
-        jacobi_dd(u, self.big_k, self.k.hi, self.kc.hi)
+        let advance = self.rate.mul_f64(t);
+        let u = if self.dir < 0.0 {
+            self.u0.sub(advance)
+        } else {
+            self.u0.add(advance)
+        };
+        jacobi_dd(u, self.big_k, self.jk, self.jkc)
     }
 
-    /// Angle `θ(t)` (from the downward vertical) and angular velocity
-    /// `θ'(t)`. NaNs where [`state`](Self::state) gives NaNs.
+    /// `θ'` from the Jacobi functions: `2kω·dir·cn` (swing), `2kω·dir·dn`
+    /// (loop).
+    fn theta_dot(&self, cn: f64, dn: f64) -> f64 {
+        let f = match self.motion {
+            Motion::Swing => cn,
+            Motion::Loop => dn,
+        };
+        2.0 * self.dir * self.k.hi * self.omega.hi * f
+    }
+
+    /// Angle `θ(t)` (from the downward vertical; in `(−π, π]` for a loop,
+    /// which passes the top) and angular velocity `θ'(t)`. NaNs where
+    /// [`state`](Self::state) gives NaNs.
     pub fn angle(&self, t: f64) -> [f64; 2] {
         let Some((sn, cn, dn)) = self.jacobi_at(t) else {
             return [f64::NAN; 2];
         };
-        let k = self.k.hi;
-        // sin(θ/2) = k sn, cos(θ/2) = dn ≥ 0.
-        let theta = 2.0 * (k * sn).atan2(dn);
-        let theta_dot = -2.0 * k * self.omega.hi * cn;
-        [theta, theta_dot]
+        let theta = match self.motion {
+            // sin(θ/2) = k sn, cos(θ/2) = dn ≥ 0.
+            Motion::Swing => 2.0 * (self.k.hi * sn).atan2(dn),
+            // sin(θ/2) = sn, cos(θ/2) = cn: θ from sin θ and cos θ.
+            Motion::Loop => (2.0 * sn * cn).atan2((cn - sn) * (cn + sn)),
+        };
+        [theta, self.theta_dot(cn, dn)]
     }
 
     /// The exact state `[x, y, v, w, λ]` at time `t` (released at `t = 0`).
@@ -460,13 +783,19 @@ impl PendulumExact {
     /// `[x, y, v, w, λ]` from the Jacobi functions of the phase.
     fn state_from(&self, sn: f64, cn: f64, dn: f64) -> [f64; 5] {
         let (k, l) = (self.k.hi, self.l);
-        let sin_theta = 2.0 * k * sn * dn;
-        // cos θ = 1 − 2k²sn² = cos θ₀ + 2k²cn²: the second form is exact
-        // at the turning points (cn = 0) and keeps y, v, λ accurate to the
-        // last digit there, however small they are.
-        let kcn = k * cn;
-        let cos_theta = self.cos_theta0 + 2.0 * kcn * kcn;
-        let theta_dot = -2.0 * k * self.omega.hi * cn;
+        let (sin_theta, cos_theta) = match self.motion {
+            Motion::Swing => {
+                // cos θ = 1 − 2k²sn² = cos θ₀ + 2k²cn²: the second form is
+                // exact at the turning points (cn = 0) and keeps y, v, λ
+                // accurate to the last digit there, however small they are.
+                let kcn = k * cn;
+                (2.0 * k * sn * dn, self.cos_theta0 + 2.0 * kcn * kcn)
+            }
+            // sin θ = 2 sin(θ/2) cos(θ/2), cos θ = cos²(θ/2) − sin²(θ/2),
+            // the latter as a product: no cancellation near θ = ±π/2.
+            Motion::Loop => (2.0 * sn * cn, (cn - sn) * (cn + sn)),
+        };
+        let theta_dot = self.theta_dot(cn, dn);
         let x = l * sin_theta;
         let y = -l * cos_theta;
         let v = l * cos_theta * theta_dot;
@@ -538,6 +867,36 @@ pub fn jacobi_sn_cn_dn(u: f64, k: f64) -> (f64, f64, f64) {
 /// `√(1 − k²) = √((1 − k)(1 + k))`, accurate for `k` near 1.
 fn complementary_modulus(k: f64) -> f64 {
     ((1.0 - k) * (1.0 + k)).sqrt()
+}
+
+/// Carlson's symmetric elliptic integral of the first kind
+/// `R_F(x, y, z) = ½∫₀^∞ dt/√((t + x)(t + y)(t + z))` for `x, y, z ≥ 0`, at
+/// most one of them zero, by the duplication theorem (Carlson 1995,
+/// *Numer. Algorithms* 10, algorithm of §2): each step shrinks the spread
+/// of the arguments fourfold; once it is below `10⁻³` the fifth-order
+/// series leaves a relative error below `10⁻¹⁷`. `F(φ | m) = sin φ ·
+/// R_F(cos²φ, 1 − m sin²φ, 1)` for `|φ| ≤ π/2` (DLMF 19.25.5).
+fn carlson_rf(x: f64, y: f64, z: f64) -> f64 {
+    let (mut x, mut y, mut z) = (x, y, z);
+    let mut mean = (x + y + z) / 3.0;
+    // 60 steps shrink any spread of doubles by 4⁶⁰; the loop ends far sooner.
+    for _ in 0..60 {
+        let spread = (mean - x).abs().max((mean - y).abs()).max((mean - z).abs());
+        if spread <= 1e-3 * mean.abs() {
+            break;
+        }
+        let (sx, sy, sz) = (x.sqrt(), y.sqrt(), z.sqrt());
+        let lambda = sx * sy + sx * sz + sy * sz;
+        x = 0.25 * (x + lambda);
+        y = 0.25 * (y + lambda);
+        z = 0.25 * (z + lambda);
+        mean = (x + y + z) / 3.0;
+    }
+    let (dx, dy) = ((mean - x) / mean, (mean - y) / mean);
+    let dz = -(dx + dy);
+    let e2 = dx * dy - dz * dz;
+    let e3 = dx * dy * dz;
+    (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / mean.sqrt()
 }
 
 /// `K = π / (2·AGM(1, k'))` in double-double (A&S 17.6.1 with 17.6.2–17.6.3).
@@ -797,6 +1156,29 @@ mod tests {
         let r = Dd::from(0.5).sqrt();
         let back = r.mul(r).sub(Dd::from(0.5));
         assert!(back.hi.abs() < 1e-31);
+    }
+
+    #[test]
+    fn carlson_rf_gives_complete_and_incomplete_integrals() {
+        // R_F(0, k'², 1) = K(k); R_F(x, x, x) = 1/√x; F(φ | 0) = φ.
+        for k in [0.0f64, 0.3, 0.5f64.sqrt(), 0.99, 1.0 - 1e-12] {
+            let kc = complementary_modulus(k);
+            let rf = carlson_rf(0.0, kc * kc, 1.0);
+            let big_k = complete_elliptic_k(k);
+            assert!(
+                (rf - big_k).abs() <= 4e-16 * big_k,
+                "k = {k}: {rf} vs {big_k}"
+            );
+        }
+        assert!((carlson_rf(4.0, 4.0, 4.0) - 0.5).abs() < 1e-16);
+        for phi in [0.1f64, 0.7, 1.5] {
+            let (s, c) = phi.sin_cos();
+            assert!((s * carlson_rf(c * c, 1.0, 1.0) - phi).abs() < 4e-16);
+        }
+        // F(π/4 | 1/2) = 0.826017876249245… (mpmath.ellipf).
+        let (s, c) = std::f64::consts::FRAC_PI_4.sin_cos();
+        let f = s * carlson_rf(c * c, 1.0 - 0.5 * s * s, 1.0);
+        assert!((f - 0.826_017_876_249_245).abs() < 1e-15, "{f}");
     }
 
     #[test]

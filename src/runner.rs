@@ -310,6 +310,8 @@ fn reference_field(e: &ReferenceError) -> String {
     match e.input() {
         "theta0" | "x0" => "initial.x".into(),
         "y0" => "initial.y".into(),
+        "v0" => "initial.v".into(),
+        "w0" => "initial.w".into(),
         "t" => "time.end".into(),
         p => format!("parameters.{p}"),
     }
@@ -344,14 +346,11 @@ pub fn pendulum_reference(
             .map(|(_, v)| *v)
             .unwrap_or(0.0)
     };
-    if value("v") != 0.0 || value("w") != 0.0 {
-        return Err(RunError::Reference(
-            "pendulum-exact describes a release at rest: [initial] v and w must be 0".into(),
-        ));
-    }
-    PendulumExact::from_start(
+    PendulumExact::from_state(
         value("x"),
         value("y"),
+        value("v"),
+        value("w"),
         param("l")?,
         param("g")?,
         param("m")?,

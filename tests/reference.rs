@@ -598,3 +598,282 @@ fn special_functions_match_high_precision_values() {
     assert!((sn - 0.5f64.tanh()).abs() < 1e-16 && (cn - dn).abs() == 0.0);
     assert!(jacobi_sn_cn_dn(f64::NAN, 0.5).0.is_nan() && jacobi_sn_cn_dn(1.0, 2.0).1.is_nan());
 }
+
+// ------------------------------------------------ swings and loops from any state
+
+use dae::dae_solvers::{init, radau5::Radau5, Options, Problem, Solver};
+use dae::reference::{Motion, SEPARATRIX_GAP};
+
+/// The start `[x, y, v, w]` at angle `theta` with angular velocity
+/// `theta_dot` on a rod of length `l`.
+fn start_at(theta: f64, theta_dot: f64, l: f64) -> [f64; 4] {
+    let (s, c) = theta.sin_cos();
+    [l * s, -l * c, l * c * theta_dot, l * s * theta_dot]
+}
+
+fn from_state(start: [f64; 4], l: f64, g: f64) -> Result<PendulumExact, ReferenceError> {
+    PendulumExact::from_state(start[0], start[1], start[2], start[3], l, g, 1.0)
+}
+
+/// RADAU5 at tolerance 1e-12 on the index-2 formulation rcd1 of the
+/// built-in pendulum: `[x, y, v, w]` at `times`.
+fn radau5_rcd1(start: [f64; 4], l: f64, g: f64, times: &[f64]) -> Vec<[f64; 4]> {
+    let mut model = dae::models::load("pendulum").unwrap();
+    model.set_parameter("g", g).unwrap();
+    model.set_parameter("l", l).unwrap();
+    let sys = model.formulation("rcd1").unwrap();
+    let info = sys.info();
+    let names = ["x", "y", "v", "w"];
+    let mut y = vec![0.0; info.unknowns()];
+    for (n, v) in names.iter().zip(start) {
+        y[info.variable(n).unwrap()] = v;
+    }
+    let start = init::consistent(&*sys, 0.0, &y, &Default::default()).unwrap();
+    let t_end = *times.last().unwrap();
+    let sol = Radau5
+        .solve(
+            &Problem {
+                system: &*sys,
+                t0: 0.0,
+                y0: &start.y,
+                t_end,
+            },
+            &Options {
+                output_times: times.to_vec(),
+                ..Options::with_tol(1e-12)
+            },
+        )
+        .unwrap();
+    let idx: Vec<usize> = names.iter().map(|n| info.variable(n).unwrap()).collect();
+    times
+        .iter()
+        .map(|t| {
+            let i = sol.t.iter().position(|s| s == t).expect("an output time");
+            [0, 1, 2, 3].map(|j| sol.y[i][idx[j]])
+        })
+        .collect()
+}
+
+/// Largest difference of `[x, y, v, w]` between the reference and RADAU5,
+/// relative to `max(1, |v|)`.
+fn max_difference(p: &PendulumExact, numeric: &[[f64; 4]], times: &[f64]) -> f64 {
+    times
+        .iter()
+        .zip(numeric)
+        .map(|(t, n)| {
+            let e = p.state(*t);
+            let scale = e[2].abs().max(e[3].abs()).max(1.0);
+            (0..4)
+                .map(|j| (e[j] - n[j]).abs() / scale)
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Loops over the top, both senses, from the bottom and from high up,
+/// against RADAU5 at 1e-12 over three revolutions or more. Measured
+/// differences 2e-11 … 1e-10, RADAU5's global error at 1e-12.
+#[test]
+fn loops_agree_with_radau5_at_1e12() {
+    for (theta, theta_dot, l, g) in [
+        (0.0, 10.0, 1.0, 9.81), // from the bottom, k² = 2.55
+        (2.0, -9.0, 1.0, 9.81), // high up, backwards
+        (-2.9, 7.0, 1.5, G),    // near the top, k² barely above 1.8
+        (0.5, 30.0, 0.5, 9.81), // fast: k² ≈ 11
+    ] {
+        let start = start_at(theta, theta_dot, l);
+        let p = from_state(start, l, g).unwrap();
+        let ctx = format!("θ₀ = {theta}, θ'₀ = {theta_dot}, k = {}", p.modulus());
+        assert_eq!(p.motion(), Motion::Loop, "{ctx}");
+        let t_end = 3.2 * p.period();
+        let times: Vec<f64> = (1..=64).map(|i| t_end * f64::from(i) / 64.0).collect();
+        let numeric = radau5_rcd1(start, l, g, &times);
+        let d = max_difference(&p, &numeric, &times);
+        println!("{ctx}: max difference {d:.1e}");
+        assert!(d < 1e-9, "{ctx}: {d:e}");
+        // The angle advances by 2π per revolution, in the sense of θ'₀.
+        let [th, thd] = p.angle(p.period());
+        let wrapped = (theta + PI).rem_euclid(2.0 * PI) - PI;
+        assert!((th - wrapped).abs() < 1e-12, "{ctx}: θ(T) = {th}");
+        assert!((thd - theta_dot).abs() < 1e-11 * theta_dot.abs(), "{ctx}");
+    }
+}
+
+/// Swings started with a velocity (not at a turning point), against RADAU5.
+#[test]
+fn swings_from_any_state_agree_with_radau5() {
+    for (theta, theta_dot, l, g) in [
+        (0.5, 1.0, 1.0, 9.81),
+        (-1.0, -2.0, 1.0, G),
+        (0.0, 4.0, 2.0, 9.81),  // from the bottom, k ≈ 0.45
+        (2.5, 0.0, 1.0, 9.81),  // at rest (through from_start)
+        (-2.5, 0.0, 1.0, 9.81), // at rest left of the vertical
+        (3.0, -0.3, 1.0, 9.81), // high, moving down: k ≈ 0.9986
+    ] {
+        let start = start_at(theta, theta_dot, l);
+        let p = from_state(start, l, g).unwrap();
+        let ctx = format!("θ₀ = {theta}, θ'₀ = {theta_dot}, k = {}", p.modulus());
+        assert_eq!(p.motion(), Motion::Swing, "{ctx}");
+        let t_end = 2.3 * p.period();
+        let times: Vec<f64> = (1..=46).map(|i| t_end * f64::from(i) / 46.0).collect();
+        let numeric = radau5_rcd1(start, l, g, &times);
+        let d = max_difference(&p, &numeric, &times);
+        println!("{ctx}: max difference {d:.1e}");
+        assert!(d < 1e-9, "{ctx}: {d:e}");
+        let s0 = p.state(0.0);
+        for j in 0..4 {
+            assert!(
+                (s0[j] - start[j]).abs() < 1e-14 * (1.0 + start[j].abs()),
+                "{ctx}: {s0:?}"
+            );
+        }
+    }
+}
+
+/// Energy, the constraints and the returns after whole periods hold to
+/// round-off for loops, over long times; a release at rest through
+/// `from_state` is exactly `from_start`.
+#[test]
+fn loops_conserve_energy_and_rest_starts_are_unchanged() {
+    for (theta, theta_dot, l, g, m) in [(0.0, 10.0, 1.0, 9.81, 1.0), (1.0, -25.0, 2.0, G, 3.0)] {
+        let start = start_at(theta, theta_dot, l);
+        let p = PendulumExact::from_state(start[0], start[1], start[2], start[3], l, g, m).unwrap();
+        let e0 = 0.5 * m * (start[2] * start[2] + start[3] * start[3]) + m * g * start[1];
+        assert!(
+            (p.energy() - e0).abs() <= 1e-14 * e0.abs(),
+            "energy formula"
+        );
+        let vmax = (start[2].hypot(start[3]).powi(2) + 4.0 * g * l).sqrt();
+        for i in 0..1000 {
+            let t = f64::from(i) * 10.003_7 + 0.001 * f64::from(i % 7);
+            let [x, y, v, w, lam] = p.state(t);
+            let ctx = format!("θ'₀ = {theta_dot}, t = {t}");
+            assert!(
+                (x * x + y * y - l * l).abs() <= 1e-13 * l * l,
+                "position; {ctx}"
+            );
+            assert!((x * v + y * w).abs() <= 1e-13 * l * vmax, "velocity; {ctx}");
+            let energy = 0.5 * m * (v * v + w * w) + m * g * y;
+            assert!(
+                (energy - e0).abs() <= 1e-12 * e0.abs(),
+                "energy {energy}; {ctx}"
+            );
+            let acc = 2.0 * v * v + 2.0 * w * w - 2.0 * y * g - 4.0 / m * (x * x + y * y) * lam;
+            assert!(
+                acc.abs() <= 1e-11 * (vmax * vmax + g * l),
+                "acceleration; {ctx}"
+            );
+        }
+        let (a, b) = (p.state(0.3), p.state(0.3 + 50.0 * p.period()));
+        for j in 0..5 {
+            assert!(
+                (a[j] - b[j]).abs() < 1e-10 * (1.0 + a[j].abs()),
+                "50 revolutions: {a:?} {b:?}"
+            );
+        }
+    }
+    let a = PendulumExact::from_start(0.6, -0.8, 1.0, G, 1.0).unwrap();
+    let b = PendulumExact::from_state(0.6, -0.8, 0.0, 0.0, 1.0, G, 1.0).unwrap();
+    assert_eq!(a, b);
+    assert_eq!(a.state(1234.5), b.state(1234.5));
+}
+
+/// Near k = 1. The separatrix itself (at rest upright; from the bottom
+/// with exactly the speed 2√(gL) to creep up to the top) and anything
+/// within `SEPARATRIX_GAP` of it: a typed error. Just off it, on either
+/// side (k² − 1 = ±1e-10), the reference stays exact: it agrees with
+/// RADAU5 while the pendulum climbs toward the top (before the
+/// numerical solution's own instability there grows), swings back on one
+/// side and goes over on the other, and keeps energy and constraints.
+#[test]
+fn the_separatrix_is_refused_and_its_neighbourhood_stays_accurate() {
+    let (l, g) = (1.0, 4.0); // ω = 2: the critical speed at the bottom is exactly 4
+    for start in [
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, -1.0, 4.0, 0.0],
+        [0.0, -1.0, -4.0, 0.0],
+    ] {
+        let err = from_state(start, l, g).unwrap_err();
+        assert!(
+            matches!(err, ReferenceError::NearSeparatrix { .. }),
+            "{start:?}: {err}"
+        );
+        assert!(err.to_string().contains("separatrix"), "{err}");
+    }
+    assert!(SEPARATRIX_GAP < 1e-20);
+    // k² − 1 = (v/4)² − 1 = ±1e-10: v = 4√(1 ± 1e-10); and the nearest
+    // doubles to 4, k² − 1 = ±4.4e-16.
+    for (v_below, v_above) in [
+        (4.0 * (1.0 - 1e-10f64).sqrt(), 4.0 * (1.0 + 1e-10f64).sqrt()),
+        (4.0 - 4.0 * f64::EPSILON / 2.0, 4.0 + 4.0 * f64::EPSILON),
+    ] {
+        near_separatrix(v_below, v_above);
+    }
+}
+
+fn near_separatrix(v_below: f64, v_above: f64) {
+    let (l, g) = (1.0, 4.0);
+    let below = from_state([0.0, -1.0, v_below, 0.0], l, g).unwrap();
+    let above = from_state([0.0, -1.0, v_above, 0.0], l, g).unwrap();
+    assert_eq!(
+        (below.motion(), above.motion()),
+        (Motion::Swing, Motion::Loop)
+    );
+    // The climb: y from −1 to within 1e-4 of the top takes ~5.9 s at ω = 2.
+    let times: Vec<f64> = (1..=40).map(|i| 0.1 * f64::from(i)).collect();
+    for p in [below, above] {
+        let start = p.state(0.0);
+        let numeric = radau5_rcd1([start[0], start[1], start[2], start[3]], l, g, &times);
+        let d = max_difference(&p, &numeric, &times);
+        println!("{:?}: max difference {d:.1e} while climbing", p.motion());
+        assert!(d < 1e-8, "{:?}: {d:e}", p.motion());
+        // The two agree while they climb: they differ only by 2e-10 in k².
+        for t in &times {
+            let (a, b) = (below.state(*t), above.state(*t));
+            assert!(
+                (0..4).all(|j| (a[j] - b[j]).abs() < 1e-5),
+                "t = {t}: {a:?} {b:?}"
+            );
+        }
+        for t in [3.0, 10.0, 100.0, 1e4] {
+            let [x, y, v, w, _] = p.state(t);
+            assert!((x * x + y * y - 1.0).abs() < 1e-13);
+            let energy = 0.5 * (v * v + w * w) + g * y;
+            assert!((energy - p.energy()).abs() < 1e-12 * g, "t = {t}");
+        }
+    }
+    // Afterwards one has turned back and the other gone over the top.
+    let [_, y, v, ..] = below.state(0.5 * below.period());
+    assert!(
+        (y + 1.0).abs() < 1e-9 && v < 0.0,
+        "back at the bottom, moving left"
+    );
+    let [x, y, ..] = above.state(0.5 * above.period());
+    assert!(
+        x.abs() < 1e-6 && (y - 1.0).abs() < 1e-9,
+        "upright after half a revolution"
+    );
+}
+
+#[test]
+fn bad_states_give_typed_errors() {
+    use ReferenceError::*;
+    // A radial velocity: not tangent.
+    let err = PendulumExact::from_state(1.0, 0.0, 0.5, 0.0, 1.0, 9.81, 1.0).unwrap_err();
+    assert!(matches!(err, VelocityNotTangent { .. }), "{err}");
+    assert_eq!(err.input(), "v0");
+    for (v0, w0, name) in [(f64::NAN, 0.0, "v0"), (0.0, f64::INFINITY, "w0")] {
+        let err = PendulumExact::from_state(1.0, 0.0, v0, w0, 1.0, 9.81, 1.0).unwrap_err();
+        assert!(
+            matches!(err, NonFiniteStart { name: n, .. } if n == name),
+            "{err}"
+        );
+    }
+    // A speed whose square overflows.
+    let err = PendulumExact::from_state(0.0, -1.0, 1e300, 0.0, 1.0, 9.81, 1.0).unwrap_err();
+    assert!(matches!(err, Unrepresentable { .. }), "{err}");
+    assert!(matches!(
+        PendulumExact::from_state(0.0, 0.0, 1.0, 0.0, 1.0, 9.81, 1.0),
+        Err(NotOnCircle { .. })
+    ));
+}

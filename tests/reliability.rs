@@ -772,3 +772,52 @@ fn sweep_tables_show_the_verdict() {
     assert!(html.contains("<small>1/1</small>"));
 }
 
+// ------------------------------------------- 8. the looping pendulum
+
+/// A start with speed enough to loop over the top had no reference at all
+/// ("pendulum-exact describes a release at rest").
+#[test]
+fn looping_start_has_an_exact_reference() {
+    // At the bottom with speed 10 on g = 9.81, L = 1: k² = 100/(4·9.81) > 1.
+    let text = scene_text(
+        "g = 9.81",
+        "x = 0.0\ny = -1.0\nv = 10.0\nw = 0.0",
+        "end = 3.0\ncheck_every = 0.5",
+        "pendulum-exact",
+    );
+    let (_dir, path) = scene_file("loop.toml", &text);
+    let o = dae(&[
+        "run",
+        &path,
+        "--solver",
+        "radau5",
+        "--formulation",
+        "ggl1",
+        "--tol",
+        "1e-10",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = json(&o);
+    let err = v["err"].as_f64().expect("an error against the reference");
+    assert!(err < 1e-7, "err {err:e}");
+}
+
+/// A velocity off the tangent is refused at its field.
+#[test]
+fn radial_start_velocity_is_refused_at_its_field() {
+    let text = scene_text(
+        "g = 9.81",
+        "x = 1.0\ny = 0.0\nv = 1.0\nw = 0.0",
+        "end = 1.0",
+        "pendulum-exact",
+    );
+    let (_dir, path) = scene_file("radial.toml", &text);
+    let o = dae(&["run", &path]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with(&format!("{path}:8:1: `initial.v`")),
+        "{err}"
+    );
+    assert!(err.contains("not tangent"), "{err}");
+}
