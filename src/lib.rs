@@ -17,10 +17,10 @@ pub mod sweep;
 
 /// Everything a user of the macro and the solvers needs.
 pub mod prelude {
-    pub use dae_macros::dae;
     pub use dae_core::system::{
         BoxedSystem, DaeSystem, FormulationInfo, Model, ModelInfo, RowKind, StaticSize, VarKind,
     };
+    pub use dae_macros::dae;
     pub use dae_solvers::{Options, Problem, Solution, SolveError, Solver, Stats, Tolerances};
 }
 

@@ -445,7 +445,9 @@ pub fn text(map: &StabilityMap) -> String {
                 short(c.err),
                 short(c.g0),
                 short(c.drift),
-                c.note.as_deref().map_or(String::new(), |n| format!(": {n}"))
+                c.note
+                    .as_deref()
+                    .map_or(String::new(), |n| format!(": {n}"))
             );
         }
     }
@@ -511,10 +513,18 @@ fn colour(cell: &Cell) -> RGBColor {
             let lerp = |a: f64, b: f64, u: f64| (a + (b - a) * u).round() as u8;
             if x < 0.5 {
                 let u = x / 0.5;
-                RGBColor(lerp(30.0, 245.0, u), lerp(140.0, 240.0, u), lerp(60.0, 200.0, u))
+                RGBColor(
+                    lerp(30.0, 245.0, u),
+                    lerp(140.0, 240.0, u),
+                    lerp(60.0, 200.0, u),
+                )
             } else {
                 let u = (x - 0.5) / 0.5;
-                RGBColor(lerp(245.0, 190.0, u), lerp(240.0, 20.0, u), lerp(200.0, 20.0, u))
+                RGBColor(
+                    lerp(245.0, 190.0, u),
+                    lerp(240.0, 20.0, u),
+                    lerp(200.0, 20.0, u),
+                )
             }
         }
     }
@@ -593,7 +603,10 @@ pub fn draw_heat_map<DB: DrawingBackend>(
         let name = case.scene.as_deref().unwrap_or(&case.file);
         let label = match tol {
             Some(t) => format!("{name}  {t:.0e}"),
-            None => format!("{name}  refused ({})", case.refused.as_ref().map_or("", |r| r.stage)),
+            None => format!(
+                "{name}  refused ({})",
+                case.refused.as_ref().map_or("", |r| r.stage)
+            ),
         };
         root.draw(&Text::new(label, (8, y + 2), font.clone()))
             .map_err(draw_err)?;
@@ -628,7 +641,14 @@ pub fn draw_heat_map<DB: DrawingBackend>(
         ("no reference", colour_of(Class::Unverified)),
         ("suspect", colour_of(Class::Suspect)),
         ("step limit", colour_of(Class::StepLimit { t: 0.0 })),
-        ("typed error", colour_of(Class::Failed { kind: String::new(), t: None, message: String::new() })),
+        (
+            "typed error",
+            colour_of(Class::Failed {
+                kind: String::new(),
+                t: None,
+                message: String::new(),
+            }),
+        ),
         ("case refused", RGBColor(200, 200, 200)),
     ];
     for (k, (label, c)) in swatches.iter().enumerate() {
@@ -636,8 +656,11 @@ pub fn draw_heat_map<DB: DrawingBackend>(
         let y = y0 + (k as i32 / 5) * 24;
         root.draw(&Rectangle::new([(x, y), (x + 18, y + 14)], c.filled()))
             .map_err(draw_err)?;
-        root.draw(&Rectangle::new([(x, y), (x + 18, y + 14)], BLACK.stroke_width(1)))
-            .map_err(draw_err)?;
+        root.draw(&Rectangle::new(
+            [(x, y), (x + 18, y + 14)],
+            BLACK.stroke_width(1),
+        ))
+        .map_err(draw_err)?;
         root.draw(&Text::new(*label, (x + 24, y + 1), font.clone()))
             .map_err(draw_err)?;
     }

@@ -200,8 +200,8 @@ fn extremes(args: &SweepArgs, cases: &std::path::Path) -> Result<(String, i32), 
             "--formulations: the stability map runs every formulation of each case",
         ));
     }
-    let files = stability::case_files(cases)
-        .map_err(|e| Failure::input(format!("--extremes: {e}")))?;
+    let files =
+        stability::case_files(cases).map_err(|e| Failure::input(format!("--extremes: {e}")))?;
     if files.is_empty() {
         return Err(Failure::input(format!(
             "--extremes {}: no scene files (*.toml) there",

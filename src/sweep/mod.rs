@@ -814,8 +814,7 @@ pub fn is_output_name(name: &str) -> bool {
     matches!(
         name,
         "results.csv" | "results.json" | "index.html" | "map.txt" | "map.json"
-    )
-        || name.ends_with(".svg")
+    ) || name.ends_with(".svg")
         || name.ends_with(".png")
         || (name.starts_with('.') && name.contains(".tmp-"))
 }
