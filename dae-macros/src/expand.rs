@@ -177,6 +177,16 @@ fn with_file_positions<T>(f: impl FnOnce() -> T) -> T {
     f()
 }
 
+/// Whether a name can be a struct or field name in the stub: an identifier
+/// that is not `_` and not a keyword (syn's `Ident` parser refuses both).
+fn is_ident(name: &str) -> bool {
+    syn::parse_str::<syn::Ident>(name).is_ok()
+}
+
+fn usable(id: &proc_macro2::Ident) -> bool {
+    is_ident(&id.to_string())
+}
+
 /// What is known of a model's items when it fails: enough to declare them
 /// so that the code using them type-checks and only the real error shows.
 struct Stub {
@@ -204,7 +214,9 @@ impl Stub {
             i += 1;
         }
         let name = match toks.get(i) {
-            Some(TokenTree::Ident(id)) => Some((id.to_string(), span_of(spans, id.span()))),
+            Some(TokenTree::Ident(id)) if usable(id) => {
+                Some((id.to_string(), span_of(spans, id.span())))
+            }
             _ => None,
         };
         let mut stub = Stub {
@@ -227,6 +239,9 @@ impl Stub {
             if kw == "parameters" {
                 for w in inner.windows(2) {
                     if let (TokenTree::Ident(p), TokenTree::Punct(eq)) = (&w[0], &w[1]) {
+                        if !usable(p) {
+                            continue;
+                        }
                         let p = p.to_string();
                         if eq.as_char() == '=' && !stub.params.iter().any(|(n, _)| *n == p) {
                             stub.params.push((p, span_of(spans, w[0].span())));
@@ -248,6 +263,9 @@ impl Stub {
     fn from_ast(ast: &ModelAst, spans: Spans) -> Stub {
         let mut params: Vec<(String, Option<Span>)> = Vec::new();
         for p in &ast.parameters {
+            if !is_ident(&p.name.name) {
+                continue;
+            }
             if !params.iter().any(|(n, _)| *n == p.name.name) {
                 params.push((p.name.name.clone(), span_of(spans, p.name.span)));
             }
@@ -262,7 +280,8 @@ impl Stub {
         };
         Stub {
             public: ast.public,
-            name: Some((ast.name.name.clone(), span_of(spans, ast.name.span))),
+            name: is_ident(&ast.name.name)
+                .then(|| (ast.name.name.clone(), span_of(spans, ast.name.span))),
             params,
             formulations,
         }
@@ -457,6 +476,28 @@ mod tests {
         let out = expand(TokenStream::from_str(src).unwrap()).to_string();
         for lit in ["1e-7", "1e300", "1e-20", "1.5"] {
             assert!(out.contains(lit), "{lit} missing: {out}");
+        }
+    }
+
+    /// Found by the `expand` fuzz target: a model whose guessed name or
+    /// parameter is `_` or a keyword (`_// …` at the start) got a stub
+    /// `struct _ {}` that is not Rust, so rustc reported a second, unrelated
+    /// syntax error after the real one. The stub skips such names.
+    #[test]
+    fn stubs_of_broken_models_are_valid_rust() {
+        let fuzzed = include_str!("../../fuzz/regressions/expand/underscore-model-name.dae");
+        for src in [
+            fuzzed,
+            "_ { differential { x } }",
+            "pub fn { parameters { _ = 1, type = 2, k = 3 } differential { x } }",
+            "pub M { parameters { self = 1.0 } differential { x } equations { der(x) = x; } }",
+        ] {
+            let Ok(tokens) = TokenStream::from_str(src) else {
+                panic!("{src} should lex");
+            };
+            let out = expand(tokens);
+            syn::parse2::<syn::File>(out.clone()).unwrap_or_else(|e| panic!("{src}: {e}: {out}"));
+            assert!(out.to_string().contains("compile_error"), "{src}: {out}");
         }
     }
 
