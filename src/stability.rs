@@ -540,9 +540,15 @@ const LEFT: u32 = 230;
 const TOP: u32 = 150;
 const LEGEND_H: u32 = 120;
 
-/// Rows (case label, tolerance) and columns (solver, formulation).
-fn grid(map: &StabilityMap) -> (Vec<(usize, Option<f64>)>, Vec<(String, String)>) {
-    let mut cols: Vec<(String, String)> = Vec::new();
+/// A row of the heat map: the case's index and the tolerance (`None` for a
+/// refused case).
+type Row = (usize, Option<f64>);
+/// A column of the heat map: solver and formulation.
+type Column = (String, String);
+
+/// Rows (case, tolerance) and columns (solver, formulation).
+fn grid(map: &StabilityMap) -> (Vec<Row>, Vec<Column>) {
+    let mut cols: Vec<Column> = Vec::new();
     let mut rows = Vec::new();
     for (i, case) in map.cases.iter().enumerate() {
         if case.refused.is_some() {
@@ -600,7 +606,10 @@ pub fn draw_heat_map<DB: DrawingBackend>(
     for (i, (ci, tol)) in rows.iter().enumerate() {
         let case = &map.cases[*ci];
         let y = (TOP + CELL_H * i as u32) as i32;
-        let name = case.scene.as_deref().unwrap_or(&case.file);
+        let stem = Path::new(&case.file)
+            .file_stem()
+            .map_or(case.file.clone(), |s| s.to_string_lossy().into_owned());
+        let name = case.scene.as_deref().unwrap_or(&stem);
         let label = match tol {
             Some(t) => format!("{name}  {t:.0e}"),
             None => format!(
