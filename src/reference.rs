@@ -483,13 +483,13 @@ impl PendulumExact {
         let (xs, ys) = (x0 / scale, y0 / scale);
         let r_s = Dd::from_prod(xs, xs).add(Dd::from_prod(ys, ys)).sqrt();
         let radius = r_s.hi * scale;
-        if !((radius - l).abs() <= START_RADIUS_RTOL * l) {
+        if (radius - l).abs() > START_RADIUS_RTOL * l || radius.is_nan() {
             return Err(not_on_circle(radius));
         }
         // The velocity must be along the circle: radial part within the
         // tolerance of the speed.
         let radial = Dd::from_prod(xs, v0).add(Dd::from_prod(ys, w0)).div(r_s).hi;
-        if !(radial.abs() <= START_RADIUS_RTOL * v0.hypot(w0)) {
+        if radial.abs() > START_RADIUS_RTOL * v0.hypot(w0) || radial.is_nan() {
             return Err(ReferenceError::VelocityNotTangent {
                 v0,
                 w0,
