@@ -1557,9 +1557,8 @@ fn extreme_options_do_not_panic() {
                 h_max: Some(1e-3),
                 ..Options::with_tol(1e-4)
             },
-            // Below round-off: radau5's map floors it; BDF (odbdf as bdf)
-            // grinds on with tiny steps until the step limit (reported),
-            // kept short here.
+            // Below what double precision can honour: refused with
+            // `ToleranceOutOfRange` (the step limit is a second bound).
             Options {
                 max_steps: 100_000,
                 ..Options::with_tol(1e-16)
