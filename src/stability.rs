@@ -20,7 +20,7 @@
 use crate::runner::{Accuracy, RunRecord, ACCURATE_FACTOR, SUSPECT_FACTOR};
 use crate::scene::Scene;
 use crate::sweep::plot::PlotError;
-use crate::sweep::{self, write, SweepError, SweepOptions, SweepReport};
+use crate::sweep::{self, SweepError, SweepOptions, SweepReport};
 use dae_solvers::init::InitMode;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -704,62 +704,41 @@ fn colour_of(class: Class) -> RGBColor {
 }
 
 /// Write `map.txt`, `map.json`, `map.svg` and `map.png` into `dir` as one
-/// set (see [`crate::sweep::write::publish_dir`]); `dir` is replaced only
-/// if it holds nothing but sweep outputs
-/// ([`crate::sweep::check_replaceable`]).
+/// set ([`crate::sweep::publish`]: `dir` is replaced only when every file is
+/// written, and only if it holds nothing but sweep outputs).
 pub fn write(map: &StabilityMap, dir: &Path) -> Result<Vec<PathBuf>, SweepError> {
-    sweep::check_replaceable(dir)?;
-    let written = write::publish_dir(dir, |staging: &Path| -> Result<Vec<String>, Staged> {
-        let mut names = Vec::new();
+    let names = sweep::publish(dir, |staging| {
+        let io = |name: &str| {
+            let path = dir.join(name);
+            move |source| SweepError::Write { path, source }
+        };
+        let plot = |name: &str| {
+            let path = dir.join(name);
+            move |e: PlotError| SweepError::Write {
+                path,
+                source: std::io::Error::other(e.to_string()),
+            }
+        };
         for (name, body) in [("map.txt", text(map)), ("map.json", json(map))] {
-            std::fs::write(staging.join(name), body)?;
-            names.push(name.to_string());
+            std::fs::write(staging.join(name), body).map_err(io(name))?;
         }
         let size = heat_map_size(map);
         let mut svg = String::new();
         {
             let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-            draw_heat_map(&root, map)?;
-            root.present().map_err(draw_err)?;
+            draw_heat_map(&root, map)
+                .and_then(|()| root.present().map_err(draw_err))
+                .map_err(plot("map.svg"))?;
         }
-        std::fs::write(staging.join("map.svg"), svg)?;
-        names.push("map.svg".into());
+        std::fs::write(staging.join("map.svg"), svg).map_err(io("map.svg"))?;
         let png = staging.join("map.png");
         {
             let root = BitMapBackend::new(&png, size).into_drawing_area();
-            draw_heat_map(&root, map)?;
-            root.present().map_err(draw_err)?;
+            draw_heat_map(&root, map)
+                .and_then(|()| root.present().map_err(draw_err))
+                .map_err(plot("map.png"))?;
         }
-        names.push("map.png".into());
-        Ok(names)
-    });
-    match written {
-        Ok(names) => Ok(names.iter().map(|n| dir.join(n)).collect()),
-        Err(Staged::Io(source)) => Err(SweepError::Write {
-            path: dir.to_path_buf(),
-            source,
-        }),
-        Err(Staged::Plot(e)) => Err(SweepError::Write {
-            path: dir.join("map.svg"),
-            source: std::io::Error::other(e.to_string()),
-        }),
-    }
-}
-
-/// Why writing the map failed.
-enum Staged {
-    Io(std::io::Error),
-    Plot(PlotError),
-}
-
-impl From<std::io::Error> for Staged {
-    fn from(e: std::io::Error) -> Self {
-        Staged::Io(e)
-    }
-}
-
-impl From<PlotError> for Staged {
-    fn from(e: PlotError) -> Self {
-        Staged::Plot(e)
-    }
+        Ok(["map.txt", "map.json", "map.svg", "map.png"])
+    })?;
+    Ok(names.iter().map(|n| dir.join(n)).collect())
 }

@@ -104,23 +104,12 @@ pub fn scene(data: &[u8]) {
             return;
         }
     };
-    let ModelSource::Builtin(name) = &scene.model else {
-        return;
-    };
-    let Ok(mut model) = dae::models::load(name) else {
-        return;
-    };
-    let info = model.model_info().clone();
-    let vars: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
-    let params: Vec<&str> = info.parameters.iter().map(|p| p.name.as_str()).collect();
-    if scene.check_names(&vars, &params).is_err() {
+    if !matches!(scene.model, ModelSource::Builtin(_)) {
         return;
     }
-    for p in &scene.parameters {
-        if model.set_parameter(&p.name, p.value).is_err() {
-            return;
-        }
-    }
+    let Ok(model) = dae::cli::run::load_model(&scene) else {
+        return;
+    };
     let initial: Vec<(String, f64)> = scene
         .initial
         .iter()

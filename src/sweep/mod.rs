@@ -866,6 +866,26 @@ impl From<std::io::Error> for Staged {
     }
 }
 
+/// Produce the output directory `dir` as one set: refuse a `dir` that holds
+/// anything but sweep outputs ([`check_replaceable`]), then let `fill`
+/// write every file into a staging directory that replaces `dir` only when
+/// complete ([`write::publish_dir`]). Shared by [`write_outputs`] and the
+/// stability map.
+pub fn publish<T>(
+    dir: &Path,
+    fill: impl FnOnce(&Path) -> Result<T, SweepError>,
+) -> Result<T, SweepError> {
+    check_replaceable(dir)?;
+    match write::publish_dir(dir, |staging: &Path| fill(staging).map_err(Staged::Fill)) {
+        Ok(v) => Ok(v),
+        Err(Staged::Fill(e)) => Err(e),
+        Err(Staged::Io(source)) => Err(SweepError::Write {
+            path: dir.to_path_buf(),
+            source,
+        }),
+    }
+}
+
 /// Write `results.csv`, `results.json`, the figures (SVG and PNG) and
 /// `index.html` as one set into `dir`. A figure that cannot be drawn is a
 /// note in `index.html`, not an error.
@@ -884,20 +904,7 @@ pub fn write_outputs(
     summary: &Summary,
     dir: &Path,
 ) -> Result<Outputs, SweepError> {
-    check_replaceable(dir)?;
-    let published = write::publish_dir(dir, |staging: &Path| {
-        fill_outputs(report, summary, staging).map_err(Staged::Fill)
-    });
-    let mut out = match published {
-        Ok(out) => out,
-        Err(Staged::Fill(e)) => return Err(e),
-        Err(Staged::Io(source)) => {
-            return Err(SweepError::Write {
-                path: dir.to_path_buf(),
-                source,
-            })
-        }
-    };
+    let mut out = publish(dir, |staging| fill_outputs(report, summary, staging))?;
     // The files were written in the staging directory: report them where
     // they are now.
     for f in &mut out.files {
