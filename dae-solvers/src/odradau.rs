@@ -17,16 +17,20 @@
 //! rows for `3N` unknowns. The simplified Newton iteration keeps RADAU5's
 //! transformation: because `(A⁻¹ ⊗ E)(T ⊗ I_N) = (T ⊗ I_M)(Λ ⊗ E)` holds for
 //! a rectangular `E` too, the transformed system still splits into one real
-//! `M × N` and one complex `M × N` system. Each is solved as a constrained
-//! least-squares problem (see `core::matrix`): the constraint rows
-//! exactly — every stage satisfies every constraint to the Newton
-//! tolerance — and the differential rows in a weighted least-squares sense.
-//! For a square formulation this is the exact solve, so `odradau` integrates
-//! `rcd1`, `rcd0`, `ggl1`, `psi1`, `psi0` like `radau5` (up to round-off in
-//! a different factorisation).
+//! `M × N` and one complex `M × N` system. Both are made square with the
+//! same projection (see `core::matrix`): the constraint rows as they are —
+//! every stage satisfies every constraint to the Newton tolerance — and the
+//! differential rows tested against the directions of the real system's
+//! weighted least-squares solve, fixed for the step. The converged stages
+//! are then the collocation solution of one square system, and the method
+//! keeps RADAU5's order 5 at the step points (order 4 when the two systems
+//! were each solved in their own least-squares sense). For a square
+//! formulation the projection is the exact solve, so `odradau` integrates
+//! `rcd1`, `rcd0`, `ggl1`, `psi1`, `psi0` like `radau5` (up to round-off
+//! in the different elimination).
 //!
 //! The error estimate is RADAU5's, `err = (γ/h E₀ − J)⁺ [f(t_n, y_n) +
-//! E(y_n)(1/h) Σ d_i Z_i]`, with the same least-squares solve, measured on
+//! E(y_n)(1/h) Σ d_i Z_i]`, with the same projected solve, measured on
 //! the unknowns with the index scaling `h^(k−1)` of index-`k` components
 //! (Hairer & Wanner VII.8). Step-size control, Jacobian reuse, dense output
 //! and the tolerance map are those of [`crate::radau5`] (see there).
@@ -59,12 +63,12 @@
 //! );
 //! ```
 
-use crate::core::matrix::LstsqStages;
+use crate::core::matrix::ProjectedStages;
 use crate::core::policy;
 use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 
-/// Radau IIA 5 with least-squares stage equations (see the
+/// Radau IIA 5 with projected least-squares stage equations (see the
 /// [module documentation](self)).
 pub struct OdRadau;
 
@@ -82,6 +86,6 @@ impl Solver for OdRadau {
 
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
         self.accepts(problem.system.info())?;
-        crate::radau5::integrate::<LstsqStages>(problem, options)
+        crate::radau5::integrate::<ProjectedStages>(problem, options)
     }
 }

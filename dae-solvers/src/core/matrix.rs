@@ -25,11 +25,41 @@
 //! weighting is invariant under scaling of rows and of unknowns. For a
 //! square nonsingular matrix the solution is the exact one.
 //!
-//! Radau's complex system `((α + iβ)/h E − J) w = r` is solved in the least
-//! squares case as the real system of twice the size,
-//! `[[αE/h − J, −βE/h], [βE/h, αE/h − J]] [Re w; Im w] = [Re r; Im r]`,
-//! whose constraint rows are the constraint rows of both parts.
+//! # Radau's stage systems for `M > N`: one projection per factorisation
+//!
+//! Radau IIA's simplified Newton iteration splits, after RADAU5's
+//! transformation `T`, into a real system `(γ/h E − J) w = r` and a complex
+//! one `((α + iβ)/h E − J) w = r`. Solving each in its own least-squares
+//! sense would test the differential rows of the real and of the complex
+//! combination of the stages against *different* directions, so the
+//! converged stages would satisfy no one square collocation system; the
+//! method then loses RADAU5's superconvergence at the step points (measured
+//! order 4 instead of 5 on `ovd1`, `ovd0`). [`ProjectedStages`] instead
+//! fixes, at each factorisation, one set of test directions — those of the
+//! real system's least-squares solve, `Wᵀ = (S D Z)ᵀ S` with `Z` an
+//! orthonormal basis of the null space of the real matrix's constraint rows
+//! `C` and `D` its differential rows — and solves both systems as the
+//! square systems
+//!
+//! ```text
+//!     [ C      ]       [ b_C    ]
+//!     [ Wᵀ D   ] w  =  [ Wᵀ b_D ]      (N × N; D = c E_D − J_D, c = γ/h or (α + iβ)/h).
+//! ```
+//!
+//! For the real system this is exactly its constrained least-squares
+//! solution (the optimality condition of the LSE problem); for the complex
+//! one it is the same projection. Because `Wᵀ` is the same for every stage,
+//! the converged stages satisfy every constraint row and `Wᵀ` times the
+//! differential rows at every stage: the collocation solution of one
+//! square system per step, of order 5 at the step points (see the tests
+//! of `odradau`). Each test direction is scaled so that its row of the
+//! real matrix has largest entry one: the weights `S` are of the size of
+//! the inverse tolerances, and unscaled rows `10²⁶` times larger than the
+//! constraint rows defeat partial pivoting (the Newton iteration then
+//! diverged on the first step). For a square nonsingular system the
+//! projection is the exact solve.
 
+use crate::linalg::lstsq::null_space;
 use crate::linalg::{ConstrainedLstsq, DenseLu, Pivoting, Singular};
 use dae_core::system::{FormulationInfo, RowKind};
 use nalgebra::{Complex, DMatrix};
@@ -206,29 +236,87 @@ impl StageSystems for SquareStages {
     }
 }
 
-/// Constrained least squares for Radau's stage systems, the complex one
-/// in its real form of twice the size.
-pub(crate) struct LstsqStages {
+/// Radau's stage systems for `M ≥ N`, projected onto one square system per
+/// factorisation (see the [module documentation](self)): the constraint
+/// rows as they are, and the differential rows tested against the weighted
+/// least-squares directions of the real matrix, `Wᵀ = (S D Z)ᵀ S`.
+pub(crate) struct ProjectedStages {
     m: usize,
     n: usize,
-    real: ConstrainedLstsq,
-    complex: ConstrainedLstsq,
-    exact2: Vec<bool>,
-    weight2: Vec<f64>,
+    /// Number of constraint rows (`p`) and of differential rows (`q`).
+    p: usize,
+    q: usize,
+    /// Row indices of the constraint rows (first `p`), of the differential
+    /// rows (first `q`), and the weights of the latter.
+    exact_rows: Vec<usize>,
+    diff_rows: Vec<usize>,
+    weight: Vec<f64>,
+    /// `Cᵀ` of the real matrix, then its QR factors (`N × p`).
+    ct: Vec<f64>,
+    tau: Vec<f64>,
+    norms: Vec<f64>,
+    /// Null-space basis `Z` of `C` (`N × k`, `k = N − p`), then `S D Z`
+    /// (`q × k`).
+    z: Vec<f64>,
+    sdz: Vec<f64>,
+    /// `Wᵀ` (`k × q`, row-major: row `l` is the test vector `l`).
+    wt: Vec<f64>,
+    /// `Wᵀ E_D` and `Wᵀ J_D` (`k × N`, row-major).
+    we: Vec<f64>,
+    wj: Vec<f64>,
+    real: DenseLu<f64>,
+    complex: DenseLu<Complex<f64>>,
     buf: Vec<f64>,
+    cbuf: Vec<Complex<f64>>,
 }
 
-impl StageSystems for LstsqStages {
+impl ProjectedStages {
+    /// `out[..p] = b_C`, `out[p..N] = Wᵀ b_D` (the square right-hand side).
+    fn project<T: Copy + Default + std::ops::AddAssign + std::ops::Mul<f64, Output = T>>(
+        &self,
+        b: impl Fn(usize) -> T,
+        out: &mut [T],
+    ) {
+        let (p, q) = (self.p, self.q);
+        for (o, &i) in out.iter_mut().zip(&self.exact_rows[..p]) {
+            *o = b(i);
+        }
+        for (o, wt) in out[p..self.n]
+            .iter_mut()
+            .zip(self.wt.chunks_exact(q.max(1)))
+        {
+            let mut sum = T::default();
+            for (&w, &i) in wt.iter().zip(&self.diff_rows[..q]) {
+                sum += b(i) * w;
+            }
+            *o = sum;
+        }
+    }
+}
+
+impl StageSystems for ProjectedStages {
     const LEAST_SQUARES: bool = true;
     fn new(m: usize, n: usize) -> Self {
-        LstsqStages {
+        ProjectedStages {
             m,
             n,
-            real: ConstrainedLstsq::new(m, n),
-            complex: ConstrainedLstsq::new(2 * m, 2 * n),
-            exact2: vec![false; 2 * m],
-            weight2: vec![1.0; 2 * m],
-            buf: vec![0.0; 2 * m],
+            p: 0,
+            q: 0,
+            exact_rows: vec![0; m],
+            diff_rows: vec![0; m],
+            weight: vec![0.0; m],
+            ct: vec![0.0; n * n],
+            tau: vec![0.0; n],
+            norms: vec![0.0; n],
+            z: vec![0.0; n * n],
+            sdz: vec![0.0; m * n],
+            wt: vec![0.0; m * n],
+            we: vec![0.0; n * n],
+            wj: vec![0.0; n * n],
+            real: DenseLu::new(n, Pivoting::Checked),
+            complex: DenseLu::new(n, Pivoting::Checked),
+            buf: vec![0.0; n],
+            cbuf: vec![Complex::new(0.0, 0.0); n],
         }
     }
     fn factor(
@@ -241,39 +329,216 @@ impl StageSystems for LstsqStages {
         rows: &Rows,
     ) -> Result<(), Singular> {
         let (m, n) = (self.m, self.n);
-        let ar = self.real.matrix_mut();
-        for c in 0..n {
-            for r in 0..m {
-                ar[(r, c)] = g * e[(r, c)] - j[(r, c)];
+        let (mut p, mut q) = (0, 0);
+        for (i, (&exact, &w)) in rows.exact.iter().zip(&rows.weight).enumerate() {
+            if exact {
+                self.exact_rows[p] = i;
+                p += 1;
+            } else {
+                if !(w > 0.0 && w.is_finite()) {
+                    return Err(Singular);
+                }
+                self.diff_rows[q] = i;
+                self.weight[q] = w;
+                q += 1;
             }
         }
-        self.real.factor(&rows.exact, &rows.weight)?;
-        let ac = self.complex.matrix_mut();
-        for c in 0..n {
-            for r in 0..m {
-                let d = a * e[(r, c)] - j[(r, c)];
-                let o = b * e[(r, c)];
-                ac[(r, c)] = d;
-                ac[(r, n + c)] = -o;
-                ac[(m + r, c)] = o;
-                ac[(m + r, n + c)] = d;
+        debug_assert_eq!(p + q, m);
+        if p > n || p + q < n {
+            return Err(Singular);
+        }
+        (self.p, self.q) = (p, q);
+        let k = n - p;
+        let real = |r: usize, c: usize| g * e[(r, c)] - j[(r, c)];
+
+        // Z: the null space of the real matrix's constraint rows C.
+        for (col, &i) in self.ct.chunks_exact_mut(n).zip(&self.exact_rows[..p]) {
+            for (c, v) in col.iter_mut().enumerate() {
+                *v = real(i, c);
             }
         }
-        for part in 0..2 {
-            self.exact2[part * m..(part + 1) * m].copy_from_slice(&rows.exact);
-            self.weight2[part * m..(part + 1) * m].copy_from_slice(&rows.weight);
+        null_space(
+            &mut self.ct,
+            n,
+            p,
+            &mut self.tau,
+            &mut self.norms,
+            &mut self.z,
+        )?;
+
+        // S D Z (q × k, column-major), then Wᵀ = (S D Z)ᵀ S (k × q, row-major).
+        for (l, zl) in self.z[..n * k].chunks_exact(n).enumerate() {
+            for (r, (&i, &s)) in self.diff_rows[..q]
+                .iter()
+                .zip(&self.weight[..q])
+                .enumerate()
+            {
+                let dz: f64 = zl.iter().enumerate().map(|(c, &zc)| real(i, c) * zc).sum();
+                self.sdz[l * q + r] = s * dz;
+            }
         }
-        self.complex.factor(&self.exact2, &self.weight2)
+        for l in 0..k {
+            for r in 0..q {
+                self.wt[l * q + r] = self.sdz[l * q + r] * self.weight[r];
+            }
+        }
+        // Each test vector scaled so that its row of the real matrix has
+        // largest entry one: partial pivoting then sees rows of one size.
+        for l in 0..k {
+            let wt = &mut self.wt[l * q..(l + 1) * q];
+            let big = (0..n).fold(0.0_f64, |acc, c| {
+                let v: f64 = wt
+                    .iter()
+                    .zip(&self.diff_rows[..q])
+                    .map(|(&w, &i)| w * real(i, c))
+                    .sum();
+                acc.max(v.abs())
+            });
+            if !(big > 0.0 && big.is_finite()) {
+                return Err(Singular);
+            }
+            wt.iter_mut().for_each(|w| *w /= big);
+        }
+        // Wᵀ E_D and Wᵀ J_D (k × N, row-major).
+        for l in 0..k {
+            let wt = &self.wt[l * q..(l + 1) * q];
+            for c in 0..n {
+                let (mut se, mut sj) = (0.0, 0.0);
+                for (&w, &i) in wt.iter().zip(&self.diff_rows[..q]) {
+                    se += w * e[(i, c)];
+                    sj += w * j[(i, c)];
+                }
+                self.we[l * n + c] = se;
+                self.wj[l * n + c] = sj;
+            }
+        }
+
+        let (exact_rows, we, wj) = (&self.exact_rows, &self.we, &self.wj);
+        self.real.factor_from(|r, c| {
+            if r < p {
+                real(exact_rows[r], c)
+            } else {
+                let o = (r - p) * n + c;
+                g * we[o] - wj[o]
+            }
+        })?;
+        self.complex.factor_from(|r, c| {
+            if r < p {
+                let i = exact_rows[r];
+                Complex::new(a * e[(i, c)] - j[(i, c)], b * e[(i, c)])
+            } else {
+                let o = (r - p) * n + c;
+                Complex::new(a * we[o] - wj[o], b * we[o])
+            }
+        })
     }
     fn solve_real(&mut self, x: &mut [f64]) {
-        self.real.solve(x)
+        let mut buf = std::mem::take(&mut self.buf);
+        self.project(|i| x[i], &mut buf);
+        self.real.solve(&mut buf);
+        x[..self.n].copy_from_slice(&buf);
+        self.buf = buf;
     }
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]) {
-        let (m, n) = (self.m, self.n);
-        self.buf[..m].copy_from_slice(&re[..m]);
-        self.buf[m..2 * m].copy_from_slice(&im[..m]);
-        self.complex.solve(&mut self.buf);
-        re[..n].copy_from_slice(&self.buf[..n]);
-        im[..n].copy_from_slice(&self.buf[n..2 * n]);
+        let mut buf = std::mem::take(&mut self.cbuf);
+        self.project(|i| Complex::new(re[i], im[i]), &mut buf);
+        self.complex.solve(&mut buf);
+        for (z, (r, i)) in buf.iter().zip(re.iter_mut().zip(im.iter_mut())) {
+            *r = z.re;
+            *i = z.im;
+        }
+        self.cbuf = buf;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::lstsq::lstsq;
+
+    fn rng(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+
+    fn rows(exact: &[bool], next: &mut impl FnMut() -> f64) -> Rows {
+        Rows {
+            exact: exact.to_vec(),
+            weight: exact.iter().map(|_| 0.5 + next().abs()).collect(),
+        }
+    }
+
+    /// A random `E` with zero constraint rows and a random `J`.
+    fn matrices(
+        m: usize,
+        n: usize,
+        exact: &[bool],
+        next: &mut impl FnMut() -> f64,
+    ) -> (DMatrix<f64>, DMatrix<f64>) {
+        let e = DMatrix::from_fn(m, n, |r, _| if exact[r] { 0.0 } else { next() });
+        let e = e + DMatrix::from_fn(m, n, |r, c| if !exact[r] && r % n == c { 2.0 } else { 0.0 });
+        let j = DMatrix::from_fn(m, n, |_, _| next());
+        (e, j)
+    }
+
+    #[test]
+    fn projected_real_system_is_the_least_squares_solve() {
+        let mut next = rng(7);
+        for (m, n, exact) in [
+            (7, 5, vec![false, false, false, false, true, true, true]),
+            (6, 5, vec![false, true, false, false, true, false]),
+            (3, 2, vec![false, false, true]),
+        ] {
+            let (e, j) = matrices(m, n, &exact, &mut next);
+            let rows = rows(&exact, &mut next);
+            let g = 3.7;
+            let mut ps = ProjectedStages::new(m, n);
+            ps.factor(&e, &j, g, 2.0, 3.0, &rows).expect("nonsingular");
+            let a = DMatrix::from_fn(m, n, |r, c| g * e[(r, c)] - j[(r, c)]);
+            let b: Vec<f64> = (0..m).map(|_| next()).collect();
+            let want = lstsq(&a, &rows.exact, &rows.weight, &b).expect("lstsq");
+            let mut x = b.clone();
+            ps.solve_real(&mut x);
+            for (u, v) in x[..n].iter().zip(&want) {
+                assert!(
+                    (u - v).abs() <= 1e-12 * (1.0 + v.abs()),
+                    "{m}x{n}: {x:?} vs {want:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn square_projected_systems_are_the_exact_solves() {
+        let mut next = rng(11);
+        let (m, n) = (5, 5);
+        let exact = [false, false, false, true, true];
+        let (e, j) = matrices(m, n, &exact, &mut next);
+        let rows = rows(&exact, &mut next);
+        let (g, a, b) = (3.7, 2.5, 1.5);
+        let mut ps = ProjectedStages::new(m, n);
+        ps.factor(&e, &j, g, a, b, &rows).expect("nonsingular");
+        let mut sq = SquareStages::new(m, n);
+        sq.factor(&e, &j, g, a, b, &rows).expect("nonsingular");
+        let rhs: Vec<f64> = (0..2 * m).map(|_| next()).collect();
+        let (mut x1, mut x2) = (rhs[..m].to_vec(), rhs[..m].to_vec());
+        ps.solve_real(&mut x1);
+        sq.solve_real(&mut x2);
+        let (mut re1, mut im1) = (rhs[..m].to_vec(), rhs[m..].to_vec());
+        let (mut re2, mut im2) = (re1.clone(), im1.clone());
+        ps.solve_complex(&mut re1, &mut im1);
+        sq.solve_complex(&mut re2, &mut im2);
+        for (u, v) in x1
+            .iter()
+            .chain(&re1)
+            .chain(&im1)
+            .zip(x2.iter().chain(&re2).chain(&im2))
+        {
+            assert!((u - v).abs() <= 1e-12 * (1.0 + v.abs()), "{u} vs {v}");
+        }
     }
 }

@@ -317,6 +317,42 @@ impl ConstrainedLstsq {
     }
 }
 
+/// An orthonormal basis of the null space of the `p × n` matrix `C`, given
+/// as `Cᵀ` in `ct` (`n × p` column-major, overwritten by its QR factors):
+/// the last `n − p` columns of `Q` in `Cᵀ = Q [R; 0]`, written to `z`
+/// (`n × (n − p)` column-major). `tau` and `norms` are workspaces of length
+/// at least `p`. Fails with [`Singular`] when `p > n`, when an entry is not
+/// finite, or when `C` fails the rank test of the
+/// [module documentation](self). Does not allocate.
+pub(crate) fn null_space(
+    ct: &mut [f64],
+    n: usize,
+    p: usize,
+    tau: &mut [f64],
+    norms: &mut [f64],
+    z: &mut [f64],
+) -> Result<(), Singular> {
+    if p > n || ct[..n * p].iter().any(|v| !v.is_finite()) {
+        return Err(Singular);
+    }
+    let ct = &mut ct[..n * p];
+    column_norms(ct, n, &mut norms[..p]);
+    householder_qr(ct, n, p, &mut tau[..p]);
+    if !full_rank(ct, n, &norms[..p], n) {
+        return Err(Singular);
+    }
+    // Column l of Z is Q e_{p+l} = H₁ (H₂ ( ⋯ H_p e_{p+l})).
+    for (l, col) in z[..n * (n - p)].chunks_exact_mut(n).enumerate() {
+        col.fill(0.0);
+        col[p + l] = 1.0;
+        for (j, &t) in tau[..p].iter().enumerate().rev() {
+            let v = &ct[j * n..(j + 1) * n];
+            reflect(&v[j + 1..], t, &mut col[j..]);
+        }
+    }
+    Ok(())
+}
+
 /// Solve the problem of the [module documentation](self) for one
 /// right-hand side, allocating: a convenience for tests and initialisation.
 ///
