@@ -298,7 +298,7 @@ impl Run<'_> {
         };
         integ.start(self.t0, self.y0, self.yp0, h0);
         let result = driver::drive(&mut integ, driver::report(out, steps, opts.record_steps));
-        add_stats(stats, &integ.stats);
+        *stats += integ.stats;
         result
     }
 
@@ -357,7 +357,7 @@ impl Run<'_> {
                 start.emit(it.t, |tau, o| it.dense(tau, o));
                 out.emit(it.t, |tau, o| it.dense(tau, o));
             });
-            add_stats(stats, &integ.stats);
+            *stats += integ.stats;
             result?;
             if opts.record_steps {
                 for (t, y) in start.times().iter().zip(start.values()) {
@@ -389,19 +389,9 @@ impl Run<'_> {
             integ.start_from_history(grid(k - 1), &history, h);
         }
         let result = driver::drive(&mut integ, driver::report(out, steps, opts.record_steps));
-        add_stats(stats, &integ.stats);
+        *stats += integ.stats;
         result
     }
-}
-
-/// Sum work counters.
-fn add_stats(total: &mut Stats, part: &Stats) {
-    total.steps += part.steps;
-    total.rejected += part.rejected;
-    total.residual_evals += part.residual_evals;
-    total.jacobian_evals += part.jacobian_evals;
-    total.factorizations += part.factorizations;
-    total.newton_iterations += part.newton_iterations;
 }
 
 /// Settings of one integrator.

@@ -150,7 +150,7 @@ use crate::core::matrix::{Rows, SquareStages, StageSystems};
 use crate::core::newton::{Contraction, Rule, Verdict};
 use crate::core::policy;
 use crate::core::weights::Weights;
-use crate::linalg::Singular;
+use crate::linalg::{mat_vec, Singular};
 use crate::options::Options;
 use crate::{NotApplicable, Problem, Solution, SolveError, Solver, Stats};
 use dae_core::system::{DaeSystem, FormulationInfo};
@@ -1008,19 +1008,6 @@ fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3] {
 /// its end value.
 fn polynomial_increment(d: &[f64; 3], s: f64) -> f64 {
     s * (d[0] + (s - C2M1) * (d[1] + (s - C1M1) * d[2]))
-}
-
-/// `out = m v` for a column-major `M × N` matrix.
-fn mat_vec(m: &DMatrix<f64>, v: &[f64], out: &mut [f64]) {
-    let rows = out.len();
-    let a = m.as_slice();
-    out.fill(0.0);
-    for (j, &vj) in v.iter().enumerate() {
-        let col = &a[j * rows..(j + 1) * rows];
-        for (o, &aij) in out.iter_mut().zip(col) {
-            *o += aij * vj;
-        }
-    }
 }
 
 #[cfg(test)]
