@@ -161,7 +161,6 @@ use crate::core::control::{self, Budget, Failure as Fail};
 use crate::core::driver::{self, Method};
 use crate::core::matrix::{Corrector, Rows, SquareLu};
 use crate::core::newton::{Contraction, Rule, Verdict};
-use crate::core::output::OutputGrid;
 use crate::core::policy;
 use crate::core::weights::Weights;
 use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
@@ -223,40 +222,34 @@ pub(crate) fn integrate<L: Corrector>(
 ) -> Result<Solution, SolveError> {
     let sys = problem.system;
     let info = sys.info();
-    let n = info.unknowns();
-    problem.check(n, options)?;
-    let (t0, t_end) = (problem.t0, problem.t_end);
+    problem.check(info.unknowns(), options)?;
+    let t0 = problem.t0;
 
     // Components in the error test and the Newton norm.
     let in_test = policy::bdf_error_test(info, options);
 
-    let mut stats = Stats::default();
+    let mut spent = Stats::default();
     let yp0 = initial_derivative_with(sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
-    stats.residual_evals += 1; // its f(t0, y0)
-    check_residuals(sys, &options.tol, t0, problem.y0, &yp0, &mut stats)?;
-
-    let mut out = OutputGrid::new(&options.output_times, t0, t_end, n);
-    out.start(t0, problem.y0);
-    let mut steps = Vec::new();
+    spent.residual_evals += 1; // its f(t0, y0)
+    check_residuals(sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
 
     let run = Run {
         sys,
         options,
         in_test: &in_test,
         t0,
-        t_end,
+        t_end: problem.t_end,
         y0: problem.y0,
         yp0: &yp0,
+        spent,
     };
     match options.fixed_step {
-        Some(h) => run.fixed::<L>(h, &mut out, &mut steps, &mut stats)?,
-        None => run.adaptive::<L>(&mut out, &mut steps, &mut stats)?,
+        Some(h) => run.fixed::<L>(h),
+        None => run.adaptive::<L>(),
     }
-    let (t, y) = out.finish();
-    Ok(Solution { t, y, steps, stats })
 }
 
-/// Everything a run needs besides its outputs.
+/// Everything a run needs, and what the driver is asked to do with it.
 struct Run<'a> {
     sys: &'a dyn DaeSystem,
     options: &'a Options,
@@ -265,16 +258,22 @@ struct Run<'a> {
     t_end: f64,
     y0: &'a [f64],
     yp0: &'a [f64],
+    /// Work before the first step (the initial derivative and the
+    /// consistency check), counted with the first run.
+    spent: Stats,
 }
 
-impl Run<'_> {
+impl<'a> Run<'a> {
+    /// An integrator with settings `cfg` whose work counters start at
+    /// `stats`.
+    fn integrator<L: Corrector>(&self, cfg: Config, stats: Stats) -> Integrator<'a, L> {
+        let mut integ = Integrator::<L>::new(self.sys, &self.options.tol, self.in_test, cfg);
+        integ.stats = stats;
+        integ
+    }
+
     /// Error-controlled integration over `[t0, t_end]`.
-    fn adaptive<L: Corrector>(
-        &self,
-        out: &mut OutputGrid,
-        steps: &mut Vec<(f64, Vec<f64>)>,
-        stats: &mut Stats,
-    ) -> Result<(), SolveError> {
+    fn adaptive<L: Corrector>(&self) -> Result<Solution, SolveError> {
         let opts = self.options;
         let span = self.t_end - self.t0;
         let (maxord, fixed_order) = match opts.fixed_order {
@@ -290,29 +289,21 @@ impl Run<'_> {
             t_end: self.t_end,
             span,
         };
-        let mut integ = Integrator::<L>::new(self.sys, &opts.tol, self.in_test, cfg);
+        let mut integ = self.integrator::<L>(cfg, self.spent);
         let h0 = match opts.h0 {
             // Clipped before φ_2 = h y'₀ is formed, which could overflow.
             Some(h) => h.min(cfg.hmax).min(span),
             None => integ.initial_step(self.y0, self.yp0),
         };
         integ.start(self.t0, self.y0, self.yp0, h0);
-        let result = driver::drive(&mut integ, driver::report(out, steps, opts.record_steps));
-        *stats += integ.stats;
-        result
+        driver::solve(&mut integ, opts, self.t0, self.t_end)
     }
 
     /// Constant step size, order `k`, no error control; the `k−1` starting
-    /// values come from an adaptive run at the caller's tolerances.
-    fn fixed<L: Corrector>(
-        &self,
-        h_request: f64,
-        out: &mut OutputGrid,
-        steps: &mut Vec<(f64, Vec<f64>)>,
-        stats: &mut Stats,
-    ) -> Result<(), SolveError> {
+    /// values come from an adaptive run at the caller's tolerances, which
+    /// the driver runs first ([`driver::solve_with_startup`]).
+    fn fixed<L: Corrector>(&self, h_request: f64) -> Result<Solution, SolveError> {
         let opts = self.options;
-        let n = self.y0.len();
         let span = self.t_end - self.t0;
         let k = opts.fixed_order.unwrap_or(opts.max_order);
         let ratio = span / h_request;
@@ -336,61 +327,58 @@ impl Run<'_> {
                 self.t0 + j as f64 * h
             }
         };
-
-        // Starting values y(t0 + j h), j = 0 … m.
-        let m = (k - 1).min(nsteps);
-        let mut start = OutputGrid::at(n, (1..=m).map(grid));
-        if m > 0 {
-            let cfg = Config {
-                maxord: MAX_ORDER,
-                fixed_order: false,
-                fixed_step: false,
-                hmax: span,
-                max_steps: opts.max_steps,
-                t_end: grid(m),
-                span,
-            };
-            let mut integ = Integrator::<L>::new(self.sys, &opts.tol, self.in_test, cfg);
-            let h0 = integ.initial_step(self.y0, self.yp0).min(h);
-            integ.start(self.t0, self.y0, self.yp0, h0);
-            let result = driver::drive(&mut integ, |it| {
-                start.emit(it.t, |tau, o| it.dense(tau, o));
-                out.emit(it.t, |tau, o| it.dense(tau, o));
-            });
-            *stats += integ.stats;
-            result?;
-            if opts.record_steps {
-                for (t, y) in start.times().iter().zip(start.values()) {
-                    steps.push((*t, y.clone()));
-                }
-            }
-            if m == nsteps {
-                return Ok(());
-            }
-        }
-
-        let cfg = Config {
+        // The constant-step run, within what is left of the step budget
+        // after the work `spent` before it.
+        let constant = |spent: Stats| Config {
             maxord: k,
             fixed_order: true,
             fixed_step: true,
             hmax: h,
-            max_steps: opts.max_steps.saturating_sub(stats.steps + stats.rejected),
+            max_steps: opts.max_steps.saturating_sub(spent.steps + spent.rejected),
             t_end: self.t_end,
             span,
         };
-        let mut integ = Integrator::<L>::new(self.sys, &opts.tol, self.in_test, cfg);
-        if k == 1 {
+
+        // Starting values y(t0 + j h), j = 1 … m.
+        let m = (k - 1).min(nsteps);
+        if m == 0 {
+            // Order one starts from y₀ and y'₀ alone.
+            let mut integ = self.integrator::<L>(constant(self.spent), self.spent);
             integ.start(self.t0, self.y0, self.yp0, h);
-        } else {
+            return driver::solve(&mut integ, opts, self.t0, self.t_end);
+        }
+        let cfg = Config {
+            maxord: MAX_ORDER,
+            fixed_order: false,
+            fixed_step: false,
+            hmax: span,
+            max_steps: opts.max_steps,
+            t_end: grid(m),
+            span,
+        };
+        let mut startup = self.integrator::<L>(cfg, self.spent);
+        let h0 = startup.initial_step(self.y0, self.yp0).min(h);
+        startup.start(self.t0, self.y0, self.yp0, h0);
+        let build = |startup: &Integrator<'a, L>, values: &[Vec<f64>]| {
+            if m == nsteps {
+                return None;
+            }
+            let mut integ = self.integrator::<L>(constant(startup.stats), Stats::default());
             // Values at t0, …, t0 + (k−1) h, oldest first.
             let mut history: Vec<&[f64]> = Vec::with_capacity(k);
             history.push(self.y0);
-            history.extend(start.values().iter().map(|v| v.as_slice()));
+            history.extend(values.iter().map(|v| v.as_slice()));
             integ.start_from_history(grid(k - 1), &history, h);
-        }
-        let result = driver::drive(&mut integ, driver::report(out, steps, opts.record_steps));
-        *stats += integ.stats;
-        result
+            Some(integ)
+        };
+        driver::solve_with_startup(
+            &mut startup,
+            (1..=m).map(grid),
+            build,
+            opts,
+            self.t0,
+            self.t_end,
+        )
     }
 }
 
