@@ -168,7 +168,7 @@ impl<S: StageSystems> Integrator<'_, S> {
     }
 
     /// Stage residuals `G_i(Z) = E(Y_i) Y'_i − f(t + c_i h, Y_i)` into `res`.
-    pub(super) fn stage_residuals(&mut self, t: f64, h: f64) {
+    fn stage_residuals(&mut self, t: f64, h: f64) {
         let (n, m) = (self.n, self.m);
         let w = &mut self.w;
         for (i, &ci) in C.iter().enumerate() {

@@ -4,12 +4,12 @@
 //! iteration.
 
 /// Nodes `c₁ = (4 − √6)/10`, `c₂ = (4 + √6)/10`, `c₃ = 1`.
-pub(super) const C1: f64 = 0.1550510257216822;
-pub(super) const C2: f64 = 0.6449489742783178;
+const C1: f64 = 0.1550510257216822;
+const C2: f64 = 0.6449489742783178;
 pub(super) const C: [f64; 3] = [C1, C2, 1.0];
-pub(super) const C1M1: f64 = C1 - 1.0;
-pub(super) const C2M1: f64 = C2 - 1.0;
-pub(super) const C1MC2: f64 = C1 - C2;
+const C1M1: f64 = C1 - 1.0;
+const C2M1: f64 = C2 - 1.0;
+const C1MC2: f64 = C1 - C2;
 
 /// `A⁻¹` of the Radau IIA(3) matrix `A` (the stage derivatives of the
 /// collocation polynomial are `(1/h) A⁻¹ Z`).
