@@ -1,6 +1,7 @@
 //! Machine-independent work counters.
 
 use serde::Serialize;
+use std::ops::AddAssign;
 
 /// What an integration cost, in counts that do not depend on the machine.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -17,4 +18,17 @@ pub struct Stats {
     pub factorizations: usize,
     /// Newton iterations, summed over all attempted steps.
     pub newton_iterations: usize,
+}
+
+impl AddAssign for Stats {
+    /// Add the counters of `part`, e.g. of a second run within one
+    /// integration.
+    fn add_assign(&mut self, part: Stats) {
+        self.steps += part.steps;
+        self.rejected += part.rejected;
+        self.residual_evals += part.residual_evals;
+        self.jacobian_evals += part.jacobian_evals;
+        self.factorizations += part.factorizations;
+        self.newton_iterations += part.newton_iterations;
+    }
 }

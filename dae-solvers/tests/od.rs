@@ -985,7 +985,7 @@ fn square_formulations_adaptive_agree_with_the_square_solvers() {
         }
         // Step attempts (accepted and rejected): the same to a few steps
         // for odradau (measured: equal, or one apart). odbdf's tighter
-        // corrector (see `bdf::NEWTON_TOL_LEAST_SQUARES`) makes its error
+        // corrector (see `bdf::corrector::NEWTON_TOL_LEAST_SQUARES`) makes its error
         // estimate cleaner: fewer attempts, never more than bdf's (measured
         // 930/1171 on rcd0).
         let (na, nb) = (sa.steps + sa.rejected, sb.steps + sb.rejected);

@@ -8,6 +8,12 @@
 //! method reaches `t_end`, fills the output grid of [`super::output`] by
 //! dense output as each step covers its times, records the step points when
 //! asked, and assembles the [`Solution`] with the method's statistics.
+//!
+//! A method that needs starting values from another run — BDF with a
+//! constant step takes its first `k − 1` values from an adaptive run — is
+//! two runs of one integration: [`solve_with_startup`] runs the start-up
+//! method, hands its values at the times the second run asks for to the
+//! function that builds that run, and reports both as one solution.
 
 use super::output::OutputGrid;
 use crate::{Options, Solution, SolveError, Stats};
@@ -33,10 +39,7 @@ pub(crate) trait Method {
 
 /// Step `method` to the end, calling `after_step` after every accepted
 /// step.
-pub(crate) fn drive<M: Method>(
-    method: &mut M,
-    mut after_step: impl FnMut(&M),
-) -> Result<(), SolveError> {
+fn drive<M: Method>(method: &mut M, mut after_step: impl FnMut(&M)) -> Result<(), SolveError> {
     while !method.finished() {
         method.step()?;
         after_step(method);
@@ -44,23 +47,56 @@ pub(crate) fn drive<M: Method>(
     Ok(())
 }
 
-/// What the driver does after each accepted step: fill the output grid up
-/// to the new time by dense output, and record the step point if asked.
-pub(crate) fn report<'a, M: Method>(
-    grid: &'a mut OutputGrid,
-    steps: &'a mut Vec<(f64, Vec<f64>)>,
+/// What the driver reports of an integration: the output grid and, when
+/// [`Options::record_steps`] asks for them, the step points.
+struct Report {
+    grid: OutputGrid,
+    steps: Vec<(f64, Vec<f64>)>,
     record: bool,
-) -> impl FnMut(&M) + 'a {
-    move |m: &M| {
-        grid.emit(m.t(), |tau, out| m.dense(tau, out));
-        if record {
-            steps.push((m.t(), m.y().to_vec()));
+}
+
+impl Report {
+    /// The output grid of `options` on `[t0, t_end]`, reporting `y0` at the
+    /// times not after `t0`.
+    fn new(options: &Options, t0: f64, t_end: f64, y0: &[f64]) -> Self {
+        let mut grid = OutputGrid::new(&options.output_times, t0, t_end, y0.len());
+        grid.start(t0, y0);
+        Report {
+            grid,
+            steps: Vec::new(),
+            record: options.record_steps,
+        }
+    }
+
+    /// Fill the output grid up to the time of `method` by its dense output.
+    fn fill<M: Method>(&mut self, method: &M) {
+        self.grid
+            .emit(method.t(), |tau, out| method.dense(tau, out));
+    }
+
+    /// After an accepted step of `method`: fill the grid, and record the
+    /// step point if asked.
+    fn step<M: Method>(&mut self, method: &M) {
+        self.fill(method);
+        if self.record {
+            self.steps.push((method.t(), method.y().to_vec()));
+        }
+    }
+
+    /// The [`Solution`] with the work counters `stats`.
+    fn finish(self, stats: Stats) -> Solution {
+        let (t, y) = self.grid.finish();
+        Solution {
+            t,
+            y,
+            steps: self.steps,
+            stats,
         }
     }
 }
 
-/// Run `method` from `t0` (values `y0`) to `t_end` with the output rule of
-/// [`OutputGrid`] and [`Options::record_steps`], and return the
+/// Run `method` from `t0` (its current values) to `t_end` with the output
+/// rule of [`OutputGrid`] and [`Options::record_steps`], and return the
 /// [`Solution`].
 pub(crate) fn solve<M: Method>(
     method: &mut M,
@@ -68,15 +104,40 @@ pub(crate) fn solve<M: Method>(
     t0: f64,
     t_end: f64,
 ) -> Result<Solution, SolveError> {
-    let mut grid = OutputGrid::new(&options.output_times, t0, t_end, method.y().len());
-    grid.start(t0, method.y());
-    let mut steps = Vec::new();
-    drive(method, report(&mut grid, &mut steps, options.record_steps))?;
-    let (t, y) = grid.finish();
-    Ok(Solution {
-        t,
-        y,
-        steps,
-        stats: method.stats(),
-    })
+    let mut report = Report::new(options, t0, t_end, method.y());
+    drive(method, |m| report.step(m))?;
+    Ok(report.finish(method.stats()))
+}
+
+/// Run `startup` from `t0` (its current values) to its end, then the
+/// method `build` makes of it and of its values at the `handover` times
+/// (ascending, in the start-up run's horizon) on to `t_end` — or nothing,
+/// when the start-up run has covered the horizon — as one integration.
+/// Each run fills the output grid where it steps; the step points recorded
+/// for the start-up run are the handover points, not its own steps; the
+/// work counters are summed.
+pub(crate) fn solve_with_startup<A: Method, B: Method>(
+    startup: &mut A,
+    handover: impl IntoIterator<Item = f64>,
+    build: impl FnOnce(&A, &[Vec<f64>]) -> Option<B>,
+    options: &Options,
+    t0: f64,
+    t_end: f64,
+) -> Result<Solution, SolveError> {
+    let mut report = Report::new(options, t0, t_end, startup.y());
+    let mut start = OutputGrid::at(startup.y().len(), handover);
+    drive(startup, |m| {
+        start.emit(m.t(), |tau, out| m.dense(tau, out));
+        report.fill(m);
+    })?;
+    if report.record {
+        let points = start.times().iter().zip(start.values());
+        report.steps.extend(points.map(|(t, y)| (*t, y.clone())));
+    }
+    let mut stats = startup.stats();
+    if let Some(mut run) = build(startup, start.values()) {
+        drive(&mut run, |m| report.step(m))?;
+        stats += run.stats();
+    }
+    Ok(report.finish(stats))
 }

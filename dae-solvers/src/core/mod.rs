@@ -14,14 +14,17 @@
 //!   between) and dense output.
 //! - `driver`: the step loop — a method implements `driver::Method`
 //!   (start, one accepted step, dense output), the driver steps to the end,
-//!   fills the output grid, records steps and assembles the solution.
+//!   fills the output grid, records steps and assembles the solution — also
+//!   for a start-up run feeding a second run (BDF with a constant step), so
+//!   that no method assembles a solution itself.
 //! - [`policy`]: the defaults a formulation implies (which unknowns enter the
 //!   error test, square or least-squares linear algebra), decided in one
 //!   place for the library and the command line alike.
 //!
 //! A method family (`radau5`, `bdf`, `odradau`, `odbdf`) keeps in its own
 //! module only its coefficients, predictor, corrector sweep, error estimate,
-//! step/order proposal and dense output.
+//! step/order proposal and dense output; `radau5` and `bdf` are directory
+//! modules, one file to each of these parts.
 
 pub(crate) mod control;
 pub(crate) mod driver;

@@ -1,0 +1,233 @@
+//! Variable-order, variable-step BDF in fixed-leading-coefficient form, after
+//! DASSL and DASPK (Brenan, Campbell & Petzold, *Numerical Solution of
+//! Initial-Value Problems in Differential-Algebraic Equations*, SIAM 1996,
+//! chapter 5 — "BCP" below).
+//!
+//! # The problem
+//!
+//! A square quasi-linear DAE
+//!
+//! ```text
+//!     F(t, y, y') = E(y) y' − f(t, y) = 0,        y ∈ ℝᴺ,
+//! ```
+//!
+//! integrated from consistent initial values `y(t₀) = y₀` supplied by the
+//! caller; the initial derivative `y'₀` is computed here (see
+//! [Initial derivative](#initial-derivative)).
+//!
+//! # The method (BCP ch. 5, basic formulas)
+//!
+//! At step `n+1` of size `h = t_{n+1} − t_n` and order `k` the solution is
+//! represented by the *modified divided differences*
+//!
+//! ```text
+//!     φ_1(n) = y_n,   φ_{i+1}(n) = ψ_1(n)⋯ψ_i(n) · y[t_n, …, t_{n−i}],
+//!     ψ_i(n+1) = t_{n+1} − t_{n+1−i},
+//! ```
+//!
+//! rescaled for the new step to `φ*_i(n) = β_i(n+1) φ_i(n)` with
+//! `β_i(n+1) = Π_{j<i} ψ_j(n+1)/ψ_j(n)`.
+//!
+//! *Predictor*: the polynomial through the last `k+1` solution values,
+//!
+//! ```text
+//!     y⁽⁰⁾ = Σ_{i=1}^{k+1} φ*_i(n),      y'⁽⁰⁾ = Σ_{i=2}^{k+1} γ_i(n+1) φ*_i(n),
+//!     γ_1 = 0,  γ_i = γ_{i−1} + α_{i−1}/h,   α_i = h/ψ_i(n+1).
+//! ```
+//!
+//! *Corrector* (fixed leading coefficient): the polynomial that interpolates
+//! the predictor at the `k` points `t_{n+1} − jh`, `j = 1..k` (equally
+//! spaced, whatever the past steps were) and satisfies the DAE at `t_{n+1}`:
+//!
+//! ```text
+//!     y' = y'⁽⁰⁾ + c_J (y − y⁽⁰⁾),     c_J = −α_s/h,   α_s = −Σ_{j=1}^{k} 1/j,
+//!     F(t_{n+1}, y, y'⁽⁰⁾ + c_J (y − y⁽⁰⁾)) = 0.
+//! ```
+//!
+//! Because `c_J` depends on `h` and `k` only, the iteration matrix
+//!
+//! ```text
+//!     G = ∂F/∂y + c_J ∂F/∂y' = ∂(E(y) y')/∂y − ∂f/∂y + c_J E(y)
+//! ```
+//!
+//! can be reused over many steps of different size (BCP ch. 5, nonlinear
+//! system solution). A modified
+//! Newton iteration solves the corrector; when `c_J` has changed since `G`
+//! was factored, each Newton update is damped by `2/(1 + c_J/c_J^old)`.
+//! Its convergence rate `ρ` is estimated from successive updates, and the
+//! iteration is accepted when `ρ/(1−ρ) · ‖δ‖ ≤ 0.33`, abandoned when
+//! `ρ > 0.9` or after four iterations. `G` is
+//! re-evaluated and re-factored when `c_J/c_J^old ∉ [0.6, 5/3]` or when the
+//! iteration fails with an old matrix.
+//!
+//! *Error estimate* (BCP ch. 5): with `e = y_{n+1} − y⁽⁰⁾` the accumulated
+//! Newton corrections, the local error of the step is estimated as
+//! `C_k ‖e‖` with `C_k = max(|α_{k+1} + α_s − α⁰|, α_{k+1})`,
+//! `α⁰ = −Σ_{i=1}^{k} α_i`; the step is accepted when it is at most one in
+//! the weighted RMS norm `‖v‖ = (Σ (v_i w_i)²/N)^{1/2}` over the `N`
+//! components in the test, `w_i = 1/(atol_i + rtol_i |y_{n,i}|)`.
+//!
+//! *Order and step selection* (BCP ch. 5, stepsize and order selection):
+//! the leading error terms at orders `k−2 … k+1` are estimated from `e` and
+//! the differences `φ*` (`TERK`, `TERKM1`, …). The order is lowered when the lower-order terms
+//! decrease less regularly, raised after `k+1` steps of constant size when
+//! the `(k+2)`-nd difference is small, and the next step is
+//! `h·r`, `r = (2·EST + 10⁻⁴)^{−1/(k+1)}`, changed only when `r ≥ 2`
+//! (then `r = 2`) or `r ≤ 1` (then clamped to `[0.5, 0.9]`). The start is
+//! DASSL's: order one, a step `h₀ ≤ 0.5/‖y'₀‖`, then order +1 and step ×2
+//! at every step until the first failure or lowering (`IPHASE`).
+//! Failures: error test — first `r = 0.9 (2·EST)^{−1/(k+1)}` clamped to
+//! `[0.25, 0.9]`, second `r = 1/4`, later order one and `r = 1/4`; Newton
+//! failure and singular `G` — `r = 1/4`, within the failure budget of
+//! `core::control` (ten Newton failures, five singular matrices, ten
+//! non-finite residuals on one step).
+//!
+//! *Dense output* (DASSL's DDATRP): between steps the solution is the
+//! polynomial of degree `k` through the last `k+1` solution values,
+//! `y(t) = Σ_{i=1}^{k+1} c_i(t) φ_i(n+1)`.
+//!
+//! # Options
+//!
+//! - [`Options::max_order`] bounds the order; [`Options::fixed_order`] `= k`
+//!   (adaptive steps) raises the order to `k` as fast as the start allows and
+//!   never lowers it by order selection — only DASSL's emergency fall-back to
+//!   order one after three error-test failures on one step, followed by a
+//!   rise of one order per step.
+//! - [`Options::h0`] replaces the initial step, [`Options::h_max`] bounds
+//!   every step, [`Options::max_steps`] counts accepted and rejected steps.
+//! - The step size falling below `4 ε max(|t|, ε (t_end − t₀))` is
+//!   [`SolveError::StepSizeTooSmall`]. The last steps are adjusted so that
+//!   the integration ends exactly at `t_end` without a tiny final step: a
+//!   step is stretched by up to 10 % to reach `t_end`, or what remains of
+//!   two steps is split evenly.
+//! - Output at [`Options::output_times`] is interpolated (the steps do not
+//!   stop there).
+//!
+//! # Index-2 formulations (DASPK)
+//!
+//! By default ([`Options::index2_in_error_test`] `= None`, decided in
+//! [`crate::core::policy::bdf_error_test`]; `Some(false)` says the same
+//! explicitly, `Some(true)` keeps them), unknowns whose
+//! [`VarInfo::index`](dae_core::system::VarInfo) is two or more (Lagrange
+//! multipliers of index-2 formulations) get weight zero in the error test and
+//! in the Newton convergence norm, which then averages over the remaining
+//! components only. For an index-2 multiplier the difference between
+//! corrector and predictor is not an estimate of a local error that shrinks
+//! like `h^{k+1}` (BCP ch. 3 on BDF for index-2 systems, ch. 5 on
+//! higher-index systems in DASSL); kept in the test it drives the step
+//! size to zero (DASPK's `INFO(16)`; the paper's DASSL/DASPK runs show it).
+//!
+//! # Initial derivative
+//!
+//! `y'₀` is computed as by [`crate::init::initial_derivative`]: the
+//! minimum-norm least-squares solution of `E(y₀) y' = f(t₀, y₀)` (by SVD, so
+//! the derivatives of purely algebraic unknowns are zero), completed in the
+//! null space of `E(y₀)` by the time derivatives of the model's constraint
+//! chain, `G_y(t₀,y₀) y' + ∂g/∂t = 0` — again in the least-squares
+//! minimum-norm sense and without changing `E y'`. For the projected
+//! formulations this recovers the derivatives that `E` leaves undetermined,
+//! so the first predictor is right. Two choices differ from that function:
+//! the rank of `E` is the numerical rank at round-off (`σ ≤ N ε σ_max` counts
+//! as zero), so that every nonsingular `E` is inverted however badly it is
+//! scaled, and a constraint chain that cannot be differentiated at `t₀` (not
+//! finite) leaves the null-space components at zero instead of failing. The
+//! initial values are then checked: a row whose residual exceeds what a
+//! perturbation of every unknown by its tolerance could cause gives
+//! [`SolveError::InconsistentInitialValues`].
+//!
+//! # Fixed step size (convergence studies)
+//!
+//! With [`Options::fixed_step`] the grid is `t₀ + jh` with
+//! `h = (t_end − t₀)/⌈(t_end − t₀)/fixed_step⌉`, the order is
+//! [`Options::fixed_order`] (else [`Options::max_order`]) and there is no
+//! error test. A `k`-step method needs `k` starting values: `y(t₀ + jh)`,
+//! `j = 1 … k−1`, are computed by this solver in adaptive mode with the
+//! caller's tolerances (choose them well below the discretisation error to
+//! observe the order) and interpolated onto the grid; from then on every
+//! step is the classical constant-step BDF-`k` formula. Starting with lower
+//! orders at the given step would cap the observed order at two. The work
+//! counters include the start-up run; [`Options::record_steps`] lists the
+//! grid points. The corrector may take up to 20 Newton iterations (no
+//! smaller step can rescue it) and a failure is final.
+//!
+//! # Resources
+//!
+//! All buffers — history, iteration matrix and its in-place LU
+//! factorisation, output rows — are allocated before the step loop; the loop
+//! itself does not allocate, except to record every step when
+//! [`Options::record_steps`] asks for it.
+
+mod corrector;
+mod history;
+mod order;
+mod run;
+mod step;
+
+use crate::core::matrix::{Corrector, SquareLu};
+use crate::core::policy;
+use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
+use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver, Stats};
+use dae_core::system::FormulationInfo;
+use run::Run;
+
+/// Variable-order (1–5), variable-step BDF in fixed-leading-coefficient form
+/// (DASSL/DASPK). See the [module documentation](self).
+pub struct Bdf;
+
+impl Solver for Bdf {
+    fn name(&self) -> &'static str {
+        "bdf"
+    }
+
+    fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable> {
+        policy::square(info)
+    }
+
+    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+        self.accepts(problem.system.info())?;
+        integrate::<SquareLu>(problem, options)
+    }
+}
+
+/// Highest order of the method.
+const MAX_ORDER: usize = 5;
+/// Columns of the history array `φ` (orders up to 5 use `φ_1 … φ_{k+2}`).
+const NCOL: usize = MAX_ORDER + 2;
+/// Unit round-off.
+const EPS: f64 = f64::EPSILON;
+
+/// Integrate `problem` with the BDF method, the corrector solved by `L`
+/// (square LU, or least squares for [`crate::odbdf`]); the caller has
+/// checked that the solver accepts the formulation.
+pub(crate) fn integrate<L: Corrector>(
+    problem: &Problem<'_>,
+    options: &Options,
+) -> Result<Solution, SolveError> {
+    let sys = problem.system;
+    let info = sys.info();
+    problem.check(info.unknowns(), options)?;
+    let t0 = problem.t0;
+
+    // Components in the error test and the Newton norm.
+    let in_test = policy::bdf_error_test(info, options);
+
+    let mut spent = Stats::default();
+    let yp0 = initial_derivative_with(sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
+    spent.residual_evals += 1; // its f(t0, y0)
+    check_residuals(sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
+
+    let run = Run {
+        sys,
+        options,
+        in_test: &in_test,
+        t0,
+        t_end: problem.t_end,
+        y0: problem.y0,
+        yp0: &yp0,
+        spent,
+    };
+    match options.fixed_step {
+        Some(h) => run.fixed::<L>(h),
+        None => run.adaptive::<L>(),
+    }
+}

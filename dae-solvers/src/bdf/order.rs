@@ -1,0 +1,140 @@
+//! The error estimate and the choice of the next step (blocks 4 and 5): the
+//! error test with the error terms of the neighbouring orders, and the
+//! order and step size proposed after an accepted step.
+
+use super::step::Integrator;
+use crate::core::matrix::Corrector;
+
+/// Result of DASSL's error test (block 4), kept for order selection.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ErrorTest {
+    /// `C_k ‖e‖`: the step is accepted when at most 1.
+    pub(super) err: f64,
+    /// Error estimate at the order proposed for the next step.
+    pub(super) est: f64,
+    /// Proposed order (`k` or `k−1`).
+    pub(super) knew: usize,
+    /// `(k+1)·σ_{k+1}‖e‖`: leading error term at order `k`.
+    pub(super) terk: f64,
+    /// Same at order `k−1`.
+    pub(super) terkm1: f64,
+    /// `σ_k ‖e + φ*_{k+1}‖`: error estimate at order `k−1`.
+    pub(super) erkm1: f64,
+}
+
+impl<L: Corrector> Integrator<'_, L> {
+    /// Block 4: local error estimate and the error terms of orders
+    /// `k−2 … k` (BCP ch. 5).
+    pub(super) fn error_test(&mut self) -> ErrorTest {
+        let n = self.n;
+        let k = self.k;
+        let enorm = self.norm(&self.e);
+        let erk = self.sigma[k] * enorm;
+        let terk = (k + 1) as f64 * erk;
+        let mut test = ErrorTest {
+            err: self.ck * enorm,
+            est: erk,
+            knew: k,
+            terk,
+            terkm1: 0.0,
+            erkm1: 0.0,
+        };
+        if k > 1 {
+            for ((d, p), e) in self
+                .delta
+                .iter_mut()
+                .zip(&self.phi[k * n..(k + 1) * n])
+                .zip(&self.e)
+            {
+                *d = p + e;
+            }
+            let erkm1 = self.sigma[k - 1] * self.norm(&self.delta);
+            let terkm1 = k as f64 * erkm1;
+            let lower = if k > 2 {
+                for (d, p) in self.delta.iter_mut().zip(&self.phi[(k - 1) * n..k * n]) {
+                    *d += p;
+                }
+                let erkm2 = self.sigma[k - 2] * self.norm(&self.delta);
+                let terkm2 = (k - 1) as f64 * erkm2;
+                terkm1.max(terkm2) <= terk
+            } else {
+                terkm1 <= 0.5 * terk
+            };
+            test.erkm1 = erkm1;
+            test.terkm1 = terkm1;
+            if lower && !self.cfg.fixed_order {
+                test.knew = k - 1;
+                test.est = erkm1;
+            }
+        }
+        if test.err.is_nan() {
+            test.err = f64::INFINITY;
+        }
+        test
+    }
+
+    /// Block 5: accept the step, choose order and step size of the next one
+    /// (not in fixed-step mode), and update the differences `φ`.
+    pub(super) fn accept(&mut self, test: Option<ErrorTest>) {
+        let n = self.n;
+        let k = self.k;
+        let kdiff = k as isize - self.kold as isize;
+        self.kold = k;
+        self.hold = self.h;
+        self.stats.steps += 1;
+
+        let mut hnew = self.h;
+        if let Some(test) = test {
+            let maxord = self.cfg.maxord;
+            if test.knew + 1 == k || k == maxord {
+                self.ramp = false;
+            }
+            if self.ramp {
+                self.k = k + 1;
+                hnew = 2.0 * self.h;
+            } else {
+                let mut newk = k;
+                let mut est = test.est;
+                if self.cfg.fixed_order {
+                    newk = (k + 1).min(maxord);
+                } else if test.knew + 1 == k {
+                    newk = k - 1;
+                    est = test.erkm1;
+                } else if k < maxord && k + 1 < self.ns && kdiff != 1 {
+                    for ((d, e), p) in self
+                        .delta
+                        .iter_mut()
+                        .zip(&self.e)
+                        .zip(&self.phi[(k + 1) * n..(k + 2) * n])
+                    {
+                        *d = e - p;
+                    }
+                    let erkp1 = self.norm(&self.delta) / (k + 2) as f64;
+                    let terkp1 = (k + 2) as f64 * erkp1;
+                    if k == 1 {
+                        if terkp1 < 0.5 * test.terk {
+                            newk = k + 1;
+                            est = erkp1;
+                        }
+                    } else if test.terkm1 <= test.terk.min(terkp1) {
+                        newk = k - 1;
+                        est = test.erkm1;
+                    } else if terkp1 < test.terk {
+                        newk = k + 1;
+                        est = erkp1;
+                    }
+                }
+                self.k = newk;
+                let r = (2.0 * est + 1e-4).powf(-1.0 / (newk + 1) as f64);
+                if r >= 2.0 {
+                    hnew = 2.0 * self.h;
+                } else if r <= 1.0 {
+                    hnew = self.h * r.clamp(0.5, 0.9);
+                }
+            }
+        }
+        self.h = hnew;
+
+        self.update_differences(k);
+    }
+}

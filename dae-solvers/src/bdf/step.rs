@@ -1,0 +1,339 @@
+//! The integrator and its step loop (DASSL's `DDASTP`): the settings of a
+//! run, the state and workspace of the step, the driver's view of it, and
+//! one accepted step with its retries after failed attempts (block 6).
+
+use super::corrector::JacState;
+use super::order::ErrorTest;
+use super::{EPS, NCOL};
+use crate::core::control::{self, Budget, Failure as Fail};
+use crate::core::driver::Method;
+use crate::core::matrix::{Corrector, Rows};
+use crate::core::weights::Weights;
+use crate::options::Tolerances;
+use crate::{SolveError, Stats};
+use dae_core::system::DaeSystem;
+use nalgebra::DMatrix;
+
+/// Settings of one integrator.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Config {
+    /// Largest order.
+    pub(super) maxord: usize,
+    /// Never lower the order; raise it to `maxord` as soon as possible.
+    pub(super) fixed_order: bool,
+    /// Constant step, no error test.
+    pub(super) fixed_step: bool,
+    /// Largest step.
+    pub(super) hmax: f64,
+    /// Step attempts allowed (accepted + rejected).
+    pub(super) max_steps: usize,
+    /// Where to stop (never stepped over).
+    pub(super) t_end: f64,
+    /// Length of the whole horizon (scale of the smallest step).
+    pub(super) span: f64,
+}
+
+/// Why a step attempt was rejected.
+#[derive(Clone, Copy, Debug)]
+enum Failure {
+    /// The corrector did not converge.
+    Newton(Fail),
+    /// The local error estimate exceeded the tolerance.
+    ErrorTest(ErrorTest),
+}
+
+/// State and workspace of the DASSL step (`N` unknowns, `M ≥ N` rows).
+pub(super) struct Integrator<'a, L> {
+    /// The formulation.
+    pub(super) sys: &'a dyn DaeSystem,
+    /// Settings of this run.
+    pub(super) cfg: Config,
+    /// Unknowns `N`.
+    pub(super) n: usize,
+    /// `E` does not depend on `y`.
+    pub(super) constant_leading: bool,
+    /// Error weights (zero for components out of the test).
+    pub(super) weights: Weights,
+
+    /// Current time `t_n` (after a step: `t_{n+1}`).
+    pub(super) t: f64,
+    /// Step size of the next attempt.
+    pub(super) h: f64,
+    /// Step size of the last accepted step.
+    pub(super) hold: f64,
+    /// Order of the next attempt.
+    pub(super) k: usize,
+    /// Order of the last accepted step (0 before the first).
+    pub(super) kold: usize,
+    /// Number of steps taken with the current `h` and `k` (capped).
+    pub(super) ns: usize,
+    /// Initial phase: raise order and double `h` after every step.
+    pub(super) ramp: bool,
+    /// The current step reaches `t_end`: snap `t` to it.
+    pub(super) last: bool,
+
+    /// `ψ_i = t_{n+1} − t_{n+1−i}`.
+    pub(super) psi: [f64; NCOL],
+    /// `α_i = h/ψ_i`.
+    pub(super) alpha: [f64; NCOL],
+    /// `β_i = Π_{j<i} ψ_j(n+1)/ψ_j(n)`, the rescaling `φ → φ*`.
+    pub(super) beta: [f64; NCOL],
+    /// `γ_i` of the predicted derivative.
+    pub(super) gamma: [f64; NCOL],
+    /// `σ_i` of the error terms.
+    pub(super) sigma: [f64; NCOL],
+    /// Leading coefficient `c_J = −α_s/h`.
+    pub(super) cj: f64,
+    /// `c_J` with which the iteration matrix was formed.
+    pub(super) cjold: f64,
+    /// Error constant `C_k`.
+    pub(super) ck: f64,
+    /// Newton rate factor `ρ/(1−ρ)` (100 when unknown).
+    pub(super) s: f64,
+    /// Whether the iteration matrix is current.
+    pub(super) jac: JacState,
+    /// Newton iterations of the last attempt.
+    pub(super) last_iterations: usize,
+
+    /// History `φ_1 … φ_{NCOL}`, column `j` at `phi[j n .. (j+1) n]`.
+    pub(super) phi: Vec<f64>,
+    /// The corrector's iterate `y` (the predictor `y⁽⁰⁾` at first).
+    pub(super) y: Vec<f64>,
+    /// Its derivative `y'⁽⁰⁾ + c_J (y − y⁽⁰⁾)`.
+    pub(super) yp: Vec<f64>,
+    /// Residual (`M`), then Newton update (`N`); scratch of length `N`.
+    pub(super) delta: Vec<f64>,
+    /// Accumulated corrections `y − y⁽⁰⁾`.
+    pub(super) e: Vec<f64>,
+    /// Iteration matrix, factored in place.
+    pub(super) lu: L,
+    /// Row classes of a least-squares corrector.
+    pub(super) rows: Rows,
+    /// `E(y)`.
+    pub(super) lead: DMatrix<f64>,
+    /// `∂(E(y) y')/∂y`.
+    pub(super) lead_jac: DMatrix<f64>,
+
+    /// Work counters (of this run, and of the work before it that it was
+    /// started with).
+    pub(super) stats: Stats,
+    /// Step attempts (accepted + rejected) and failures on this step.
+    pub(super) budget: Budget,
+}
+
+impl<L: Corrector> Method for Integrator<'_, L> {
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.phi[..self.n]
+    }
+    fn dense(&self, tau: f64, out: &mut [f64]) {
+        self.interpolate(tau, out)
+    }
+    fn finished(&self) -> bool {
+        self.t >= self.cfg.t_end
+    }
+    fn step(&mut self) -> Result<(), SolveError> {
+        Integrator::step(self)
+    }
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+}
+
+impl<'a, L: Corrector> Integrator<'a, L> {
+    /// Allocate every buffer of the step loop.
+    pub(super) fn new(
+        sys: &'a dyn DaeSystem,
+        tol: &Tolerances,
+        in_test: &[bool],
+        cfg: Config,
+    ) -> Self {
+        let info = sys.info();
+        let (m, n) = (info.equations(), info.unknowns());
+        Integrator {
+            sys,
+            cfg,
+            n,
+            constant_leading: info.constant_leading,
+            weights: Weights::new(tol, |_| 1.0, in_test.to_vec(), vec![0; n]),
+            t: 0.0,
+            h: 0.0,
+            hold: 0.0,
+            k: 1,
+            kold: 0,
+            ns: 0,
+            ramp: true,
+            last: false,
+            psi: [0.0; NCOL],
+            alpha: [0.0; NCOL],
+            beta: [0.0; NCOL],
+            gamma: [0.0; NCOL],
+            sigma: [0.0; NCOL],
+            cj: 0.0,
+            cjold: 0.0,
+            ck: 0.0,
+            s: 100.0,
+            jac: JacState::Needed,
+            last_iterations: 0,
+            phi: vec![0.0; n * NCOL],
+            y: vec![0.0; n],
+            yp: vec![0.0; n],
+            delta: vec![0.0; m],
+            e: vec![0.0; n],
+            lu: L::new(m, n),
+            rows: Rows::new(info),
+            lead: DMatrix::zeros(m, n),
+            lead_jac: DMatrix::zeros(m, n),
+            stats: Stats::default(),
+            budget: Budget::new(cfg.max_steps),
+        }
+    }
+
+    /// DASSL's initial step: `0.001·(t_end − t₀)`, reduced so that
+    /// `h ‖y'₀‖ ≤ 0.5`, and at most `h_max`.
+    pub(super) fn initial_step(&mut self, y0: &[f64], yp0: &[f64]) -> f64 {
+        self.weights.update(y0);
+        let mut h = 0.001 * self.cfg.span;
+        let ypnorm = self.norm(yp0);
+        if ypnorm > 0.5 / h {
+            h = 0.5 / ypnorm;
+        }
+        h.min(self.cfg.hmax)
+    }
+
+    /// The weighted RMS norm over the components in the test.
+    pub(super) fn norm(&self, v: &[f64]) -> f64 {
+        self.weights.norm(v)
+    }
+
+    /// Smallest step allowed at `t`.
+    fn hmin(&self) -> f64 {
+        control::h_min(self.t, self.cfg.span)
+    }
+
+    /// Take one step (retrying with smaller steps or lower order as needed).
+    fn step(&mut self) -> Result<(), SolveError> {
+        self.weights.update(&self.phi[..self.n]);
+
+        // Step size limits and the end of the horizon.
+        let remaining = self.cfg.t_end - self.t;
+        let h_before = self.h;
+        if !self.cfg.fixed_step {
+            self.h = self.h.min(self.cfg.hmax);
+        }
+        // Reach t_end without a step that is tiny next to its predecessors:
+        // stretch the last step by up to 10 %, or split what remains of two
+        // steps into two equal ones.
+        self.last = if self.cfg.fixed_step {
+            remaining <= 1.5 * self.h
+        } else {
+            self.h >= remaining
+                || (remaining <= 1.1 * self.h && remaining <= self.cfg.hmax)
+                || remaining - self.h <= 4.0 * EPS * self.cfg.t_end.abs()
+        };
+        if self.last {
+            self.h = remaining;
+        } else if !self.cfg.fixed_step && remaining < 2.0 * self.h {
+            self.h = 0.5 * remaining;
+        }
+        if self.kold == 0 && self.h != h_before {
+            self.rescale_first_step(h_before);
+        }
+        if !self.last && self.h < self.hmin() {
+            return Err(SolveError::StepSizeTooSmall {
+                t: self.t,
+                h: self.h,
+            });
+        }
+
+        let mut nef = 0usize;
+        loop {
+            self.budget.attempt(self.t)?;
+            let t_old = self.t;
+            self.set_coefficients();
+            self.t = if self.last {
+                self.cfg.t_end
+            } else {
+                t_old + self.h
+            };
+
+            let failure = match self.corrector() {
+                Ok(()) if self.cfg.fixed_step => {
+                    self.accept(None);
+                    self.budget.accepted();
+                    if L::LEAST_SQUARES {
+                        // The point a least-squares corrector converges to
+                        // depends on its matrix: with constant steps a
+                        // matrix kept for many steps would bias every step
+                        // the same way. A fresh one each step.
+                        self.jac = JacState::Needed;
+                    }
+                    return Ok(());
+                }
+                Ok(()) => {
+                    let test = self.error_test();
+                    if test.err <= 1.0 {
+                        self.accept(Some(test));
+                        self.budget.accepted();
+                        return Ok(());
+                    }
+                    Failure::ErrorTest(test)
+                }
+                Err(fail) => Failure::Newton(fail),
+            };
+
+            // Block 6: the step failed.
+            self.stats.rejected += 1;
+            self.restore(t_old);
+            self.ramp = false;
+            self.last = false;
+            let h_failed = self.h;
+            let hmin = self.hmin();
+            match failure {
+                Failure::Newton(fail) => {
+                    if self.cfg.fixed_step {
+                        return Err(self.newton_error(fail, h_failed));
+                    }
+                    self.h *= 0.25;
+                    let limit_hit = self.budget.failed(fail);
+                    if limit_hit || self.h < hmin {
+                        return Err(self.newton_error(fail, h_failed));
+                    }
+                }
+                Failure::ErrorTest(test) => {
+                    nef += 1;
+                    if nef == 1 {
+                        self.k = test.knew;
+                        let r = 0.9 * (2.0 * test.est + 1e-4).powf(-1.0 / (self.k + 1) as f64);
+                        self.h *= r.clamp(0.25, 0.9);
+                    } else {
+                        // From the third failure on, order one, as DASSL:
+                        // at higher orders an algebraic component left off
+                        // its constraint by the Newton tolerance is an error
+                        // estimate that does not shrink with h. With a fixed
+                        // order it is raised again after the step.
+                        self.k = if nef == 2 { test.knew } else { 1 };
+                        self.h *= 0.25;
+                    }
+                    if self.h < hmin {
+                        return Err(SolveError::StepSizeTooSmall {
+                            t: self.t,
+                            h: self.h,
+                        });
+                    }
+                }
+            }
+            if self.kold == 0 {
+                self.rescale_first_step(h_failed);
+            }
+        }
+    }
+
+    /// The typed error for a Newton failure at the current time with step
+    /// size `h`.
+    fn newton_error(&self, fail: Fail, h: f64) -> SolveError {
+        Budget::error(fail, self.t, h, self.last_iterations)
+    }
+}

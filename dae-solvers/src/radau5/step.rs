@@ -1,0 +1,311 @@
+//! The integrator and its step loop (RADAU5's loop from label 10 to the
+//! acceptance of a step): the start at `t₀`, one accepted step with its
+//! retries, and the driver's view of it.
+
+use super::control::{classical_quotient, predictive_quotient, Control, Next};
+use super::stages::{Newton, Work};
+use super::tableau::dense;
+use super::{H0_DEFAULT, NIT, UROUND};
+use crate::core::control::{self, Budget, Failure};
+use crate::core::driver::Method;
+use crate::core::matrix::StageSystems;
+use crate::core::newton::{Contraction, Rule};
+use crate::options::Options;
+use crate::{Problem, SolveError, Stats};
+use dae_core::system::DaeSystem;
+
+/// The state of one Radau IIA 5 integration: the formulation, the buffers
+/// of the step loop, the work counters, the contraction monitor and the
+/// step-size controller.
+pub(super) struct Integrator<'a, S> {
+    /// The formulation.
+    pub(super) sys: &'a dyn DaeSystem,
+    /// The caller's options.
+    pub(super) options: &'a Options,
+    /// Unknowns `N`.
+    pub(super) n: usize,
+    /// Equations `M` (`M = N` unless the stage systems are least squares).
+    pub(super) m: usize,
+    /// Start of the horizon.
+    pub(super) t0: f64,
+    /// End of the horizon.
+    pub(super) t_end: f64,
+    /// `E` does not depend on `y`.
+    pub(super) constant_leading: bool,
+    /// Every buffer of the step loop.
+    pub(super) w: Work<S>,
+    /// Work counters.
+    pub(super) stats: Stats,
+    /// Contraction monitor; its `η` is carried from step to step and its
+    /// `θ` decides Jacobian reuse.
+    pub(super) newton: Contraction,
+    /// Step-size controller state.
+    pub(super) c: Control,
+}
+
+impl<S: StageSystems> Method for Integrator<'_, S> {
+    fn t(&self) -> f64 {
+        self.c.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.w.y
+    }
+    fn dense(&self, tau: f64, out: &mut [f64]) {
+        dense(self.n, &self.w.cont, tau, self.c.t, self.c.h_old, out)
+    }
+    fn finished(&self) -> bool {
+        self.c.done
+    }
+    fn step(&mut self) -> Result<(), SolveError> {
+        Integrator::step(self)
+    }
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+}
+
+impl<'a, S: StageSystems> Integrator<'a, S> {
+    /// The integrator of `problem` at `t₀`, its buffers allocated; nothing
+    /// is evaluated before [`Integrator::start`].
+    pub(super) fn new(problem: &Problem<'a>, options: &'a Options) -> Self {
+        let info = problem.system.info();
+        let (m, n) = (info.equations(), info.unknowns());
+        let mut w = Work::<S>::new(info, options);
+        w.y.copy_from_slice(problem.y0);
+        // RADAU5: fnewt = max(10 u / rtol, min(0.03, rtol^(1/2))), here
+        // with the smallest relative tolerance (an absolute one where all
+        // relative tolerances are zero), kept above 10 u.
+        let rmin = w
+            .weights
+            .rtol()
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let r = if rmin > 0.0 {
+            rmin
+        } else {
+            w.weights
+                .atol()
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min)
+        };
+        let r = r.max(10.0 * UROUND);
+        let fnewt = (10.0 * UROUND / r).max(0.03f64.min(r.sqrt()));
+        let rule = Rule::Radau5 {
+            slow_exit: options.fixed_step.is_none(),
+        };
+        let span = problem.t_end - problem.t0;
+        Integrator {
+            sys: problem.system,
+            options,
+            n,
+            m,
+            t0: problem.t0,
+            t_end: problem.t_end,
+            constant_leading: info.constant_leading,
+            w,
+            stats: Stats::default(),
+            newton: Contraction::new(rule, NIT, fnewt, 1.0),
+            c: Control {
+                t: problem.t0,
+                h: 0.0,
+                h_max: options.h_max.unwrap_or(span).min(span),
+                fixed: options.fixed_step,
+                last: false,
+                done: false,
+                first: true,
+                reject: false,
+                caljac: false,
+                h_old: 0.0,
+                h_acc: 0.0,
+                err_acc: 1e-2,
+                budget: Budget::new(options.max_steps),
+                next: Next::Jacobian,
+            },
+        }
+    }
+
+    /// `f(t, y_n)` into `f0`, and `E(y_n)` when it is not constant (or
+    /// `first`).
+    fn evaluate_at_step_point(&mut self, t: f64, first: bool) -> Result<(), SolveError> {
+        self.sys.rhs(t, &self.w.y, &mut self.w.f0);
+        self.stats.residual_evals += 1;
+        if self.w.f0.iter().any(|v| !v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                t,
+                what: "residual",
+            });
+        }
+        if first || !self.constant_leading {
+            self.sys.leading(&self.w.y, &mut self.w.e_n);
+            if self.w.e_n.iter().any(|v| !v.is_finite()) {
+                return Err(SolveError::NonFinite {
+                    t,
+                    what: "leading matrix",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Evaluate at `t₀` and choose the first step.
+    pub(super) fn start(&mut self) -> Result<(), SolveError> {
+        let (t0, t_end) = (self.t0, self.t_end);
+        let span = t_end - t0;
+        self.evaluate_at_step_point(t0, true)?;
+        let c = &mut self.c;
+        c.h = match c.fixed {
+            Some(hf) => hf,
+            // A tiny h0 is raised to well above the smallest step.
+            None => self
+                .options
+                .h0
+                .unwrap_or(H0_DEFAULT)
+                .min(c.h_max)
+                .max(100.0 * control::h_min(t0, span)),
+        };
+        if t0 + c.h >= t_end - c.end_slack(t0, c.h, t_end) {
+            c.h = span;
+            c.last = true;
+        }
+        c.h_old = c.h;
+        c.h_acc = c.h;
+        Ok(())
+    }
+
+    /// One accepted step from `c.t` (RADAU5's loop from label 10 to the
+    /// acceptance of a step), then the size of the next one.
+    fn step(&mut self) -> Result<(), SolveError> {
+        let t_end = self.t_end;
+        let span = t_end - self.t0;
+        loop {
+            let (t, h, fixed) = (self.c.t, self.c.h, self.c.fixed);
+            if fixed.is_none() && h < control::h_min(t, span) {
+                return Err(SolveError::StepSizeTooSmall { t, h });
+            }
+            if self.c.next == Next::Jacobian {
+                self.jacobian(t)?;
+                self.c.caljac = true;
+                self.c.next = Next::Factor;
+            }
+            if self.c.next == Next::Factor {
+                if self.factor(h).is_err() {
+                    let c = &mut self.c;
+                    if fixed.is_some() || c.budget.failed(Failure::Singular) {
+                        return Err(SolveError::SingularMatrix { t, h });
+                    }
+                    c.h *= 0.5;
+                    c.reject = true;
+                    c.last = false;
+                    c.next = c.after_failure();
+                    continue;
+                }
+                self.stats.factorizations += 1;
+            }
+            self.c.budget.attempt(t)?;
+
+            // ---- one step attempt from t with h ----
+            self.w.weights.update_scaled(&self.w.y, h);
+            self.starting_values(self.c.first, h / self.c.h_old);
+
+            let outcome = self.newton(t, h, fixed.is_none());
+            let newt = match outcome {
+                Newton::Converged(k) => k,
+                Newton::TooSlow { iterations, .. }
+                | Newton::Diverged(iterations)
+                | Newton::NonFinite(iterations) => iterations,
+            };
+            self.stats.newton_iterations += newt;
+
+            let failed_factor = match outcome {
+                Newton::Converged(_) => None,
+                Newton::TooSlow { factor, .. } => Some(factor),
+                Newton::Diverged(_) | Newton::NonFinite(_) => Some(0.5),
+            };
+            // Error estimate and proposed step (adaptive mode only).
+            let mut err = 0.0;
+            let mut h_new = h;
+            let mut non_finite = matches!(outcome, Newton::NonFinite(_));
+            let mut newton_failed = failed_factor.is_some();
+            if !newton_failed && fixed.is_none() {
+                err = self.error_norm(t, h, self.c.first || self.c.reject);
+                if err.is_finite() {
+                    h_new = h / classical_quotient(err, newt);
+                } else {
+                    non_finite = true;
+                    newton_failed = true;
+                }
+            }
+
+            let c = &mut self.c;
+            if newton_failed {
+                // ---- Newton failure (RADAU5's label 78) ----
+                self.stats.rejected += 1;
+                let failure = if non_finite {
+                    Failure::NonFinite("residual")
+                } else {
+                    Failure::Newton
+                };
+                let exhausted = c.budget.failed(failure);
+                if fixed.is_some() && !c.caljac {
+                    c.next = Next::Jacobian;
+                    continue;
+                }
+                if fixed.is_some() || exhausted {
+                    return Err(Budget::error(failure, t, h, newt));
+                }
+                c.h *= failed_factor.unwrap_or(0.5);
+                c.reject = true;
+                c.last = false;
+                c.next = c.after_failure();
+                continue;
+            }
+
+            if err >= 1.0 {
+                // ---- rejected by the error test ----
+                self.stats.rejected += 1;
+                c.reject = true;
+                c.last = false;
+                if c.first {
+                    c.h *= 0.1;
+                } else {
+                    c.h = h_new;
+                }
+                c.next = c.after_failure();
+                continue;
+            }
+
+            // ---- accepted ----
+            c.budget.accepted();
+            if fixed.is_none() {
+                if self.stats.steps > 0 {
+                    let quot = (h / h_new).max(predictive_quotient(err, c.err_acc, h, c.h_acc));
+                    h_new = h / quot;
+                }
+                c.h_acc = h;
+                c.err_acc = err.max(1e-2);
+            }
+            c.first = false;
+            c.t = if c.last { t_end } else { t + h };
+            c.h_old = h;
+            c.caljac = false;
+            self.advance(h);
+            self.stats.steps += 1;
+            let t = self.c.t;
+            if self.w.y.iter().any(|v| !v.is_finite()) {
+                return Err(SolveError::NonFinite {
+                    t,
+                    what: "solution",
+                });
+            }
+            if self.c.last {
+                self.c.done = true;
+                return Ok(());
+            }
+            self.evaluate_at_step_point(t, false)?;
+            self.next_step(h_new);
+            return Ok(());
+        }
+    }
+}
