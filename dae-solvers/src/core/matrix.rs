@@ -59,7 +59,7 @@
 //! diverged on the first step). For a square nonsingular system the
 //! projection is the exact solve.
 
-use crate::linalg::lstsq::null_space;
+use crate::linalg::lstsq::{null_space, split_rows};
 use crate::linalg::{ConstrainedLstsq, DenseLu, Pivoting, Singular};
 use dae_core::system::{FormulationInfo, RowKind};
 use nalgebra::{Complex, DMatrix};
@@ -329,24 +329,15 @@ impl StageSystems for ProjectedStages {
         rows: &Rows,
     ) -> Result<(), Singular> {
         let (m, n) = (self.m, self.n);
-        let (mut p, mut q) = (0, 0);
-        for (i, (&exact, &w)) in rows.exact.iter().zip(&rows.weight).enumerate() {
-            if exact {
-                self.exact_rows[p] = i;
-                p += 1;
-            } else {
-                if !(w > 0.0 && w.is_finite()) {
-                    return Err(Singular);
-                }
-                self.diff_rows[q] = i;
-                self.weight[q] = w;
-                q += 1;
-            }
-        }
+        let (p, q) = split_rows(
+            &rows.exact,
+            &rows.weight,
+            n,
+            &mut self.exact_rows,
+            &mut self.diff_rows,
+            &mut self.weight,
+        )?;
         debug_assert_eq!(p + q, m);
-        if p > n || p + q < n {
-            return Err(Singular);
-        }
         (self.p, self.q) = (p, q);
         let k = n - p;
         let real = |r: usize, c: usize| g * e[(r, c)] - j[(r, c)];

@@ -178,24 +178,14 @@ impl ConstrainedLstsq {
             return Err(Singular);
         }
 
-        // Split the rows.
-        let (mut p, mut q) = (0, 0);
-        for (i, (&e, &w)) in exact.iter().zip(weight).enumerate() {
-            if e {
-                self.exact_rows[p] = i;
-                p += 1;
-            } else {
-                if !(w > 0.0 && w.is_finite()) {
-                    return Err(Singular);
-                }
-                self.weighted_rows[q] = i;
-                self.row_weight[q] = w;
-                q += 1;
-            }
-        }
-        if p > n || q + p < n {
-            return Err(Singular);
-        }
+        let (p, q) = split_rows(
+            exact,
+            weight,
+            n,
+            &mut self.exact_rows,
+            &mut self.weighted_rows,
+            &mut self.row_weight,
+        )?;
         (self.p, self.q) = (p, q);
         let a = self.a.as_slice();
 
@@ -315,6 +305,39 @@ impl ConstrainedLstsq {
             reflect(&col[j + 1..], tau, &mut x[j..]);
         }
     }
+}
+
+/// Split the rows of an `M × N` system by `exact`: the indices of the exact
+/// rows into `exact_rows`, those of the weighted rows into `weighted_rows`
+/// and their weights into `row_weight`; returns their numbers `(p, q)`.
+/// Fails with [`Singular`] when a weight of a weighted row is not positive
+/// and finite, when `p > N`, or when `p + q < N`.
+pub(crate) fn split_rows(
+    exact: &[bool],
+    weight: &[f64],
+    n: usize,
+    exact_rows: &mut [usize],
+    weighted_rows: &mut [usize],
+    row_weight: &mut [f64],
+) -> Result<(usize, usize), Singular> {
+    let (mut p, mut q) = (0, 0);
+    for (i, (&e, &w)) in exact.iter().zip(weight).enumerate() {
+        if e {
+            exact_rows[p] = i;
+            p += 1;
+        } else {
+            if !(w > 0.0 && w.is_finite()) {
+                return Err(Singular);
+            }
+            weighted_rows[q] = i;
+            row_weight[q] = w;
+            q += 1;
+        }
+    }
+    if p > n || p + q < n {
+        return Err(Singular);
+    }
+    Ok((p, q))
 }
 
 /// An orthonormal basis of the null space of the `p × n` matrix `C`, given
