@@ -704,6 +704,31 @@ mod tests {
     }
 
     #[test]
+    fn null_space_is_orthonormal_and_annihilated() {
+        let mut next = rng(5);
+        for (p, n) in [(1, 2), (3, 5), (2, 6), (4, 4)] {
+            let c = random(p, n, &mut next);
+            let mut ct: Vec<f64> = c.transpose().as_slice().to_vec();
+            let (mut tau, mut norms) = (vec![0.0; p], vec![0.0; p]);
+            let mut z = vec![f64::NAN; n * (n - p)];
+            null_space(&mut ct, n, p, &mut tau, &mut norms, &mut z).expect("full rank");
+            let z = DMatrix::from_column_slice(n, n - p, &z);
+            let ztz = z.transpose() * &z;
+            assert!(
+                (ztz - DMatrix::identity(n - p, n - p)).amax() < 1e-14,
+                "{p}x{n}: ZᵀZ"
+            );
+            assert!((&c * &z).amax() < 1e-14 * c.amax(), "{p}x{n}: C Z");
+        }
+        // Dependent rows are refused.
+        let c = DMatrix::from_row_slice(2, 3, &[1.0, 2.0, 3.0, 2.0, 4.0, 6.0]);
+        let mut ct: Vec<f64> = c.transpose().as_slice().to_vec();
+        let mut z = vec![0.0; 3];
+        let (mut tau, mut norms) = (vec![0.0; 2], vec![0.0; 2]);
+        assert!(null_space(&mut ct, 3, 2, &mut tau, &mut norms, &mut z).is_err());
+    }
+
+    #[test]
     fn singular_problems_are_refused_without_panicking() {
         let (m, n) = (7, 4);
         let mut next = rng(0x5eed);
