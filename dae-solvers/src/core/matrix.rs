@@ -255,10 +255,8 @@ pub(crate) struct ProjectedStages {
     ct: Vec<f64>,
     tau: Vec<f64>,
     norms: Vec<f64>,
-    /// Null-space basis `Z` of `C` (`N × k`, `k = N − p`), then `S D Z`
-    /// (`q × k`).
+    /// Null-space basis `Z` of `C` (`N × k`, `k = N − p`).
     z: Vec<f64>,
-    sdz: Vec<f64>,
     /// `Wᵀ` (`k × q`, row-major: row `l` is the test vector `l`).
     wt: Vec<f64>,
     /// `Wᵀ E_D` and `Wᵀ J_D` (`k × N`, row-major).
@@ -309,7 +307,6 @@ impl StageSystems for ProjectedStages {
             tau: vec![0.0; n],
             norms: vec![0.0; n],
             z: vec![0.0; n * n],
-            sdz: vec![0.0; m * n],
             wt: vec![0.0; m * n],
             we: vec![0.0; n * n],
             wj: vec![0.0; n * n],
@@ -357,7 +354,7 @@ impl StageSystems for ProjectedStages {
             &mut self.z,
         )?;
 
-        // S D Z (q × k, column-major), then Wᵀ = (S D Z)ᵀ S (k × q, row-major).
+        // Wᵀ = (S D Z)ᵀ S (k × q, row-major): entry (l, r) is s_r (D Z)_rl s_r.
         for (l, zl) in self.z[..n * k].chunks_exact(n).enumerate() {
             for (r, (&i, &s)) in self.diff_rows[..q]
                 .iter()
@@ -365,12 +362,7 @@ impl StageSystems for ProjectedStages {
                 .enumerate()
             {
                 let dz: f64 = zl.iter().enumerate().map(|(c, &zc)| real(i, c) * zc).sum();
-                self.sdz[l * q + r] = s * dz;
-            }
-        }
-        for l in 0..k {
-            for r in 0..q {
-                self.wt[l * q + r] = self.sdz[l * q + r] * self.weight[r];
+                self.wt[l * q + r] = (s * dz) * s;
             }
         }
         // Each test vector scaled so that its row of the real matrix has
