@@ -461,6 +461,15 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The initial values as `(name, value)` pairs, in the scene's order:
+    /// what [`crate::runner::RunSpec::initial`] and the reference take.
+    pub fn initial_values(&self) -> Vec<(String, f64)> {
+        self.initial
+            .iter()
+            .map(|v| (v.name.clone(), v.value))
+            .collect()
+    }
+
     /// A built-in scene by name (`s01`, `s02`; case-insensitive): the paper's
     /// scenarios, identical to `scenes/s01.toml` and `scenes/s02.toml`.
     ///

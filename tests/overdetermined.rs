@@ -50,11 +50,7 @@ fn spherical_pendulum() -> Scene {
 /// One run of `scene` as `dae run` does it.
 fn run(scene: &Scene, solver: &str, formulation: &str, tol: f64) -> Result<RunRecord, RunError> {
     let model = load_model(scene).unwrap_or_else(|f| panic!("{}", f.message));
-    let initial: Vec<(String, f64)> = scene
-        .initial
-        .iter()
-        .map(|v| (v.name.clone(), v.value))
-        .collect();
+    let initial = scene.initial_values();
     runner::run(&RunSpec {
         scene: &scene.name,
         model: &*model,

@@ -74,11 +74,7 @@ fn scene_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
 /// One run of a parsed scene through the runner, as `dae run` does it.
 fn run_scene(scene: &Scene, solver: &str, formulation: &str, tol: f64) -> runner::RunRecord {
     let model = load_model(scene).unwrap_or_else(|f| panic!("{}", f.message));
-    let initial: Vec<(String, f64)> = scene
-        .initial
-        .iter()
-        .map(|v| (v.name.clone(), v.value))
-        .collect();
+    let initial = scene.initial_values();
     let reference = runner::pendulum_reference(&*model, &initial).expect("a reference");
     runner::run(&RunSpec {
         scene: &scene.name,
@@ -674,11 +670,7 @@ fn stiff_wrong_answers_are_inaccurate_or_suspect() {
         let text = scene_text(parameters, initial, "end = 0.05", reference);
         let scene = Scene::parse(&text, "stiff.toml", None).unwrap();
         let model = load_model(&scene).unwrap_or_else(|f| panic!("{}", f.message));
-        let initial: Vec<(String, f64)> = scene
-            .initial
-            .iter()
-            .map(|v| (v.name.clone(), v.value))
-            .collect();
+        let initial = scene.initial_values();
         let reference = (reference == "pendulum-exact")
             .then(|| runner::pendulum_reference(&*model, &initial).unwrap());
         let rec = runner::run(&RunSpec {

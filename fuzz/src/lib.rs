@@ -110,11 +110,7 @@ pub fn scene(data: &[u8]) {
     let Ok(model) = dae::cli::run::load_model(&scene) else {
         return;
     };
-    let initial: Vec<(String, f64)> = scene
-        .initial
-        .iter()
-        .map(|v| (v.name.clone(), v.value))
-        .collect();
+    let initial = scene.initial_values();
     let _ = dae::runner::pendulum_reference(&*model, &initial);
 }
 

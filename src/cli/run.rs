@@ -121,11 +121,7 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
                 ))
             })?,
     };
-    let initial: Vec<(String, f64)> = scene
-        .initial
-        .iter()
-        .map(|v| (v.name.clone(), v.value))
-        .collect();
+    let initial = scene.initial_values();
     let reference = match scene.reference {
         ReferenceKind::PendulumExact => {
             Some(runner::pendulum_reference(&*model, &initial).map_err(|e| located(&scene, &e))?)

@@ -536,11 +536,7 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
     validate(opts)?;
     let model = load_model(scene).map_err(|f| SweepError::Model(f.message))?;
     let info = model.model_info().clone();
-    let initial: Vec<(String, f64)> = scene
-        .initial
-        .iter()
-        .map(|v| (v.name.clone(), v.value))
-        .collect();
+    let initial = scene.initial_values();
     let reference = match scene.reference {
         ReferenceKind::PendulumExact => Some(runner::pendulum_reference(&*model, &initial)?),
         ReferenceKind::None => None,
