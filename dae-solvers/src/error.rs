@@ -156,4 +156,16 @@ pub enum NotApplicable {
         /// The highest level the solver takes.
         max: u8,
     },
+    /// The leading matrix `E(y)` depends on the unknowns, for a method whose
+    /// formulas need a constant one (MEBDF, the linearly implicit Euler).
+    #[error("state-dependent leading matrix E(y): solver needs a constant one")]
+    LeadingMatrixNotConstant,
+    /// An unknown has a higher index than the method integrates.
+    #[error("index {index}: solver takes unknowns of index at most {max}")]
+    IndexTooHigh {
+        /// The largest index of any unknown of the formulation.
+        index: u8,
+        /// The highest index the solver takes.
+        max: u8,
+    },
 }

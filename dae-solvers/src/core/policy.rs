@@ -11,8 +11,9 @@
 //!   leave unknowns of index ≥ 2 out of the error test and the Newton norm.
 //!   Radau-type methods keep every unknown and scale index-`k` components by
 //!   `h^(k−1)` instead (Hairer & Wanner VII.8).
-//! - **What a method accepts**: [`square`], [`overdetermined`] — the typed
-//!   reasons of [`crate::Solver::accepts`].
+//! - **What a method accepts**: [`square`], [`overdetermined`],
+//!   [`constant_leading`], [`max_index`] — the typed reasons of
+//!   [`crate::Solver::accepts`].
 
 use crate::error::NotApplicable;
 use crate::Options;
@@ -76,4 +77,23 @@ pub fn overdetermined(info: &FormulationInfo, max_c_level: u8) -> Result<(), Not
         });
     }
     Ok(())
+}
+
+/// A method whose formulas need a constant leading matrix `E`.
+pub fn constant_leading(info: &FormulationInfo) -> Result<(), NotApplicable> {
+    if info.constant_leading {
+        Ok(())
+    } else {
+        Err(NotApplicable::LeadingMatrixNotConstant)
+    }
+}
+
+/// A method for unknowns of index at most `max`.
+pub fn max_index(info: &FormulationInfo, max: u8) -> Result<(), NotApplicable> {
+    let index = info.max_index();
+    if index > max {
+        Err(NotApplicable::IndexTooHigh { index, max })
+    } else {
+        Ok(())
+    }
 }
