@@ -8,6 +8,7 @@ pub use dae_macros::dae;
 pub use dae_solvers;
 
 pub mod cli;
+pub mod inputs;
 pub mod models;
 pub mod reference;
 pub mod runner;

@@ -47,9 +47,9 @@ pub enum ModelError {
     Invalid(String),
 }
 
-/// Where a model comes from.
+/// A model's text and the name its messages show (what [`derive`] reads).
 #[derive(Clone, Debug)]
-pub struct ModelSource {
+pub struct ModelText {
     /// Name shown in messages (`pendulum` or the path).
     pub label: String,
     /// The model text.
@@ -57,9 +57,9 @@ pub struct ModelSource {
 }
 
 /// Resolve a built-in name (`pendulum`) or read a `.dae` file.
-pub fn source(spec: &str) -> Result<ModelSource, ModelError> {
+pub fn source(spec: &str) -> Result<ModelText, ModelError> {
     if let Some(&name) = BUILTIN_MODELS.iter().find(|n| **n == spec) {
-        return Ok(ModelSource {
+        return Ok(ModelText {
             label: name.to_string(),
             text: PENDULUM_SOURCE.to_string(),
         });
@@ -76,18 +76,19 @@ pub fn source(spec: &str) -> Result<ModelSource, ModelError> {
         path: spec.to_string(),
         source,
     })?;
-    Ok(ModelSource {
+    Ok(ModelText {
         label: spec.to_string(),
         text,
     })
 }
 
 /// Parse, check and derive a model source.
-pub fn derive(src: &ModelSource) -> Result<Derived, ModelError> {
+pub fn derive(src: &ModelText) -> Result<Derived, ModelError> {
     Derived::from_str(&src.text).map_err(|e| ModelError::Invalid(render_error(&e, &src.label)))
 }
 
-/// A runnable model: the compiled built-in or an interpreted file.
+/// A runnable model by built-in name or path: the compiled built-in or an
+/// interpreted file.
 pub fn load(spec: &str) -> Result<Box<dyn Model + Send + Sync>, ModelError> {
     if spec == "pendulum" {
         return Ok(Box::new(builtin::Pendulum::default()));
@@ -95,4 +96,26 @@ pub fn load(spec: &str) -> Result<Box<dyn Model + Send + Sync>, ModelError> {
     let src = source(spec)?;
     let d = derive(&src)?;
     Ok(Box::new(InterpretedModel::new(&d)))
+}
+
+/// The runnable model a scene names: a built-in by name, a file by its
+/// path — also a file whose path reads like a built-in's name (`pendulum`).
+pub fn load_source(
+    source: &crate::scene::ModelSource,
+) -> Result<Box<dyn Model + Send + Sync>, ModelError> {
+    match source {
+        crate::scene::ModelSource::Builtin(name) => load(name),
+        crate::scene::ModelSource::File(path) => {
+            let label = path.display().to_string();
+            if path.is_dir() {
+                return Err(ModelError::IsDirectory { path: label });
+            }
+            let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+                path: label.clone(),
+                source,
+            })?;
+            let d = derive(&ModelText { label, text })?;
+            Ok(Box::new(InterpretedModel::new(&d)))
+        }
+    }
 }

@@ -3,8 +3,8 @@
 //! counters, constraint residuals per level and invariant drift. Shared by
 //! `dae run` and `dae sweep`.
 
-use crate::reference::{PendulumExact, ReferenceError};
-use dae_core::system::{DaeSystem, Model};
+use crate::reference::data::{Reference, Scaling, UseError};
+use dae_core::system::{DaeSystem, Model, VarKind};
 use dae_solvers::init::{self, InitMode, InitOptions};
 use dae_solvers::{Options, Problem, SolveError, Stats};
 use serde::ser::SerializeMap;
@@ -24,10 +24,11 @@ pub struct RunSpec<'a> {
     pub t0: f64,
     /// End time.
     pub t_end: f64,
-    /// Check times (errors and residuals are measured there).
+    /// Check times (residuals and drift are measured there, and errors
+    /// against a reference that gives no times of its own).
     pub check: &'a [f64],
-    /// Exact reference, if any.
-    pub reference: Option<&'a PendulumExact>,
+    /// Reference, if any (see [`crate::reference::data`]).
+    pub reference: Option<&'a Reference>,
     /// Solver name.
     pub solver: &'a str,
     /// Formulation name.
@@ -80,26 +81,32 @@ impl Named {
     }
 }
 
-/// Largest constraint violations over the check times, per level.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Residuals {
-    /// Position level.
-    pub level0: Option<f64>,
-    /// Velocity level.
-    pub level1: Option<f64>,
-    /// Acceleration level.
-    pub level2: Option<f64>,
-}
+/// Largest constraint violations over the check times, per level of the
+/// model's constraint chain: entry `k` is the largest `|g|` of the level-`k`
+/// constraints (`None` for a level without any). Serialised as
+/// `{"level0": …, "level1": …}`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Residuals(pub Vec<Option<f64>>);
 
 impl Residuals {
     /// Residual of level `k`.
     pub fn level(&self, k: usize) -> Option<f64> {
-        match k {
-            0 => self.level0,
-            1 => self.level1,
-            2 => self.level2,
-            _ => None,
+        self.0.get(k).copied().flatten()
+    }
+
+    /// Number of levels of the chain.
+    pub fn levels(&self) -> usize {
+        self.0.len()
+    }
+}
+
+impl Serialize for Residuals {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in self.0.iter().enumerate() {
+            m.serialize_entry(&format!("level{k}"), v)?;
         }
+        m.end()
     }
 }
 
@@ -123,13 +130,24 @@ pub struct RunRecord {
     /// Values at `t_end` by unknown name.
     #[serde(rename = "final")]
     pub final_values: Named,
-    /// Max over check times of the largest error of the model's differential
-    /// unknowns (`null` without a reference).
+    /// Max over the reference's times of the largest error of the
+    /// differential unknowns it gives (of all it gives, if none is
+    /// differential); `null` without a reference. The times are the check
+    /// times, or a `values` reference's own. Each error is scaled as the
+    /// reference says ([`Scaling`]).
     pub err: Option<f64>,
-    /// Sum over check times of the errors of every unknown.
+    /// Sum over those times of the errors of every unknown the reference
+    /// gives.
     pub err_sum: Option<f64>,
-    /// Max over check times of the multiplier's error.
-    pub err_lambda: Option<f64>,
+    /// Max over those times of the errors of the algebraic unknowns the
+    /// reference gives (the multipliers of a mechanical system); `null`
+    /// if it gives none.
+    pub err_algebraic: Option<f64>,
+    /// Significant correct digits, as the IVP Test Set reports them:
+    /// `−log₁₀` of the largest scaled error of any unknown the reference
+    /// gives over those times (with relative scaling, the IVP Test Set's
+    /// `scd`); `null` without a reference or for an exact answer.
+    pub scd: Option<f64>,
     /// Does the answer deserve the tolerance? (See [`Accuracy`].) `null`
     /// for a run that did not reach the end.
     pub accuracy: Option<Accuracy>,
@@ -238,11 +256,13 @@ pub struct Trajectory {
     pub t: Vec<f64>,
     /// Values at the sample times.
     pub y: Vec<Vec<f64>>,
-    /// Largest error of any reference component at each sample (empty
+    /// `(t, error)` at each sample where the reference gives a value: the
+    /// largest error of the unknowns [`RunRecord::err`] measures (empty
     /// without a reference).
-    pub err: Vec<f64>,
-    /// `|g|` per level (max over sources) at each sample.
-    pub residuals: Vec<[f64; 3]>,
+    pub err: Vec<(f64, f64)>,
+    /// `|g|` per level of the constraint chain (max over sources) at each
+    /// sample.
+    pub residuals: Vec<Vec<f64>>,
     /// Drift of the first invariant at each sample.
     pub drift: Vec<f64>,
 }
@@ -280,100 +300,9 @@ pub enum RunError {
     /// An `[initial]` name that is not an unknown.
     #[error("`{0}` in [initial] is not an unknown of the model")]
     UnknownVariable(String),
-    /// A reference the model cannot have.
+    /// A reference that cannot serve this run.
     #[error("reference: {0}")]
-    Reference(String),
-    /// The exact reference cannot be built from the scene's values: the
-    /// field to blame (`initial.x`, `parameters.g`, `time.end`, …) and why.
-    #[error("`{field}`: pendulum-exact reference: {source}")]
-    ReferenceInput {
-        /// The scene field, as `section.key`.
-        field: String,
-        /// What the reference refused.
-        source: ReferenceError,
-    },
-}
-
-impl RunError {
-    /// The scene field a bad-input error is about, where there is one.
-    pub fn field(&self) -> Option<&str> {
-        match self {
-            RunError::ReferenceInput { field, .. } => Some(field),
-            _ => None,
-        }
-    }
-}
-
-/// The scene field (`initial.x`, `parameters.g`, `time.end`) of the input a
-/// reference error blames.
-fn reference_field(e: &ReferenceError) -> String {
-    match e.input() {
-        "theta0" | "x0" => "initial.x".into(),
-        "y0" => "initial.y".into(),
-        "v0" => "initial.v".into(),
-        "w0" => "initial.w".into(),
-        "t" => "time.end".into(),
-        p => format!("parameters.{p}"),
-    }
-}
-
-/// Variables compared against the pendulum reference, in its order.
-const REF_NAMES: [&str; 5] = ["x", "y", "v", "w", "lambda"];
-
-/// Check that the reference can be used for this model and scene.
-pub fn pendulum_reference(
-    model: &dyn Model,
-    initial: &[(String, f64)],
-) -> Result<PendulumExact, RunError> {
-    let info = model.model_info();
-    for n in REF_NAMES {
-        if !info.variables.iter().any(|v| v.name == n) {
-            return Err(RunError::Reference(format!(
-                "pendulum-exact needs unknowns x, y, v, w, lambda; model `{}` has no `{n}`",
-                info.name
-            )));
-        }
-    }
-    let param = |n: &str| {
-        model
-            .parameter(n)
-            .ok_or_else(|| RunError::Reference(format!("pendulum-exact needs parameter `{n}`")))
-    };
-    let value = |n: &str| {
-        initial
-            .iter()
-            .find(|(k, _)| k == n)
-            .map(|(_, v)| *v)
-            .unwrap_or(0.0)
-    };
-    PendulumExact::from_state(
-        value("x"),
-        value("y"),
-        value("v"),
-        value("w"),
-        param("l")?,
-        param("g")?,
-        param("m")?,
-    )
-    .map_err(|source| RunError::ReferenceInput {
-        field: reference_field(&source),
-        source,
-    })
-}
-
-/// The reference must be defined over the whole horizon (the state is NaN
-/// beyond 2⁵¹ periods): checked once at `t_end − t0`, the furthest time.
-fn check_reference_horizon(reference: &PendulumExact, t0: f64, t_end: f64) -> Result<(), RunError> {
-    let t = t_end - t0;
-    if reference.state(t).iter().all(|v| v.is_finite()) {
-        Ok(())
-    } else {
-        let source = ReferenceError::PhaseLost { t };
-        Err(RunError::ReferenceInput {
-            field: reference_field(&source),
-            source,
-        })
-    }
+    Reference(#[from] UseError),
 }
 
 /// Run one integration. `Err` only for bad input; solver failures are an
@@ -386,7 +315,9 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
         issue,
     })?;
     if let Some(r) = spec.reference {
-        check_reference_horizon(r, spec.t0, spec.t_end)?;
+        let info = spec.model.model_info();
+        let unknowns: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
+        r.check_use(&unknowns, spec.t0, spec.t_end, spec.check)?;
     }
     let sys = spec.model.formulation(spec.formulation)?;
     let info = sys.info().clone();
@@ -416,7 +347,8 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
         final_values: Named::default(),
         err: None,
         err_sum: None,
-        err_lambda: None,
+        err_algebraic: None,
+        scd: None,
         accuracy: None,
         accuracy_note: None,
         tsim_s: 0.0,
@@ -457,7 +389,14 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
         });
     }
     let y0 = consistent.y;
-    let mut output_times: Vec<f64> = spec.check.iter().chain(spec.samples).copied().collect();
+    let reference_times = spec.reference.and_then(Reference::times).unwrap_or(&[]);
+    let mut output_times: Vec<f64> = spec
+        .check
+        .iter()
+        .chain(spec.samples)
+        .chain(reference_times)
+        .copied()
+        .collect();
     output_times.sort_by(f64::total_cmp);
     output_times.dedup();
     let defaults = Options::with_tol(spec.tol);
@@ -551,6 +490,96 @@ pub fn check_flags(times: &[f64], checks: &[f64]) -> Vec<bool> {
         .collect()
 }
 
+/// The reference's components in a formulation: position in `y`, scaling,
+/// and whether [`RunRecord::err`] measures it (a differential unknown, or
+/// every one if the reference gives no differential unknown).
+struct Components {
+    /// `(j, i)`: component `j` of the reference is unknown `i`.
+    index: Vec<(usize, usize)>,
+    scaling: Vec<Scaling>,
+    main: Vec<bool>,
+}
+
+impl Components {
+    fn new(reference: &Reference, info: &dae_core::system::FormulationInfo) -> Components {
+        // Names are checked against the model before the run; a name the
+        // formulation lacks could only be left out.
+        let index: Vec<(usize, usize)> = reference
+            .names()
+            .iter()
+            .enumerate()
+            .filter_map(|(j, n)| info.variable(n).map(|i| (j, i)))
+            .collect();
+        let differential: Vec<bool> = index
+            .iter()
+            .map(|&(_, i)| info.variables[i].kind == VarKind::Differential)
+            .collect();
+        let any = differential.iter().any(|&d| d);
+        Components {
+            scaling: index.iter().map(|&(j, _)| reference.scaling()[j]).collect(),
+            main: differential.iter().map(|&d| d || !any).collect(),
+            index,
+        }
+    }
+}
+
+/// Errors against the reference at one time.
+struct Errors {
+    /// Largest error of the main components.
+    main: f64,
+    /// Sum over all components.
+    sum: f64,
+    /// Largest error of the other (algebraic) components.
+    other: Option<f64>,
+    /// Largest error over all components.
+    all: f64,
+    /// The accuracy verdict's measure: the main components' errors,
+    /// absolute ones divided by `max(1, |y*|)` over the absolute main
+    /// components.
+    verdict: f64,
+}
+
+impl Components {
+    fn errors(&self, y: &[f64], exact: &[f64]) -> Errors {
+        let scale = self
+            .index
+            .iter()
+            .zip(self.main.iter().zip(&self.scaling))
+            .filter(|(_, (&main, &s))| main && s == Scaling::Absolute)
+            .fold(1.0f64, |m, (&(j, _), _)| m.max(exact[j].abs()));
+        let mut e = Errors {
+            main: 0.0,
+            sum: 0.0,
+            other: None,
+            all: 0.0,
+            verdict: 0.0,
+        };
+        for (c, &(j, i)) in self.index.iter().enumerate() {
+            let d = self.scaling[c].error(y[i], exact[j]);
+            // NaN propagates through max below only via this test.
+            let nan = |m: f64| if d.is_nan() { f64::NAN } else { m.max(d) };
+            e.sum += d;
+            e.all = nan(e.all);
+            if self.main[c] {
+                e.main = nan(e.main);
+                let v = if self.scaling[c] == Scaling::Absolute {
+                    d / scale
+                } else {
+                    d
+                };
+                e.verdict = if v.is_nan() {
+                    f64::NAN
+                } else {
+                    e.verdict.max(v)
+                };
+            } else {
+                e.other = Some(nan(e.other.unwrap_or(0.0)));
+            }
+        }
+        e
+    }
+}
+
 /// Errors, residuals and drift from the solution at the output times.
 fn measure(
     spec: &RunSpec<'_>,
@@ -561,60 +590,72 @@ fn measure(
 ) {
     let info = sys.info();
     let k = info.constraints.len();
+    let levels = info
+        .constraints
+        .iter()
+        .map(|c| usize::from(c.level) + 1)
+        .max()
+        .unwrap_or(0);
     let n_inv = info.invariants.len();
     let mut g = vec![0.0; k];
     let mut inv0 = vec![0.0; n_inv];
     let mut inv = vec![0.0; n_inv];
     sys.invariants(spec.t0, y0, &mut inv0);
-    let ref_idx: Vec<Option<usize>> = REF_NAMES.iter().map(|n| info.variable(n)).collect();
     let is_check = check_flags(&sol.t, spec.check);
-    let (mut err, mut err_sum, mut err_lambda) = (0.0f64, 0.0f64, 0.0f64);
-    // Largest error relative to max(1, |y*|) over the check times, and
-    // where: the accuracy verdict's measure.
+    let reference = spec.reference.map(|r| (r, Components::new(r, info)));
+    let is_ref_time = match spec.reference.and_then(Reference::times) {
+        Some(times) => check_flags(&sol.t, times),
+        None => is_check.clone(),
+    };
+    let mut exact = vec![0.0; spec.reference.map_or(0, |r| r.names().len())];
+    let (mut err, mut err_sum, mut err_alg, mut worst) = (0.0f64, 0.0f64, None::<f64>, 0.0f64);
+    let mut compared = false;
+    // Largest verdict measure over the reference's times, and where.
     let (mut err_scaled, mut worst_t) = (0.0f64, spec.t0);
-    let mut res = [None::<f64>; 3];
+    let mut res = vec![None::<f64>; levels];
     let mut drift = vec![0.0f64; n_inv];
     let traj = &mut record.trajectory;
     traj.names = info.variables.iter().map(|v| v.name.clone()).collect();
-    for ((t, y), &is_check) in sol.t.iter().zip(&sol.y).zip(&is_check) {
+    for (((t, y), &is_check), &is_ref_time) in
+        sol.t.iter().zip(&sol.y).zip(&is_check).zip(&is_ref_time)
+    {
         sys.constraints(*t, y, &mut g);
-        let mut lev = [0.0f64; 3];
+        let mut lev = vec![0.0f64; levels];
         for (c, gi) in info.constraints.iter().zip(&g) {
-            if (c.level as usize) < 3 {
-                lev[c.level as usize] = lev[c.level as usize].max(gi.abs());
-            }
+            let l = usize::from(c.level);
+            lev[l] = lev[l].max(gi.abs());
         }
         sys.invariants(*t, y, &mut inv);
-        let mut e_here = 0.0f64;
-        if let Some(r) = spec.reference {
-            // The reference starts at its own t = 0: the scene's t0.
-            let exact = r.state(*t - spec.t0);
-            let mut sum = 0.0;
-            for (j, idx) in ref_idx.iter().enumerate() {
-                if let Some(i) = idx {
-                    let d = (y[*i] - exact[j]).abs();
-                    sum += d;
-                    if j < 4 {
-                        e_here = e_here.max(d);
+        if let Some((r, comps)) = &reference {
+            if r.at(*t, &mut exact) {
+                let e = comps.errors(y, &exact);
+                traj.err.push((*t, e.main));
+                if is_ref_time {
+                    compared = true;
+                    if e.verdict > err_scaled || e.verdict.is_nan() {
+                        err_scaled = e.verdict;
+                        worst_t = *t;
                     }
-                }
-            }
-            if is_check {
-                let scale = exact[..4].iter().fold(1.0f64, |m, v| m.max(v.abs()));
-                if e_here / scale > err_scaled || e_here.is_nan() {
-                    err_scaled = e_here / scale;
-                    worst_t = *t;
-                }
-                err = err.max(e_here);
-                err_sum += sum;
-                if let Some(i) = ref_idx[4] {
-                    err_lambda = err_lambda.max((y[i] - exact[4]).abs());
+                    err = if e.main.is_nan() {
+                        f64::NAN
+                    } else {
+                        err.max(e.main)
+                    };
+                    err_sum += e.sum;
+                    if let Some(o) = e.other {
+                        err_alg = Some(err_alg.unwrap_or(0.0).max(o));
+                    }
+                    worst = if e.all.is_nan() {
+                        f64::NAN
+                    } else {
+                        worst.max(e.all)
+                    };
                 }
             }
         }
         if is_check {
             for (l, slot) in res.iter_mut().enumerate() {
-                if info.constraints.iter().any(|c| c.level as usize == l) {
+                if info.constraints.iter().any(|c| usize::from(c.level) == l) {
                     *slot = Some(slot.unwrap_or(0.0).max(lev[l]));
                 }
             }
@@ -624,9 +665,6 @@ fn measure(
         }
         traj.t.push(*t);
         traj.y.push(y.clone());
-        if spec.reference.is_some() {
-            traj.err.push(e_here);
-        }
         traj.residuals.push(lev);
         traj.drift.push(
             inv.first()
@@ -634,16 +672,13 @@ fn measure(
                 .map_or(0.0, |(a, b)| (a - b).abs()),
         );
     }
-    if spec.reference.is_some() {
+    if compared {
         record.err = Some(err);
         record.err_sum = Some(err_sum);
-        record.err_lambda = ref_idx[4].map(|_| err_lambda);
+        record.err_algebraic = err_alg;
+        record.scd = (worst > 0.0 && worst.is_finite()).then(|| -worst.log10());
     }
-    record.residuals = Residuals {
-        level0: res[0],
-        level1: res[1],
-        level2: res[2],
-    };
+    record.residuals = Residuals(res);
     record.invariant_drift = Named(info.invariants.iter().cloned().zip(drift).collect());
     let inv_scale: Vec<f64> = inv0.iter().map(|v| v.abs().max(1.0)).collect();
     let (accuracy, note) = verdict(spec, record, err_scaled, worst_t, &inv_scale);

@@ -17,7 +17,7 @@
 //! end = 20.0                  # start = 0.0 unless given
 //! check = [20.0]              # or: check_every = 2.0; neither: check at end
 //! [reference]
-//! kind = "pendulum-exact"     # or "none" (the default)
+//! kind = "exact"              # the pendulum's closed form; see below
 //! [sweep]                     # optional; defaults: every solver, formulation,
 //! solvers = ["radau5", "bdf", "odradau", "odbdf"] # and the tolerances 1e-5 … 1e-12
 //! formulations = ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0"]
@@ -32,6 +32,26 @@
 //! A model path is relative to the directory of the scene file; the
 //! resolved path is stored in [`ModelSource::File`].
 //!
+//! # References
+//!
+//! `[reference]` says what the runs are compared against
+//! ([`crate::reference::data`]); without it, nothing (`kind = "none"`):
+//!
+//! ```toml
+//! [reference]
+//! kind = "exact"                # a built-in closed form: closed_form = "pendulum"
+//! # kind = "values"             # published values at given times, errors there:
+//! # file = "andrews_ref.csv"    #   a CSV `t,<unknown>,…` beside the scene, or inline:
+//! # times = [0.03]
+//! # values = { x1 = [15.81], x2 = [-15.7] }
+//! # kind = "trajectory"         # a sampled solution (CSV), interpolated at the checks
+//! # scaling = "relative"        # absolute (default) or relative, for every
+//! #                             # component, or per component: { x1 = "relative" }
+//! ```
+//!
+//! `kind = "pendulum-exact"` is the older name of `kind = "exact"` and still
+//! accepted.
+//!
 //! ```
 //! use dae::scene::{ModelSource, Scene};
 //!
@@ -42,6 +62,7 @@
 //! assert_eq!(s.sweep.tolerances.len(), 8);
 //! ```
 
+use crate::reference::data::{Scaling, Table, SCALINGS};
 use serde::de::{Deserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -77,8 +98,15 @@ pub const MAX_ABS_VALUE: f64 = 1e150;
 const S01_TOML: &str = include_str!("../scenes/s01.toml");
 const S02_TOML: &str = include_str!("../scenes/s02.toml");
 
-/// Reference kinds a scene may name.
-pub const REFERENCE_KINDS: [&str; 2] = ["pendulum-exact", "none"];
+/// Reference kinds a scene may name (`pendulum-exact` is also accepted, as
+/// the older name of `exact`).
+pub const REFERENCE_KINDS: [&str; 4] = ["exact", "values", "trajectory", "none"];
+
+/// Largest reference CSV file a scene may name (256 MiB).
+pub const MAX_REFERENCE_BYTES: u64 = 256 << 20;
+
+/// Closed forms a reference of kind `exact` may name.
+pub const CLOSED_FORMS: [&str; 1] = ["pendulum"];
 
 /// A place in a scene: the file (or `<built-in NAME>`, or the origin given to
 /// [`Scene::parse`]) and a 1-based line and column (in characters).
@@ -242,6 +270,17 @@ pub enum SceneError {
         /// The one before it.
         previous: f64,
     },
+    /// A reference table (`reference.file`, or `reference.times` with
+    /// `reference.values`) that cannot be read or is malformed.
+    #[error("{at}: `{field}`: {reason}")]
+    ReferenceTable {
+        /// Where.
+        at: Location,
+        /// The field (`reference.file`, `reference.values`, …).
+        field: String,
+        /// What is wrong (with the CSV line where there is one).
+        reason: String,
+    },
     /// Both `check` and `check_every`.
     #[error("{at}: `time.check` and `time.check_every` are exclusive; give one of them")]
     CheckConflict {
@@ -391,22 +430,44 @@ pub struct TimeSpec {
     pub rule: CheckRule,
 }
 
-/// What the numerical solution is compared against.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum ReferenceKind {
-    /// [`crate::reference::PendulumExact`], from the scene's start and
+/// What the numerical solution is compared against, as the scene gives it
+/// (built into a [`crate::reference::data::Reference`] with the model, by
+/// [`crate::inputs`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ReferenceSpec {
+    /// A built-in closed form ([`CLOSED_FORMS`]), from the scene's start and
     /// parameters.
-    PendulumExact,
+    Exact {
+        /// Its name (`pendulum`).
+        closed_form: String,
+    },
+    /// Published values at their times.
+    Values {
+        /// The values.
+        table: Table,
+        /// Per column of the table.
+        scaling: Vec<Scaling>,
+    },
+    /// A sampled solution, interpolated at the check times.
+    Trajectory {
+        /// The samples.
+        table: Table,
+        /// Per column of the table.
+        scaling: Vec<Scaling>,
+    },
     /// No reference: errors are not computed.
     None,
 }
 
-impl ReferenceKind {
-    /// The name used in scene files.
-    pub fn as_str(self) -> &'static str {
+impl ReferenceSpec {
+    /// The kind, as scene files name it.
+    pub fn as_str(&self) -> &'static str {
         match self {
-            ReferenceKind::PendulumExact => "pendulum-exact",
-            ReferenceKind::None => "none",
+            ReferenceSpec::Exact { .. } => "exact",
+            ReferenceSpec::Values { .. } => "values",
+            ReferenceSpec::Trajectory { .. } => "trajectory",
+            ReferenceSpec::None => "none",
         }
     }
 }
@@ -450,7 +511,7 @@ pub struct Scene {
     /// Horizon and check times.
     pub time: TimeSpec,
     /// Reference solution.
-    pub reference: ReferenceKind,
+    pub reference: ReferenceSpec,
     /// Sweep grid.
     pub sweep: Sweep,
     /// Where `model`, `time`, `time.start`, `time.end` and `reference.kind`
@@ -662,6 +723,34 @@ struct RawTime {
 #[serde(deny_unknown_fields)]
 struct RawReference {
     kind: Option<Spanned<String>>,
+    closed_form: Option<Spanned<String>>,
+    file: Option<Spanned<String>>,
+    times: Option<Spanned<Vec<Spanned<f64>>>>,
+    values: Option<Spanned<RawSeries>>,
+    scaling: Option<Spanned<toml::Value>>,
+}
+
+/// A table of `name = [numbers]`, in file order, with spans.
+struct RawSeries(Vec<(Spanned<String>, Spanned<Vec<f64>>)>);
+
+impl<'de> Deserialize<'de> for RawSeries {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct SeriesVisitor;
+        impl<'de> Visitor<'de> for SeriesVisitor {
+            type Value = RawSeries;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a table of `name = [numbers]` entries")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<RawSeries, A::Error> {
+                let mut entries = Vec::new();
+                while let Some(key) = map.next_key::<Spanned<String>>()? {
+                    entries.push((key, map.next_value::<Spanned<Vec<f64>>>()?));
+                }
+                Ok(RawSeries(entries))
+            }
+        }
+        deserializer.deserialize_map(SeriesVisitor)
+    }
 }
 
 #[derive(Deserialize)]
@@ -880,24 +969,15 @@ impl Source<'_> {
         }
         let time = self.time(time_raw)?;
         let reference = match raw.reference {
-            None => ReferenceKind::None,
+            None => ReferenceSpec::None,
             Some(r) => {
                 let span = r.span();
-                let kind = r
-                    .into_inner()
-                    .kind
-                    .ok_or_else(|| self.missing("reference.kind", Some(&span)))?;
-                place("reference.kind", kind.span());
-                match kind.get_ref().as_str() {
-                    "pendulum-exact" => ReferenceKind::PendulumExact,
-                    "none" => ReferenceKind::None,
-                    other => {
-                        return Err(SceneError::UnknownReference {
-                            at: self.at(&kind.span()),
-                            kind: other.to_string(),
-                        })
-                    }
+                place("reference", span.clone());
+                let r = r.into_inner();
+                if let Some(kind) = &r.kind {
+                    place("reference.kind", kind.span());
                 }
+                self.reference(r, &span, base_dir)?
             }
         };
         let sweep = match raw.sweep {
@@ -915,6 +995,211 @@ impl Source<'_> {
             sweep,
             places,
         })
+    }
+
+    /// `[reference]`: its kind and, for `values` and `trajectory`, the
+    /// table (read from `file`, relative to `base_dir`, or inline) and the
+    /// scaling of each column.
+    fn reference(
+        &self,
+        r: RawReference,
+        table_span: &Range<usize>,
+        base_dir: Option<&Path>,
+    ) -> Result<ReferenceSpec, SceneError> {
+        let kind = r
+            .kind
+            .as_ref()
+            .ok_or_else(|| self.missing("reference.kind", Some(table_span)))?;
+        let invalid = |span: &Range<usize>, field: &str, reason: String| SceneError::InvalidValue {
+            at: self.at(span),
+            field: field.into(),
+            reason,
+        };
+        let kind_name = kind.get_ref().as_str();
+        // Fields that do not belong to the kind are refused, not ignored.
+        let given: [(&str, Option<Range<usize>>); 5] = [
+            ("closed_form", r.closed_form.as_ref().map(Spanned::span)),
+            ("file", r.file.as_ref().map(Spanned::span)),
+            ("times", r.times.as_ref().map(Spanned::span)),
+            ("values", r.values.as_ref().map(Spanned::span)),
+            ("scaling", r.scaling.as_ref().map(Spanned::span)),
+        ];
+        let allowed: &[&str] = match kind_name {
+            "exact" | "pendulum-exact" => &["closed_form"],
+            "values" | "trajectory" => &["file", "times", "values", "scaling"],
+            "none" => &[],
+            other => {
+                return Err(SceneError::UnknownReference {
+                    at: self.at(&kind.span()),
+                    kind: other.to_string(),
+                })
+            }
+        };
+        if let Some((field, Some(span))) = given
+            .iter()
+            .find(|(f, span)| span.is_some() && !allowed.contains(f))
+        {
+            return Err(invalid(
+                span,
+                &format!("reference.{field}"),
+                format!("does not apply to a reference of kind \"{kind_name}\""),
+            ));
+        }
+        let table = match kind_name {
+            "none" => return Ok(ReferenceSpec::None),
+            "exact" | "pendulum-exact" => {
+                let closed_form = match &r.closed_form {
+                    None => CLOSED_FORMS[0].to_string(),
+                    Some(c) if CLOSED_FORMS.contains(&c.get_ref().as_str()) => c.get_ref().clone(),
+                    Some(c) => {
+                        return Err(invalid(
+                            &c.span(),
+                            "reference.closed_form",
+                            format!(
+                                "\"{}\" is unknown (known: {})",
+                                c.get_ref(),
+                                CLOSED_FORMS.join(", ")
+                            ),
+                        ))
+                    }
+                };
+                return Ok(ReferenceSpec::Exact { closed_form });
+            }
+            _ => self.reference_table(&r, table_span, base_dir)?,
+        };
+        let scaling = self.scaling(r.scaling.as_ref(), &table)?;
+        Ok(if kind_name == "values" {
+            ReferenceSpec::Values { table, scaling }
+        } else {
+            ReferenceSpec::Trajectory { table, scaling }
+        })
+    }
+
+    /// The table of a `values` or `trajectory` reference: `file` or
+    /// `times` with `values`, not both.
+    fn reference_table(
+        &self,
+        r: &RawReference,
+        table_span: &Range<usize>,
+        base_dir: Option<&Path>,
+    ) -> Result<Table, SceneError> {
+        let located =
+            |span: &Range<usize>, field: &str, reason: String| SceneError::ReferenceTable {
+                at: self.at(span),
+                field: field.into(),
+                reason,
+            };
+        match (&r.file, &r.times, &r.values) {
+            (Some(file), None, None) => {
+                let given = Path::new(file.get_ref());
+                let path = match base_dir {
+                    Some(base) if given.is_relative() => base.join(given),
+                    _ => given.to_path_buf(),
+                };
+                let cannot = |why: String| {
+                    located(
+                        &file.span(),
+                        "reference.file",
+                        format!("cannot read `{}`: {why}", path.display()),
+                    )
+                };
+                // A regular file of bounded size: `/dev/zero` or a FIFO
+                // would never end.
+                let meta = std::fs::metadata(&path).map_err(|e| cannot(e.to_string()))?;
+                if !meta.is_file() {
+                    return Err(cannot("not a regular file".into()));
+                }
+                if meta.len() > MAX_REFERENCE_BYTES {
+                    return Err(cannot(format!(
+                        "{} bytes, more than the limit of {MAX_REFERENCE_BYTES}",
+                        meta.len()
+                    )));
+                }
+                let text = std::fs::read_to_string(&path).map_err(|e| cannot(e.to_string()))?;
+                Table::from_csv(&text).map_err(|e| {
+                    located(
+                        &file.span(),
+                        "reference.file",
+                        format!("`{}`: {e}", path.display()),
+                    )
+                })
+            }
+            (None, Some(times), Some(values)) => {
+                let t: Vec<f64> = times.get_ref().iter().map(|v| *v.get_ref()).collect();
+                let mut names = Vec::new();
+                let mut columns = Vec::new();
+                for (name, series) in &values.get_ref().0 {
+                    if series.get_ref().len() != t.len() {
+                        return Err(located(
+                            &series.span(),
+                            &format!("reference.values.{}", name.get_ref()),
+                            format!(
+                                "{} values for the {} times of `reference.times`",
+                                series.get_ref().len(),
+                                t.len()
+                            ),
+                        ));
+                    }
+                    names.push(name.get_ref().clone());
+                    columns.push(series.get_ref().clone());
+                }
+                let rows = (0..t.len())
+                    .map(|i| columns.iter().map(|c| c[i]).collect())
+                    .collect();
+                Table::new(names, t, rows)
+                    .map_err(|e| located(&values.span(), "reference.values", e.to_string()))
+            }
+            (Some(file), _, _) => Err(located(
+                &file.span(),
+                "reference.file",
+                "give either `file` or `times` with `values`, not both".into(),
+            )),
+            (None, None, None) => Err(self.missing("reference.file", Some(table_span))),
+            (None, Some(times), None) => Err(self.missing("reference.values", Some(&times.span()))),
+            (None, None, Some(values)) => {
+                Err(self.missing("reference.times", Some(&values.span())))
+            }
+        }
+    }
+
+    /// `scaling`: one name for every column, or a table of names per
+    /// column (the others absolute).
+    fn scaling(
+        &self,
+        raw: Option<&Spanned<toml::Value>>,
+        table: &Table,
+    ) -> Result<Vec<Scaling>, SceneError> {
+        let mut out = vec![Scaling::Absolute; table.names.len()];
+        let Some(raw) = raw else { return Ok(out) };
+        let invalid = |field: String, reason: String| SceneError::InvalidValue {
+            at: self.at(&raw.span()),
+            field,
+            reason,
+        };
+        let parse = |field: &str, v: &toml::Value| {
+            v.as_str().and_then(Scaling::parse).ok_or_else(|| {
+                invalid(
+                    field.into(),
+                    format!("must be one of {} (got {v})", SCALINGS.join(", ")),
+                )
+            })
+        };
+        match raw.get_ref() {
+            toml::Value::Table(per) => {
+                for (name, v) in per {
+                    let field = format!("reference.scaling.{name}");
+                    let j = table.names.iter().position(|n| n == name).ok_or_else(|| {
+                        invalid(
+                            field.clone(),
+                            format!("`{name}` is not a column of the reference"),
+                        )
+                    })?;
+                    out[j] = parse(&field, v)?;
+                }
+            }
+            v => out.fill(parse("reference.scaling", v)?),
+        }
+        Ok(out)
     }
 
     fn model(

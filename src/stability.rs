@@ -303,7 +303,7 @@ fn case(file: &Path, opts: &MapOptions) -> Result<Case, SweepError> {
     sweep::validate(&sweep_opts)?;
     let report = match sweep::run(&scene, &sweep_opts) {
         Ok(r) => r,
-        Err(e @ SweepError::Model(_)) => {
+        Err(e @ SweepError::Inputs(_)) => {
             return Ok(refused("model", e.to_string(), Some(scene.name)))
         }
         Err(e @ SweepError::Run(_)) => return Ok(refused("run", e.to_string(), Some(scene.name))),

@@ -5,10 +5,9 @@
 //! run by `dae::runner` as `dae run` and `dae sweep` run them; and the
 //! `dae run` command line with the new solvers.
 
-use dae::cli::run::load_model;
+use dae::inputs::inputs;
 use dae::runner::{self, RunError, RunRecord, RunSpec};
 use dae::scene::Scene;
-use dae_solvers::init::InitMode;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -49,23 +48,10 @@ fn spherical_pendulum() -> Scene {
 
 /// One run of `scene` as `dae run` does it.
 fn run(scene: &Scene, solver: &str, formulation: &str, tol: f64) -> Result<RunRecord, RunError> {
-    let model = load_model(scene).unwrap_or_else(|f| panic!("{}", f.message));
-    let initial = scene.initial_values();
+    let inputs = inputs(scene).unwrap_or_else(|e| panic!("{e}"));
     runner::run(&RunSpec {
-        scene: &scene.name,
-        model: &*model,
-        initial: &initial,
-        t0: scene.time.start,
-        t_end: scene.time.end,
-        check: &scene.time.checks,
         reference: None,
-        solver,
-        formulation,
-        tol,
-        init_mode: InitMode::Project,
-        samples: &[],
-        repeats: 1,
-        max_steps: None,
+        ..inputs.spec(scene, solver, formulation, tol)
     })
 }
 
@@ -88,9 +74,9 @@ fn check_run(scene: &Scene, solver: &str, formulation: &str, tol: f64) -> RunRec
     );
     let res = &r.residuals;
     let (l0, l1, l2) = (
-        res.level0.expect("position level"),
-        res.level1.expect("velocity level"),
-        res.level2.expect("acceleration level"),
+        res.level(0).expect("position level"),
+        res.level(1).expect("velocity level"),
+        res.level(2).expect("acceleration level"),
     );
     let drift = r.invariant_drift.get("energy").expect("energy");
     println!(

@@ -3,13 +3,13 @@
 //! accepted a meaningless input silently. Each failed before its fix.
 //! Scenes are built here as TOML text; horizons are short.
 
-use dae::cli::run::load_model;
+use dae::inputs::inputs;
 use dae::prelude::*;
-use dae::runner::{self, RunSpec};
+use dae::runner;
 use dae::scene::Scene;
 use dae::sweep::write::publish_dir;
 use dae::sweep::{self, SweepOptions};
-use dae_solvers::init::{self, InitMode};
+use dae_solvers::init;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -73,26 +73,9 @@ fn scene_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
 
 /// One run of a parsed scene through the runner, as `dae run` does it.
 fn run_scene(scene: &Scene, solver: &str, formulation: &str, tol: f64) -> runner::RunRecord {
-    let model = load_model(scene).unwrap_or_else(|f| panic!("{}", f.message));
-    let initial = scene.initial_values();
-    let reference = runner::pendulum_reference(&*model, &initial).expect("a reference");
-    runner::run(&RunSpec {
-        scene: &scene.name,
-        model: &*model,
-        initial: &initial,
-        t0: scene.time.start,
-        t_end: scene.time.end,
-        check: &scene.time.checks,
-        reference: Some(&reference),
-        solver,
-        formulation,
-        tol,
-        init_mode: InitMode::Project,
-        samples: &[],
-        repeats: 1,
-        max_steps: None,
-    })
-    .expect("the run starts")
+    let inputs = inputs(scene).unwrap_or_else(|e| panic!("{e}"));
+    assert!(inputs.reference.is_some(), "a reference");
+    runner::run(&inputs.spec(scene, solver, formulation, tol)).expect("the run starts")
 }
 
 // ------------------------------------------------- 1. the reference hang
@@ -669,27 +652,9 @@ fn stiff_wrong_answers_are_inaccurate_or_suspect() {
     let run = |parameters: &str, initial: &str, reference: &str, solver: &str| {
         let text = scene_text(parameters, initial, "end = 0.05", reference);
         let scene = Scene::parse(&text, "stiff.toml", None).unwrap();
-        let model = load_model(&scene).unwrap_or_else(|f| panic!("{}", f.message));
-        let initial = scene.initial_values();
-        let reference = (reference == "pendulum-exact")
-            .then(|| runner::pendulum_reference(&*model, &initial).unwrap());
-        let rec = runner::run(&RunSpec {
-            scene: &scene.name,
-            model: &*model,
-            initial: &initial,
-            t0: 0.0,
-            t_end: scene.time.end,
-            check: &scene.time.checks,
-            reference: reference.as_ref(),
-            solver,
-            formulation: "rcd0",
-            tol: 1e-6,
-            init_mode: InitMode::Project,
-            samples: &[],
-            repeats: 1,
-            max_steps: None,
-        })
-        .unwrap();
+        let inputs = inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(inputs.reference.is_some(), reference == "pendulum-exact");
+        let rec = runner::run(&inputs.spec(&scene, solver, "rcd0", 1e-6)).unwrap();
         assert_eq!(rec.status, "ok", "{:?}", rec.error);
         rec
     };

@@ -3,7 +3,7 @@
 //! field and line it names.
 
 use dae::scene::{
-    CheckRule, ModelSource, ReferenceKind, Scene, SceneError, Sweep, DEFAULT_TOLERANCES,
+    CheckRule, ModelSource, ReferenceSpec, Scene, SceneError, Sweep, DEFAULT_TOLERANCES,
     KNOWN_FORMULATIONS, KNOWN_SOLVERS, MAX_CHECK_TIMES,
 };
 use std::path::{Path, PathBuf};
@@ -78,7 +78,12 @@ fn base_scene_parses() {
     assert_eq!(s.time.end, 20.0);
     assert_eq!(s.time.checks, vec![10.0, 20.0]);
     assert_eq!(s.time.rule, CheckRule::List);
-    assert_eq!(s.reference, ReferenceKind::PendulumExact);
+    assert_eq!(
+        s.reference,
+        ReferenceSpec::Exact {
+            closed_form: "pendulum".into()
+        }
+    );
     assert_eq!(s.sweep.solvers, vec!["radau5"]);
     assert_eq!(s.sweep.formulations, vec!["ori2", "ggl1"]);
     assert_eq!(s.sweep.tolerances, vec![1e-6, 1e-8]);
@@ -110,7 +115,7 @@ fn defaults() {
     assert_eq!((s.time.start, s.time.end), (0.0, 5.0));
     assert_eq!(s.time.checks, vec![5.0]);
     assert_eq!(s.time.rule, CheckRule::EndOnly);
-    assert_eq!(s.reference, ReferenceKind::None);
+    assert_eq!(s.reference, ReferenceSpec::None);
     assert_eq!(s.sweep, Sweep::default());
     assert_eq!(s.sweep.solvers, KNOWN_SOLVERS);
     assert_eq!(
@@ -130,7 +135,7 @@ fn defaults() {
     let s = parse(&text.replace("end = 5", "start = 1.5\nend = 5")).unwrap();
     assert_eq!((s.time.start, s.time.checks.as_slice()), (1.5, &[5.0][..]));
     let s = parse(&format!("{text}[reference]\nkind = \"none\"\n")).unwrap();
-    assert_eq!(s.reference, ReferenceKind::None);
+    assert_eq!(s.reference, ReferenceSpec::None);
 }
 
 #[test]
@@ -167,7 +172,12 @@ fn builtins_are_the_papers_scenarios() {
             .collect();
         assert_eq!(init, [("x", 1.0), ("y", 0.0), ("v", 0.0), ("w", 0.0)]);
         assert_eq!((s.time.start, s.time.end), (0.0, end));
-        assert_eq!(s.reference, ReferenceKind::PendulumExact);
+        assert_eq!(
+            s.reference,
+            ReferenceSpec::Exact {
+                closed_form: "pendulum".into()
+            }
+        );
         assert_eq!(s.sweep, Sweep::default());
         assert!(s
             .check_names(&["x", "y", "v", "w", "lambda"], &["m", "l", "g"])
@@ -362,13 +372,13 @@ fn bad_horizons_and_check_times() {
 
 #[test]
 fn unknown_reference_kind() {
-    let err = expect_err(&with_line(15, "kind = \"exact\""), "reference.kind", 15);
+    let err = expect_err(&with_line(15, "kind = \"analytic\""), "reference.kind", 15);
     assert!(
-        matches!(err, SceneError::UnknownReference { ref kind, .. } if kind == "exact"),
+        matches!(err, SceneError::UnknownReference { ref kind, .. } if kind == "analytic"),
         "{err}"
     );
     assert!(
-        err.to_string().contains("pendulum-exact"),
+        err.to_string().contains("exact, values, trajectory, none"),
         "lists the known kinds: {err}"
     );
 }
@@ -569,5 +579,6 @@ fn scene_serialises_to_json() {
     let json = serde_json::to_value(Scene::builtin("s01").unwrap()).unwrap();
     assert_eq!(json["name"], "S01");
     assert_eq!(json["time"]["checks"][0], 20.0);
-    assert_eq!(json["reference"], "PendulumExact");
+    assert_eq!(json["reference"]["kind"], "exact");
+    assert_eq!(json["reference"]["closed_form"], "pendulum");
 }

@@ -27,7 +27,8 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
         final_values: Named(vec![("x".into(), 1.0), ("y".into(), 0.0)]),
         err,
         err_sum: err.map(|e| 2.0 * e),
-        err_lambda: err.map(|e| e / 2.0),
+        err_algebraic: err.map(|e| e / 2.0),
+        scd: err.map(|e| -e.log10()),
         // The runner's rule for a solution of order one.
         accuracy: Some(match err {
             Some(e) if e <= 100.0 * tol => Accuracy::Accurate,
@@ -44,11 +45,7 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
             factorizations: 95,
             newton_iterations: 300,
         },
-        residuals: Residuals {
-            level0: Some(1e-9),
-            level1: Some(1e-8),
-            level2: None,
-        },
+        residuals: Residuals(vec![Some(1e-9), Some(1e-8), None]),
         invariant_drift: Named(vec![("energy".into(), 1e-7)]),
         init: None,
         trajectory: Trajectory::default(),
@@ -65,7 +62,8 @@ fn failed(solver: &str, formulation: &str, tol: f64) -> RunRecord {
         }),
         err: None,
         err_sum: None,
-        err_lambda: None,
+        err_algebraic: None,
+        scd: None,
         accuracy: None,
         accuracy_note: None,
         t_end: 1.5,
@@ -189,10 +187,20 @@ fn success_matrix_marks_reasons_and_counts() {
         lines[1].split_whitespace().collect::<Vec<_>>(),
         ["radau5", "X", "2/2", "-1", "-2"]
     );
+    // Cells with failed runs carry a note: which tolerances, which error.
     assert_eq!(
         lines[2].split_whitespace().collect::<Vec<_>>(),
-        ["bdf", "x", "0/2", "-1", "o"]
+        ["bdf", "x", "0/2", "*1", "-1", "o", "*2"]
     );
+    assert!(
+        text.contains("*1: bdf(rcd1) failed at 1e-6 (step_size_too_small)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("*2: bdf(psi0) failed at 1e-5, 1e-6 (step_size_too_small)"),
+        "{text}"
+    );
+    assert_eq!(c("radau5", "rcd1").failure_note(), None);
     assert_eq!(
         (c("bdf", "rcd1").accurate, c("bdf", "rcd1").inaccurate),
         (0, 1)
@@ -213,7 +221,7 @@ fn efficiency_rows_show_values_and_failures() {
     let (_, _, _, runs) = grid();
     let rows = table::efficiency_rows(&runs);
     assert_eq!(rows.len(), 1 + runs.len());
-    assert_eq!(rows[0], table::EFFICIENCY_HEADER.map(String::from).to_vec());
+    assert_eq!(rows[0], table::efficiency_header(3));
     let ok = &rows[1];
     assert_eq!(ok[0], "radau5(rcd1)");
     assert_eq!(ok[1], "1e-5");
@@ -653,7 +661,7 @@ fn sweep_without_reference_reports_residuals_not_errors() {
     let r = &report.runs[0].record;
     assert_eq!(r.status, "ok", "{:?}", r.error);
     assert!(r.err.is_none() && r.err_sum.is_none());
-    assert!(r.residuals.level0.is_some() && r.residuals.level1.is_some());
+    assert!(r.residuals.level(0).is_some() && r.residuals.level(1).is_some());
     assert!(r.invariant_drift.get("energy").is_some());
     let summary = sweep::Summary::of(&report);
     assert!(summary.pareto.is_empty() && summary.paper.is_none());

@@ -1,9 +1,9 @@
 //! `dae run [SCENE] [--solver NAME] [--formulation NAME] [--tol T] [--format json|text]`.
 
 use super::Failure;
-use crate::runner::{self, RunError, RunRecord, RunSpec};
-use crate::scene::{ReferenceKind, Scene};
-use dae_core::system::Model;
+use crate::inputs::inputs;
+use crate::runner::{self, RunRecord, RunSpec};
+use crate::scene::Scene;
 use dae_solvers::init::InitMode;
 use std::fmt::Write;
 
@@ -40,41 +40,6 @@ pub struct RunArgs {
     pub strict_init: bool,
 }
 
-/// Load a scene's model with the scene's parameters applied and names
-/// checked.
-pub fn load_model(scene: &Scene) -> Result<Box<dyn Model + Send + Sync>, Failure> {
-    let spec = match &scene.model {
-        crate::scene::ModelSource::Builtin(name) => name.clone(),
-        crate::scene::ModelSource::File(path) => path.display().to_string(),
-    };
-    let mut model = crate::models::load(&spec).map_err(|e| Failure::input(e.to_string()))?;
-    let info = model.model_info().clone();
-    let vars: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
-    let params: Vec<&str> = info.parameters.iter().map(|p| p.name.as_str()).collect();
-    scene
-        .check_names(&vars, &params)
-        .map_err(|e| Failure::input(e.to_string()))?;
-    for p in &scene.parameters {
-        model.set_parameter(&p.name, p.value).map_err(|e| {
-            Failure::input(format!(
-                "{}:{}:{}: [parameters] {e}",
-                scene.origin, p.line, p.column
-            ))
-        })?;
-    }
-    Ok(model)
-}
-
-/// A run that could not start, as a bad-input failure: errors about a
-/// scene field (an exact reference that cannot be built from the start,
-/// say) are prefixed with the field's place in the scene file.
-pub fn located(scene: &Scene, e: &RunError) -> Failure {
-    match e.field() {
-        Some(field) => Failure::input(format!("{}: {e}", scene.locate(field))),
-        None => Failure::input(format!("{}: {e}", scene.origin)),
-    }
-}
-
 /// Check a tolerance given on the command line: the rule of the library
 /// and of scene files, [`dae_solvers::options::check_uniform`] (`RTOL =
 /// ATOL = tol` in `[100 ε, 1)`).
@@ -91,7 +56,8 @@ pub fn check_tol(tol: f64, flag: &str) -> Result<(), Failure> {
 pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
     check_tol(args.tol, "--tol")?;
     let scene = Scene::load(&args.scene).map_err(|e| Failure::input(e.to_string()))?;
-    let model = load_model(&scene)?;
+    let inputs = inputs(&scene).map_err(|e| Failure::input(e.to_string()))?;
+    let model = &inputs.model;
     let solver = args
         .solver
         .clone()
@@ -121,34 +87,16 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
                 ))
             })?,
     };
-    let initial = scene.initial_values();
-    let reference = match scene.reference {
-        ReferenceKind::PendulumExact => {
-            Some(runner::pendulum_reference(&*model, &initial).map_err(|e| located(&scene, &e))?)
-        }
-        ReferenceKind::None => None,
-    };
     let spec = RunSpec {
-        scene: &scene.name,
-        model: &*model,
-        initial: &initial,
-        t0: scene.time.start,
-        t_end: scene.time.end,
-        check: &scene.time.checks,
-        reference: reference.as_ref(),
-        solver: &solver,
-        formulation: &formulation,
-        tol: args.tol,
         init_mode: if args.strict_init {
             InitMode::Strict
         } else {
             InitMode::Project
         },
-        samples: &[],
-        repeats: 1,
-        max_steps: None,
+        ..inputs.spec(&scene, &solver, &formulation, args.tol)
     };
-    let record = runner::run(&spec).map_err(|e| located(&scene, &e))?;
+    let record =
+        runner::run(&spec).map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?;
     let code = if record.status == "ok" { 0 } else { 3 };
     let out = match args.format {
         Format::Json => serde_json::to_string_pretty(&record).unwrap_or_default() + "\n",
@@ -195,10 +143,11 @@ pub fn text(r: &RunRecord) -> String {
     let _ = writeln!(s, "  final: {}", vals.join(", "));
     let _ = writeln!(
         s,
-        "  err {}  err_sum {}  err_lambda {}",
+        "  err {}  err_sum {}  err_algebraic {}  scd {}",
         opt(r.err),
         opt(r.err_sum),
-        opt(r.err_lambda)
+        opt(r.err_algebraic),
+        r.scd.map_or_else(|| "-".into(), |v| format!("{v:.2}"))
     );
     let st = &r.stats;
     let _ = writeln!(
@@ -211,13 +160,10 @@ pub fn text(r: &RunRecord) -> String {
         st.factorizations,
         st.newton_iterations
     );
-    let _ = writeln!(
-        s,
-        "  residuals: level0 {} level1 {} level2 {}",
-        opt(r.residuals.level0),
-        opt(r.residuals.level1),
-        opt(r.residuals.level2)
-    );
+    let levels: Vec<String> = (0..r.residuals.levels())
+        .map(|k| format!("level{k} {}", opt(r.residuals.level(k))))
+        .collect();
+    let _ = writeln!(s, "  residuals: {}", levels.join(" "));
     for (k, v) in &r.invariant_drift.0 {
         let _ = writeln!(s, "  drift of {k}: {v:.3e}");
     }

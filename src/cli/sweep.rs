@@ -155,7 +155,7 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
     // Refuse an output directory the sweep may not replace before the work.
     sweep::check_replaceable(&dir).map_err(|e| Failure::input(format!("--out: {e}")))?;
     let report = sweep::run(&scene, &opts).map_err(|e| match &e {
-        sweep::SweepError::Run(r) => super::run::located(&scene, r),
+        sweep::SweepError::Run(r) => Failure::input(format!("{}: {r}", scene.origin)),
         _ => Failure::input(e.to_string()),
     })?;
     let summary = sweep::Summary::of(&report);

@@ -52,6 +52,7 @@ fn table(rows: &[Vec<String>], left_cols: usize) -> String {
 fn success_html(summary: &Summary) -> String {
     let m = &summary.success;
     let reasons = m.reasons();
+    let mut failures: Vec<String> = Vec::new();
     let mut s = String::from("<table>\n<tr><th class=\"l\"></th>");
     for f in &m.formulations {
         let _ = write!(s, "<th>{}</th>", esc(f));
@@ -76,10 +77,14 @@ fn success_html(summary: &Summary) -> String {
                         _ => "o",
                     };
                     let warn = c.inaccurate + c.suspect > 0;
+                    let note = c.failure_note().map_or_else(String::new, |note| {
+                        failures.push(format!("{}({}) {note}", r.solver, c.formulation));
+                        format!("<sup>*{}</sup>", failures.len())
+                    });
                     let _ = write!(
                         s,
                         "<td class=\"{class}\" title=\"reached the end at {} of {} tolerances; accurate {}, \
-                         inaccurate {}, unverified {}, suspect {}\">{}<br><small{}>{}</small></td>",
+                         inaccurate {}, unverified {}, suspect {}\">{}{note}<br><small{}>{}</small></td>",
                         c.ok,
                         c.runs,
                         c.accurate,
@@ -98,6 +103,9 @@ fn success_html(summary: &Summary) -> String {
     s.push_str("</table>\n<p>");
     for (i, r) in reasons.iter().enumerate() {
         let _ = write!(s, "<sup>{}</sup> {}<br>", i + 1, esc(r));
+    }
+    for (i, f) in failures.iter().enumerate() {
+        let _ = write!(s, "<sup>*{}</sup> {}<br>", i + 1, esc(f));
     }
     let _ = writeln!(s, "{}</p>", esc(m.legend));
     s
@@ -278,8 +286,9 @@ pub fn index(
     let _ = write!(
         s,
         "<h2>Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds; err: largest pointwise \
-         error of the differential unknowns over the check times; err_sum: sum over the check times of the errors \
-         of all unknowns (the paper's ERR reading); err_lambda: largest error of the multiplier; evals / jac / LU: \
+         error of the differential unknowns over the reference's times; err_sum: sum over those times of the errors \
+         of all unknowns the reference gives (the paper's ERR reading); err_alg: largest error of the algebraic \
+         unknowns (multipliers); evals / jac / LU: \
          residual and Jacobian evaluations and LU factorisations; |gk|: largest residual of the level-k \
          constraints over the check times; drift: largest |{0}(t) − {0}(t0)|.</p>\n",
         esc(inv)

@@ -44,10 +44,9 @@ pub mod plot;
 pub mod table;
 pub mod write;
 
-use crate::cli::run::load_model;
-use crate::reference::PendulumExact;
+use crate::inputs::{inputs, InputError};
 use crate::runner::{self, RunError, RunRecord, RunSpec, Trajectory};
-use crate::scene::{ModelSource, ReferenceKind, Scene};
+use crate::scene::{ModelSource, Scene};
 use dae_core::system::{FormulationError, Model};
 use dae_solvers::init::InitMode;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -141,9 +140,9 @@ pub enum SweepError {
         /// `solvers`, `formulations` or `tolerances`.
         what: &'static str,
     },
-    /// The scene's model could not be loaded.
-    #[error("{0}")]
-    Model(String),
+    /// The scene's model, parameters or reference could not be used.
+    #[error(transparent)]
+    Inputs(#[from] InputError),
     /// A run could not start (bad scene input, e.g. an unusable reference).
     #[error(transparent)]
     Run(#[from] RunError),
@@ -291,7 +290,7 @@ impl SweepReport {
 
     /// Whether the scene has a reference (errors are measured).
     pub fn has_reference(&self) -> bool {
-        self.scene.reference != ReferenceKind::None.as_str()
+        self.scene.reference != "none"
     }
 
     /// The runs at the figure tolerance that succeeded, in pair order.
@@ -451,8 +450,7 @@ struct Job {
 /// What every run shares.
 struct Ctx<'a> {
     scene: &'a Scene,
-    initial: Vec<(String, f64)>,
-    reference: Option<PendulumExact>,
+    inputs: crate::inputs::Inputs,
     init_mode: InitMode,
     samples: Vec<f64>,
     repeats: usize,
@@ -462,20 +460,13 @@ struct Ctx<'a> {
 impl Ctx<'_> {
     fn run(&self, model: &dyn Model, job: &Job, samples: &[f64]) -> Result<RunRecord, RunError> {
         runner::run(&RunSpec {
-            scene: &self.scene.name,
             model,
-            initial: &self.initial,
-            t0: self.scene.time.start,
-            t_end: self.scene.time.end,
-            check: &self.scene.time.checks,
-            reference: self.reference.as_ref(),
-            solver: &job.solver,
-            formulation: &job.formulation,
-            tol: job.tol,
             init_mode: self.init_mode,
             samples,
-            repeats: 1,
             max_steps: self.max_steps,
+            ..self
+                .inputs
+                .spec(self.scene, &job.solver, &job.formulation, job.tol)
         })
     }
 
@@ -534,14 +525,9 @@ fn job_label(job: &Job) -> String {
 pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError> {
     let start = Instant::now();
     validate(opts)?;
-    let model = load_model(scene).map_err(|f| SweepError::Model(f.message))?;
-    let info = model.model_info().clone();
-    let initial = scene.initial_values();
-    let reference = match scene.reference {
-        ReferenceKind::PendulumExact => Some(runner::pendulum_reference(&*model, &initial)?),
-        ReferenceKind::None => None,
-    };
-    let pairs = pairs(&*model, &opts.solvers, &opts.formulations)?;
+    let inputs = inputs(scene)?;
+    let info = inputs.model.model_info().clone();
+    let pairs = pairs(&*inputs.model, &opts.solvers, &opts.formulations)?;
     let fig_tol = figure_tol(&opts.tolerances);
     let jobs: Vec<Job> = pairs
         .iter()
@@ -557,17 +543,16 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
         .collect();
     let ctx = Ctx {
         scene,
-        initial,
-        reference,
+        inputs,
         init_mode: opts.init_mode,
         samples: sample_times(scene),
         repeats: opts.repeats.max(1),
         max_steps: opts.max_steps,
     };
     let runs = if opts.jobs <= 1 {
-        sequential(&ctx, &*model, &jobs, opts.progress)?
+        sequential(&ctx, &*ctx.inputs.model, &jobs, opts.progress)?
     } else {
-        parallel(&ctx, &*model, &jobs, opts.jobs, opts.progress)?
+        parallel(&ctx, &*ctx.inputs.model, &jobs, opts.jobs, opts.progress)?
     };
     let mut levels: Vec<(u8, String)> = info
         .constraints
@@ -655,7 +640,7 @@ fn parallel(
                 let (next, bar) = (&next, &bar);
                 s.spawn(move || -> Result<Vec<(usize, RunRecord)>, SweepError> {
                     // Each thread integrates with its own model instance.
-                    let model = load_model(ctx.scene).map_err(|f| SweepError::Model(f.message))?;
+                    let model = inputs(ctx.scene)?.model;
                     let mut done = Vec::new();
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);

@@ -399,7 +399,7 @@ pub fn compare_runs(
     Comparison {
         table: table.label.clone(),
         note: format!(
-            "our err_sum (sum over the check times of |x-x*|+|y-y*|+|v-v*|+|w-w*|+|lambda-lambda*| against the exact \
+            "our err_sum (sum over the check times of the errors of the five unknowns, positions, velocities and multiplier, against the exact \
              solution) next to the paper's ERR; more accurate: ours < paper/{EQUAL_FACTOR}, equal: within a factor \
              {EQUAL_FACTOR}, behind: ours > {EQUAL_FACTOR}·paper. radau5 ↔ RADAU5, bdf ↔ DASSL and DASPK, odradau ↔ QUALIDAES and GEOMS, odbdf ↔ ODASSL and OVDBDF."
         ),

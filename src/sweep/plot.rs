@@ -14,7 +14,9 @@
 //! A figure is first described as data ([`Figure`]: panels of series) and
 //! then drawn by one renderer on either backend. Colours encode the
 //! formulation, line style and marker the solver, so a pair keeps its look
-//! in every figure and every sweep.
+//! in every figure and every sweep. Axes carry no units: the model language
+//! declares none, and a unit guessed from a name is wrong for the next
+//! model (`tsim` is measured, in seconds).
 
 use super::table::tol_label;
 use super::{write, SweepReport, SweepRun};
@@ -176,28 +178,6 @@ pub struct Figures {
     pub notes: Vec<String>,
 }
 
-/// Unit of an unknown for the axis label, by the naming convention of the
-/// shipped mechanical models (SI): positions `x, y, z…` in m, velocities
-/// `v, w, vx…` in m/s, multipliers `lambda…` in N/m (forces `2·x·λ`),
-/// GGL multipliers `eta…` in 1/s. Other names get no unit.
-pub fn unit_of(name: &str) -> Option<&'static str> {
-    let base = name.trim_end_matches(|c: char| c.is_ascii_digit());
-    match base {
-        "x" | "y" | "z" => Some("m"),
-        "v" | "w" | "u" | "vx" | "vy" | "vz" => Some("m/s"),
-        "lambda" | "lam" => Some("N/m"),
-        "eta" | "mu" => Some("1/s"),
-        _ => None,
-    }
-}
-
-fn with_unit(label: &str, unit: Option<&str>) -> String {
-    match unit {
-        Some(u) => format!("{label} [{u}]"),
-        None => label.to_string(),
-    }
-}
-
 fn level_name(level: u8) -> &'static str {
     match level {
         0 => "position",
@@ -205,24 +185,6 @@ fn level_name(level: u8) -> &'static str {
         2 => "acceleration",
         _ => "higher",
     }
-}
-
-/// Units of the residual of each level: the constraints of the shipped
-/// models are squared lengths (m², m²/s, m²/s²); for other constraints the
-/// unit is left out.
-fn residual_unit(report: &SweepReport, level: u8) -> Option<&'static str> {
-    let squared = report
-        .constraints
-        .iter()
-        .filter(|(l, _)| *l == 0)
-        .all(|(_, e)| e.contains("^2"));
-    if !squared {
-        return None;
-    }
-    [Some("m²"), Some("m²/s"), Some("m²/s²")]
-        .get(level as usize)
-        .copied()
-        .flatten()
 }
 
 fn label(run: &SweepRun) -> String {
@@ -296,8 +258,8 @@ fn solution_figure(
         .iter()
         .map(|v| Panel {
             title: v.clone(),
-            x_label: "t [s]".into(),
-            y_label: with_unit(v, unit_of(v)),
+            x_label: "t".into(),
+            y_label: v.to_string(),
             x_log: false,
             y_log: false,
             markers: false,
@@ -343,7 +305,7 @@ fn error_figure(report: &SweepReport, runs: &[&SweepRun], tol: &str, sampled_at:
             Series {
                 label: label(r),
                 look: look(&r.record.solver, &r.record.formulation),
-                points: tr.t.iter().zip(&tr.err).map(|(t, e)| (*t, *e)).collect(),
+                points: tr.err.clone(),
             }
         })
         .collect();
@@ -361,7 +323,7 @@ fn error_figure(report: &SweepReport, runs: &[&SweepRun], tol: &str, sampled_at:
         ),
         panels: vec![Panel {
             title: "max(|x−x*|, |y−y*|, |v−v*|, |w−w*|)".into(),
-            x_label: "t [s]".into(),
+            x_label: "t".into(),
             y_label: "error [m, m/s]".into(),
             x_log: false,
             y_log: true,
@@ -412,8 +374,8 @@ fn residual_figure(
             };
             Panel {
                 title,
-                x_label: "t [s]".into(),
-                y_label: with_unit(&format!("|g{}|", subscript(l)), residual_unit(report, l)),
+                x_label: "t".into(),
+                y_label: format!("|g{}|", subscript(l)),
                 x_log: false,
                 y_log: true,
                 markers: false,
@@ -429,7 +391,7 @@ fn residual_figure(
                                 .t
                                 .iter()
                                 .zip(&tr.residuals)
-                                .map(|(t, g)| (*t, g[l as usize]))
+                                .filter_map(|(t, g)| g.get(l as usize).map(|g| (*t, *g)))
                                 .collect(),
                         }
                     })
@@ -438,11 +400,10 @@ fn residual_figure(
         })
         .collect();
     if let Some(inv) = report.invariants.first() {
-        let unit = (inv == "energy").then_some("J");
         panels.push(Panel {
             title: format!("drift of the invariant `{inv}`"),
-            x_label: "t [s]".into(),
-            y_label: with_unit(&format!("|{inv}(t) − {inv}(t0)|"), unit),
+            x_label: "t".into(),
+            y_label: format!("|{inv}(t) − {inv}(t0)|"),
             x_log: false,
             y_log: true,
             markers: false,
@@ -488,7 +449,7 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
         if with_ref {
             r.record.err
         } else {
-            r.record.residuals.level0
+            r.record.residuals.level(0)
         }
     };
     let mut series = Vec::new();
@@ -561,7 +522,7 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
     } else {
         (
             format!("{}: work vs position-constraint residual (no reference)", report.scene.name),
-            with_unit("|g₀| (largest over check times)", residual_unit(report, 0)),
+            "|g₀| (largest over check times)".to_string(),
             "the largest position-constraint residual over the check times (the scene has no reference, so no error)"
                 .to_string(),
         )

@@ -71,6 +71,10 @@ pub struct SuccessCell {
     /// Why the pair is not applicable.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
+    /// The runs that did not reach the end: tolerance and error kind, in
+    /// sweep order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub failed: Vec<(f64, String)>,
 }
 
 /// One row of the matrix.
@@ -115,6 +119,26 @@ impl SuccessCell {
         } else {
             "?".into()
         }
+    }
+
+    /// Why runs of the cell failed, grouped by error kind: `failed at
+    /// 1e-11, 1e-12 (newton_failure)`; `None` if none did.
+    pub fn failure_note(&self) -> Option<String> {
+        if self.failed.is_empty() {
+            return None;
+        }
+        let mut kinds: Vec<(&str, Vec<String>)> = Vec::new();
+        for (tol, kind) in &self.failed {
+            match kinds.iter_mut().find(|(k, _)| k == kind) {
+                Some((_, tols)) => tols.push(tol_label(*tol)),
+                None => kinds.push((kind, vec![tol_label(*tol)])),
+            }
+        }
+        let parts: Vec<String> = kinds
+            .iter()
+            .map(|(k, tols)| format!("{} ({k})", tols.join(", ")))
+            .collect();
+        Some(format!("failed at {}", parts.join("; ")))
     }
 
     /// The mark and the accuracy, as the text matrix shows them (`X 6/8`).
@@ -176,9 +200,14 @@ pub fn success_matrix<R: Borrow<RunRecord>>(
                         .map(Borrow::borrow)
                         .filter(|r| &r.solver == s && &r.formulation == f);
                     let mut verdicts = [0usize; 4];
+                    let mut failed = Vec::new();
                     let (ok, n) = mine.fold((0, 0), |(ok, n), r| {
                         if let Some(a) = r.accuracy {
                             verdicts[a as usize] += 1;
+                        }
+                        if r.status != "ok" {
+                            let kind = r.error.as_ref().map_or("error", |e| e.kind.as_str());
+                            failed.push((r.tol, kind.to_string()));
                         }
                         (ok + usize::from(r.status == "ok"), n + 1)
                     });
@@ -197,6 +226,7 @@ pub fn success_matrix<R: Borrow<RunRecord>>(
                         unverified: verdicts[Accuracy::Unverified as usize],
                         suspect: verdicts[Accuracy::Suspect as usize],
                         reason,
+                        failed,
                     }
                 })
                 .collect(),
@@ -271,9 +301,12 @@ pub fn align(rows: &[Vec<String>]) -> String {
     s
 }
 
-/// The success matrix as text, with numbered reasons below.
+/// The success matrix as text, with numbered reasons below: `-k` for a
+/// pair that is not applicable, `*k` after the mark of a pair with failed
+/// runs.
 pub fn success_text(m: &SuccessMatrix) -> String {
     let reasons = m.reasons();
+    let mut failures: Vec<String> = Vec::new();
     let mut rows = vec![std::iter::once(String::new())
         .chain(m.formulations.iter().cloned())
         .collect::<Vec<_>>()];
@@ -285,7 +318,13 @@ pub fn success_text(m: &SuccessMatrix) -> String {
                     "-{}",
                     reasons.iter().position(|x| x == why).map_or(0, |i| i + 1)
                 ),
-                None => c.label(),
+                None => match c.failure_note() {
+                    Some(note) => {
+                        failures.push(format!("{}({}) {note}", r.solver, c.formulation));
+                        format!("{} *{}", c.label(), failures.len())
+                    }
+                    None => c.label(),
+                },
             });
         }
         rows.push(row);
@@ -294,40 +333,41 @@ pub fn success_text(m: &SuccessMatrix) -> String {
     for (i, r) in reasons.iter().enumerate() {
         let _ = writeln!(s, "  -{}: {r}", i + 1);
     }
+    for (i, f) in failures.iter().enumerate() {
+        let _ = writeln!(s, "  *{}: {f}", i + 1);
+    }
     let _ = writeln!(s, "  {}", m.legend);
     s
 }
 
-/// Column headers of the efficiency table.
-pub const EFFICIENCY_HEADER: [&str; 17] = [
-    "pair",
-    "tol",
-    "status",
-    "accuracy",
-    "tsim_s",
-    "err",
-    "err_sum",
-    "err_lambda",
-    "steps",
-    "rejected",
-    "evals",
-    "jac",
-    "LU",
-    "|g0|",
-    "|g1|",
-    "|g2|",
-    "drift",
-];
+/// Column headers of the efficiency table for a constraint chain of
+/// `levels` levels (one `|gk|` column each).
+pub fn efficiency_header(levels: usize) -> Vec<String> {
+    let head = [
+        "pair", "tol", "status", "accuracy", "tsim_s", "err", "err_sum", "err_alg", "steps",
+        "rejected", "evals", "jac", "LU",
+    ];
+    let mut h: Vec<String> = head.iter().map(|s| s.to_string()).collect();
+    h.extend((0..levels).map(|k| format!("|g{k}|")));
+    h.push("drift".into());
+    h
+}
+
+/// Levels of the constraint chain the runs report (the most any run has).
+pub fn residual_levels<R: Borrow<RunRecord>>(runs: &[R]) -> usize {
+    runs.iter()
+        .map(|r| r.borrow().residuals.levels())
+        .max()
+        .unwrap_or(0)
+}
 
 /// The efficiency table: one row per run (pairs in sweep order, tolerances
 /// within), with the time, the errors, the work counters, the largest
 /// constraint residual per level and the drift of the first invariant
 /// (energy).
 pub fn efficiency_rows<R: Borrow<RunRecord>>(runs: &[R]) -> Vec<Vec<String>> {
-    let mut rows = vec![EFFICIENCY_HEADER
-        .iter()
-        .map(|s| s.to_string())
-        .collect::<Vec<_>>()];
+    let levels = residual_levels(runs);
+    let mut rows = vec![efficiency_header(levels)];
     for r in runs.iter().map(Borrow::borrow) {
         let ok = r.status == "ok";
         let status = match (&r.error, ok) {
@@ -340,7 +380,7 @@ pub fn efficiency_rows<R: Borrow<RunRecord>>(runs: &[R]) -> Vec<Vec<String>> {
         };
         let num = |v: usize| if ok { v.to_string() } else { "-".into() };
         let val = |v: Option<f64>| if ok { sci(v) } else { "-".into() };
-        rows.push(vec![
+        let mut row = vec![
             format!("{}({})", r.solver, r.formulation),
             tol_label(r.tol),
             status,
@@ -352,17 +392,16 @@ pub fn efficiency_rows<R: Borrow<RunRecord>>(runs: &[R]) -> Vec<Vec<String>> {
             if ok { sci(Some(r.tsim_s)) } else { "-".into() },
             val(r.err),
             val(r.err_sum),
-            val(r.err_lambda),
+            val(r.err_algebraic),
             num(r.stats.steps),
             num(r.stats.rejected),
             num(r.stats.residual_evals),
             num(r.stats.jacobian_evals),
             num(r.stats.factorizations),
-            val(r.residuals.level0),
-            val(r.residuals.level1),
-            val(r.residuals.level2),
-            val(r.invariant_drift.0.first().map(|(_, v)| *v)),
-        ]);
+        ];
+        row.extend((0..levels).map(|k| val(r.residuals.level(k))));
+        row.push(val(r.invariant_drift.0.first().map(|(_, v)| *v)));
+        rows.push(row);
     }
     rows
 }
@@ -566,20 +605,20 @@ pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
         "tsim_runs",
         "err",
         "err_sum",
-        "err_lambda",
+        "err_algebraic",
+        "scd",
         "steps",
         "rejected",
         "residual_evals",
         "jacobian_evals",
         "factorizations",
         "newton_iterations",
-        "residual_level0",
-        "residual_level1",
-        "residual_level2",
     ]
     .iter()
     .map(|s| s.to_string())
     .collect();
+    let levels = residual_levels(&report.runs);
+    head.extend((0..levels).map(|k| format!("residual_level{k}")));
     head.extend(report.invariants.iter().map(|n| format!("drift_{n}")));
     head.extend(report.variables.iter().map(|n| format!("final_{n}")));
     w.write_record(&head)?;
@@ -610,17 +649,16 @@ pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
                 .join(";"),
             opt(r.err),
             opt(r.err_sum),
-            opt(r.err_lambda),
+            opt(r.err_algebraic),
+            opt(r.scd),
             r.stats.steps.to_string(),
             r.stats.rejected.to_string(),
             r.stats.residual_evals.to_string(),
             r.stats.jacobian_evals.to_string(),
             r.stats.factorizations.to_string(),
             r.stats.newton_iterations.to_string(),
-            opt(r.residuals.level0),
-            opt(r.residuals.level1),
-            opt(r.residuals.level2),
         ];
+        row.extend((0..levels).map(|k| opt(r.residuals.level(k))));
         row.extend(
             report
                 .invariants

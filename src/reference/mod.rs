@@ -74,6 +74,8 @@
 //! ≈ 4·10⁻¹³. To reproduce the paper's start `x = 1, y = 0` exactly use
 //! [`PendulumExact::from_start`].
 
+pub mod data;
+
 use std::fmt;
 
 /// Why an exact reference could not be built.
@@ -307,6 +309,10 @@ fn check_param(name: &'static str, value: f64) -> Result<(), ReferenceError> {
 }
 
 impl PendulumExact {
+    /// The unknowns [`PendulumExact::state`] gives, in its order: the
+    /// names the paper's model (and `scenes/pendulum.dae`) uses.
+    pub const COMPONENTS: [&'static str; 5] = ["x", "y", "v", "w", "lambda"];
+
     /// The pendulum released at rest from the angle `theta0` (radians, from
     /// the downward vertical, `0 < θ₀ < π`), with gravity `g`, rod length `l`
     /// and mass `m` (all finite and positive).

@@ -1,0 +1,239 @@
+//! One way from a scene to the inputs of its runs — the model with the
+//! scene's parameters, the initial values, the reference — shared by
+//! `dae run`, `dae sweep` and the library.
+//!
+//! ```
+//! use dae::inputs::inputs;
+//! use dae::scene::Scene;
+//!
+//! let scene = Scene::builtin("s01").unwrap();
+//! let inputs = inputs(&scene).unwrap();
+//! assert_eq!(inputs.model.parameter("g"), Some(13.7503716373294544));
+//! assert_eq!(inputs.initial[0], ("x".to_string(), 1.0));
+//! let reference = inputs.reference.unwrap();
+//! assert_eq!((reference.kind(), reference.names().len()), ("exact", 5));
+//! ```
+
+use crate::models::{self, ModelError};
+use crate::reference::data::{Reference, UseError};
+use crate::reference::{PendulumExact, ReferenceError};
+use crate::runner::RunSpec;
+use crate::scene::{Location, ReferenceSpec, Scene, SceneError};
+use dae_core::system::{Model, ParameterError};
+use dae_solvers::init::InitMode;
+
+/// What every run of a scene shares.
+pub struct Inputs {
+    /// The model, the scene's parameters set.
+    pub model: Box<dyn Model + Send + Sync>,
+    /// The scene's initial values, by name.
+    pub initial: Vec<(String, f64)>,
+    /// The reference, checked against the model and the horizon.
+    pub reference: Option<Reference>,
+}
+
+impl Inputs {
+    /// The run of `solver` on `formulation` at `tol` over the scene's
+    /// horizon, checked at its check times against its reference, with the
+    /// defaults of `dae run`: inconsistent initial values projected, no
+    /// extra samples, one integration, the library's step bound. Change
+    /// any of them with struct update syntax:
+    ///
+    /// ```
+    /// use dae::inputs::inputs;
+    /// use dae::runner::{run, RunSpec};
+    /// use dae::scene::Scene;
+    ///
+    /// let scene = Scene::builtin("s01").unwrap();
+    /// let inputs = inputs(&scene).unwrap();
+    /// let record = run(&RunSpec { repeats: 3, ..inputs.spec(&scene, "radau5", "ggl1", 1e-6) }).unwrap();
+    /// assert_eq!(record.status, "ok");
+    /// assert!(record.err.unwrap() < 1e-4);
+    /// ```
+    pub fn spec<'a>(
+        &'a self,
+        scene: &'a Scene,
+        solver: &'a str,
+        formulation: &'a str,
+        tol: f64,
+    ) -> RunSpec<'a> {
+        RunSpec {
+            scene: &scene.name,
+            model: &*self.model,
+            initial: &self.initial,
+            t0: scene.time.start,
+            t_end: scene.time.end,
+            check: &scene.time.checks,
+            reference: self.reference.as_ref(),
+            solver,
+            formulation,
+            tol,
+            init_mode: InitMode::Project,
+            samples: &[],
+            repeats: 1,
+            max_steps: None,
+        }
+    }
+}
+
+/// Why a scene's inputs could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    /// The model could not be loaded.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// A name in `[initial]` or `[parameters]` the model does not have.
+    #[error(transparent)]
+    Names(#[from] SceneError),
+    /// A parameter value the model refuses.
+    #[error("{at}: [parameters] {source}")]
+    Parameter {
+        /// Where the value is.
+        at: Location,
+        /// Why it was refused.
+        source: ParameterError,
+    },
+    /// The reference cannot serve this model and scene.
+    #[error("{at}: {message}")]
+    Reference {
+        /// The scene field to blame.
+        at: Location,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Build the inputs of `scene`'s runs.
+pub fn inputs(scene: &Scene) -> Result<Inputs, InputError> {
+    let mut model = models::load_source(&scene.model)?;
+    let info = model.model_info().clone();
+    let vars: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
+    let params: Vec<&str> = info.parameters.iter().map(|p| p.name.as_str()).collect();
+    scene.check_names(&vars, &params)?;
+    for p in &scene.parameters {
+        model
+            .set_parameter(&p.name, p.value)
+            .map_err(|source| InputError::Parameter {
+                at: Location {
+                    origin: scene.origin.clone(),
+                    line: p.line,
+                    column: p.column,
+                },
+                source,
+            })?;
+    }
+    let initial = scene.initial_values();
+    let reference = match &scene.reference {
+        ReferenceSpec::None => None,
+        ReferenceSpec::Exact { .. } => Some(Reference::pendulum(
+            pendulum(scene, &*model, &initial)?,
+            scene.time.start,
+        )),
+        ReferenceSpec::Values { table, scaling } => {
+            Some(Reference::values(table.clone(), scaling.clone()))
+        }
+        ReferenceSpec::Trajectory { table, scaling } => {
+            Some(Reference::trajectory(table.clone(), scaling.clone()))
+        }
+    };
+    if let Some(r) = &reference {
+        r.check_use(&vars, scene.time.start, scene.time.end, &scene.time.checks)
+            .map_err(|e| {
+                let field = match e {
+                    UseError::Undefined { .. } => "time.end",
+                    _ => "reference.kind",
+                };
+                InputError::Reference {
+                    at: scene.locate(field),
+                    message: format!("reference: {e}"),
+                }
+            })?;
+    }
+    Ok(Inputs {
+        model,
+        initial,
+        reference,
+    })
+}
+
+/// The pendulum's closed form from the scene's start and the model's
+/// parameters `l`, `g`, `m`; a refusal blames the scene field it comes
+/// from.
+fn pendulum(
+    scene: &Scene,
+    model: &dyn Model,
+    initial: &[(String, f64)],
+) -> Result<PendulumExact, InputError> {
+    let refuse = |field: &str, message: String| InputError::Reference {
+        at: scene.locate(field),
+        message,
+    };
+    let info = model.model_info();
+    if let Some(n) = PendulumExact::COMPONENTS
+        .iter()
+        .find(|n| !info.variables.iter().any(|v| v.name == **n))
+    {
+        return Err(refuse(
+            "reference.kind",
+            format!(
+                "reference: the pendulum's closed form needs unknowns {}; model `{}` has no `{n}`",
+                PendulumExact::COMPONENTS.join(", "),
+                info.name
+            ),
+        ));
+    }
+    let param = |n: &str| {
+        model.parameter(n).ok_or_else(|| {
+            refuse(
+                "reference.kind",
+                format!("reference: the pendulum's closed form needs parameter `{n}`"),
+            )
+        })
+    };
+    let value = |n: &str| {
+        initial
+            .iter()
+            .find(|(k, _)| k == n)
+            .map_or(0.0, |(_, v)| *v)
+    };
+    let exact = PendulumExact::from_state(
+        value("x"),
+        value("y"),
+        value("v"),
+        value("w"),
+        param("l")?,
+        param("g")?,
+        param("m")?,
+    )
+    .map_err(|e| pendulum_refusal(scene, &e))?;
+    // The closed form is NaN beyond 2⁵¹ periods: checked at the furthest
+    // time of the horizon.
+    if exact
+        .state(scene.time.end - scene.time.start)
+        .iter()
+        .any(|v| !v.is_finite())
+    {
+        let e = ReferenceError::PhaseLost {
+            t: scene.time.end - scene.time.start,
+        };
+        return Err(pendulum_refusal(scene, &e));
+    }
+    Ok(exact)
+}
+
+/// A refusal of the pendulum's closed form, at the scene field (`initial.x`,
+/// `parameters.g`, `time.end`) of the input it blames.
+fn pendulum_refusal(scene: &Scene, e: &ReferenceError) -> InputError {
+    let field = match e.input() {
+        "theta0" | "x0" => "initial.x".to_string(),
+        "y0" => "initial.y".into(),
+        "v0" => "initial.v".into(),
+        "w0" => "initial.w".into(),
+        "t" => "time.end".into(),
+        p => format!("parameters.{p}"),
+    };
+    InputError::Reference {
+        at: scene.locate(&field),
+        message: format!("`{field}`: pendulum-exact reference: {e}"),
+    }
+}
