@@ -5,8 +5,8 @@
 
 use super::step::{Config, Integrator};
 use super::MAX_ORDER;
-use crate::core::{control, driver};
 use crate::core::matrix::Corrector;
+use crate::core::{control, driver};
 use crate::{Options, Solution, SolveError, Stats};
 use dae_core::system::DaeSystem;
 

@@ -60,12 +60,14 @@ fn solve_small(a: &mut [[f64; MAX_K + 2]; MAX_K + 2], b: &mut [f64; MAX_K + 2], 
             .unwrap_or(col);
         a.swap(col, pivot);
         b.swap(col, pivot);
-        for row in col + 1..n {
-            let f = a[row][col] / a[col][col];
-            for c in col..n {
-                a[row][c] -= f * a[col][c];
+        let (top, bottom) = a.split_at_mut(col + 1);
+        let pivot_row = &top[col];
+        for (off, row) in bottom[..n - col - 1].iter_mut().enumerate() {
+            let f = row[col] / pivot_row[col];
+            for (x, y) in row[col..n].iter_mut().zip(&pivot_row[col..n]) {
+                *x -= f * y;
             }
-            b[row] -= f * b[col];
+            b[col + 1 + off] -= f * b[col];
         }
     }
     for row in (0..n).rev() {
@@ -89,21 +91,25 @@ impl Coefficients {
             error_constant: [0.0; MAX_K + 2],
         };
         for k in 1..=MAX_K {
-            // BDF-k: unknowns α_1 … α_k, β; rows m = 0 … k:
-            // Σ_j α_j (−j)^m − β [m = 1] = −[m = 0].
-            let mut a = [[0.0; MAX_K + 2]; MAX_K + 2];
-            let mut b = [0.0; MAX_K + 2];
-            for m in 0..=k {
-                for j in 1..=k {
-                    a[m][j - 1] = power(j, m);
+            // BDF-k in backward differences (exact, no linear solve):
+            // Σ_{i=1}^{k} ∇^i y_{n+1}/i = h y'_{n+1}, ∇^i y_{n+1} =
+            // Σ_j (−1)^j C(i, j) y_{n+1−j}; divided by Σ 1/i.
+            let mut alpha = [0.0; MAX_K + 1];
+            for i in 1..=k {
+                let mut binom = 1.0;
+                for (j, a) in alpha.iter_mut().enumerate().take(i + 1) {
+                    if j > 0 {
+                        binom *= (i + 1 - j) as f64 / j as f64;
+                    }
+                    let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
+                    *a += sign * binom / i as f64;
                 }
-                a[m][k] = if m == 1 { -1.0 } else { 0.0 };
-                b[m] = if m == 0 { -1.0 } else { 0.0 };
             }
-            solve_small(&mut a, &mut b, k + 1);
-            c.bdf_alpha[k][0] = 1.0;
-            c.bdf_alpha[k][1..=k].copy_from_slice(&b[..k]);
-            c.bdf_beta[k] = b[k];
+            let lead = alpha[0];
+            for (dst, a) in c.bdf_alpha[k].iter_mut().zip(&alpha) {
+                *dst = a / lead;
+            }
+            c.bdf_beta[k] = 1.0 / lead;
 
             // EBDF-k: unknowns â_1 … â_k, b̂_0, b̂_1; rows m = 0 … k+1:
             // Σ_j â_j (−j)^m − b̂_0 [m = 1] − b̂_1 m = −[m = 0].

@@ -183,7 +183,7 @@ mod tests {
         hist.eval(1.0, 3, &mut out);
         assert!((out[0] - p(t_n + 0.5)).abs() < 1e-12);
         let mut e = [0.0];
-        hist.difference_to(&[p(t_n + 0.75)], 3, &mut e);
+        hist.difference_to(&[p(t_n + 0.5)], 3, &mut e);
         assert!(e[0].abs() < 1e-12);
     }
 }

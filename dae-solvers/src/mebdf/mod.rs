@@ -156,14 +156,22 @@ fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, Solve
 
     // Constant step: k − 1 starting values from an adaptive run.
     let (nsteps, h) = limits::constant_grid(span, h_request, options.max_steps, t0)?;
-    let grid = |j: usize| if j == nsteps { t_end } else { t0 + j as f64 * h };
+    let grid = |j: usize| {
+        if j == nsteps {
+            t_end
+        } else {
+            t0 + j as f64 * h
+        }
+    };
     let k = order - 1;
     let constant = |spent: Stats| Config {
         max_order: order,
         fixed_order: true,
         fixed_step: true,
         hmax: h,
-        max_steps: options.max_steps.saturating_sub(spent.steps + spent.rejected),
+        max_steps: options
+            .max_steps
+            .saturating_sub(spent.steps + spent.rejected),
         ..cfg
     };
     let m = (k - 1).min(nsteps);

@@ -57,6 +57,16 @@ enum Stage {
     Three,
 }
 
+/// `c += Σ_j coef[j] · back_j`, `back_j` the `j`-th column of `back` (the
+/// back values `y_n, y_{n−1}, …`).
+fn accumulate(c: &mut [f64], coef: &[f64], back: &[f64]) {
+    for (a, col) in coef.iter().zip(back.chunks_exact(c.len())) {
+        for (ci, b) in c.iter_mut().zip(col) {
+            *ci += a * b;
+        }
+    }
+}
+
 impl Integrator<'_> {
     /// The step number `k` of the formulas at order `p`.
     pub(super) fn steps_of(p: usize) -> usize {
@@ -104,12 +114,7 @@ impl Integrator<'_> {
 
         // Stage 1.
         self.c.fill(0.0);
-        for j in 1..=k {
-            let a = alpha[j];
-            for (c, b) in self.c.iter_mut().zip(&self.back[(j - 1) * n..j * n]) {
-                *c += a * b;
-            }
-        }
+        accumulate(&mut self.c, &alpha[1..=k], &self.back);
         self.hist.eval(1.0, p, &mut self.ypred);
         self.y1.copy_from_slice(&self.ypred);
         self.ensure_matrix(t1, hb)?;
@@ -125,12 +130,7 @@ impl Integrator<'_> {
         for (c, y) in self.c.iter_mut().zip(&self.y1) {
             *c = alpha[1] * y;
         }
-        for j in 2..=k {
-            let a = alpha[j];
-            for (c, b) in self.c.iter_mut().zip(&self.back[(j - 2) * n..(j - 1) * n]) {
-                *c += a * b;
-            }
-        }
+        accumulate(&mut self.c, &alpha[2..=k], &self.back);
         self.hist.eval(2.0, p, &mut self.y2);
         for ((y2, y1), yp) in self.y2.iter_mut().zip(&self.y1).zip(&self.ypred) {
             *y2 += y1 - yp;
@@ -147,12 +147,7 @@ impl Integrator<'_> {
         for ((c, d1), d2) in self.c.iter_mut().zip(&self.d1).zip(&self.d2) {
             *c = -w1 * d1 - w2 * d2;
         }
-        for j in 1..=k {
-            let aj = a[j];
-            for (c, b) in self.c.iter_mut().zip(&self.back[(j - 1) * n..j * n]) {
-                *c += aj * b;
-            }
-        }
+        accumulate(&mut self.c, &a[1..=k], &self.back);
         self.y3.copy_from_slice(&self.y1);
         self.newton(t1, hb, Stage::Three)
     }
@@ -171,7 +166,11 @@ impl Integrator<'_> {
         }
         let inv = 1.0 / hb;
         let a = self.lu.matrix_mut().as_mut_slice();
-        for ((g, e), j) in a.iter_mut().zip(self.lead.as_slice()).zip(self.jac.as_slice()) {
+        for ((g, e), j) in a
+            .iter_mut()
+            .zip(self.lead.as_slice())
+            .zip(self.jac.as_slice())
+        {
             *g = inv * e - j;
         }
         if !a.iter().all(|v| v.is_finite()) {

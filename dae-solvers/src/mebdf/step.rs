@@ -260,12 +260,7 @@ impl<'a> Integrator<'a> {
             match rejection {
                 Rejection::Newton(fail) => {
                     if fixed || self.budget.failed(fail) || 0.25 * self.h < hmin {
-                        return Err(Budget::error(
-                            fail,
-                            self.t,
-                            h_failed,
-                            self.last_iterations,
-                        ));
+                        return Err(Budget::error(fail, self.t, h_failed, self.last_iterations));
                     }
                     self.h *= 0.25;
                 }
