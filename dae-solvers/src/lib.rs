@@ -12,6 +12,7 @@
 //! | [`bdf`] | BDF orders 1–5, fixed leading coefficient (DASSL/DASPK) | square |
 //! | [`odradau`] | Radau IIA 5 with least-squares stage equations (QUALIDAES/GEOMS) | `M ≥ N`, c-level ≤ 1 |
 //! | [`odbdf`] | BDF 1–5 with a least-squares corrector (ODASSL/OVDBDF) | `M ≥ N`, c-level 0 |
+//! | [`mebdf`] | modified extended BDF orders 1–8 (Cash's MEBDF/MEBDFDAE) | square, constant `E` |
 //!
 //! [`init`] computes consistent initial values from the model's constraint
 //! chain, and the initial derivative BDF starts from. Every solver returns
@@ -24,6 +25,7 @@ pub mod core;
 pub mod error;
 pub mod init;
 mod linalg;
+pub mod mebdf;
 pub mod odbdf;
 pub mod odradau;
 pub mod options;
@@ -92,9 +94,10 @@ pub fn solver_by_name(name: &str) -> Option<Box<dyn Solver + Send + Sync>> {
         "bdf" => Some(Box::new(bdf::Bdf)),
         "odradau" => Some(Box::new(odradau::OdRadau)),
         "odbdf" => Some(Box::new(odbdf::OdBdf)),
+        "mebdf" => Some(Box::new(mebdf::Mebdf)),
         _ => None,
     }
 }
 
 /// Names of all solvers, in report order.
-pub const SOLVER_NAMES: [&str; 4] = ["radau5", "bdf", "odradau", "odbdf"];
+pub const SOLVER_NAMES: [&str; 5] = ["radau5", "bdf", "odradau", "odbdf", "mebdf"];

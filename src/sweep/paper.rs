@@ -199,6 +199,7 @@ pub fn family(solver: &str) -> &'static [&'static str] {
         "bdf" => &["DASSL", "DASPK"],
         "odradau" => &["QUALIDAES", "GEOMS"],
         "odbdf" => &["ODASSL", "OVDBDF"],
+        "mebdf" => &["MEBDF"],
         _ => &[],
     }
 }

@@ -5,8 +5,8 @@
 
 use super::step::{Config, Integrator};
 use super::MAX_ORDER;
-use crate::core::driver;
 use crate::core::matrix::Corrector;
+use crate::core::{control, driver};
 use crate::{Options, Solution, SolveError, Stats};
 use dae_core::system::DaeSystem;
 
@@ -74,20 +74,7 @@ impl<'a> Run<'a> {
         let opts = self.options;
         let span = self.t_end - self.t0;
         let k = opts.fixed_order.unwrap_or(opts.max_order);
-        let ratio = span / h_request;
-        if !ratio.is_finite() || ratio > opts.max_steps as f64 {
-            return Err(SolveError::StepLimit {
-                t: self.t0,
-                max_steps: opts.max_steps,
-            });
-        }
-        let nsteps = if (ratio - ratio.round()).abs() <= 1e-9 * ratio.max(1.0) {
-            ratio.round()
-        } else {
-            ratio.ceil()
-        }
-        .max(1.0) as usize;
-        let h = span / nsteps as f64;
+        let (nsteps, h) = control::constant_grid(span, h_request, opts.max_steps, self.t0)?;
         let grid = |j: usize| {
             if j == nsteps {
                 self.t_end

@@ -4,7 +4,7 @@
 
 use super::corrector::JacState;
 use super::order::ErrorTest;
-use super::{EPS, NCOL};
+use super::NCOL;
 use crate::core::control::{self, Budget, Failure as Fail};
 use crate::core::driver::Method;
 use crate::core::matrix::{Corrector, Rows};
@@ -220,24 +220,13 @@ impl<'a, L: Corrector> Integrator<'a, L> {
         // Step size limits and the end of the horizon.
         let remaining = self.cfg.t_end - self.t;
         let h_before = self.h;
-        if !self.cfg.fixed_step {
-            self.h = self.h.min(self.cfg.hmax);
-        }
-        // Reach t_end without a step that is tiny next to its predecessors:
-        // stretch the last step by up to 10 %, or split what remains of two
-        // steps into two equal ones.
-        self.last = if self.cfg.fixed_step {
-            remaining <= 1.5 * self.h
-        } else {
-            self.h >= remaining
-                || (remaining <= 1.1 * self.h && remaining <= self.cfg.hmax)
-                || remaining - self.h <= 4.0 * EPS * self.cfg.t_end.abs()
-        };
-        if self.last {
-            self.h = remaining;
-        } else if !self.cfg.fixed_step && remaining < 2.0 * self.h {
-            self.h = 0.5 * remaining;
-        }
+        (self.h, self.last) = control::approach_end(
+            self.h,
+            remaining,
+            self.cfg.hmax,
+            self.cfg.t_end,
+            self.cfg.fixed_step,
+        );
         if self.kold == 0 && self.h != h_before {
             self.rescale_first_step(h_before);
         }

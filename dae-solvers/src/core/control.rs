@@ -99,3 +99,56 @@ impl Budget {
         }
     }
 }
+
+/// The step toward `t_end` from a point `remaining` before it, for a
+/// proposed step `h` (bounded by `h_max` unless `fixed_step`): reach
+/// `t_end` without a step that is tiny next to its predecessors — stretch
+/// the last step by up to 10 % (a constant step: up to 50 %), or split
+/// what remains of two steps into two equal ones. Returns the step and
+/// whether it is the last.
+pub(crate) fn approach_end(
+    h: f64,
+    remaining: f64,
+    h_max: f64,
+    t_end: f64,
+    fixed_step: bool,
+) -> (f64, bool) {
+    let h = if fixed_step { h } else { h.min(h_max) };
+    let last = if fixed_step {
+        remaining <= 1.5 * h
+    } else {
+        h >= remaining
+            || (remaining <= 1.1 * h && remaining <= h_max)
+            || remaining - h <= 4.0 * f64::EPSILON * t_end.abs()
+    };
+    if last {
+        (remaining, true)
+    } else if !fixed_step && remaining < 2.0 * h {
+        (0.5 * remaining, false)
+    } else {
+        (h, false)
+    }
+}
+
+/// The constant step for a request `h_request` on a horizon of length
+/// `span`: `span/⌈span/h_request⌉` (a ratio within `10⁻⁹` of an integer
+/// counts as that integer), with the number of steps;
+/// [`SolveError::StepLimit`] at `t0` when that exceeds `max_steps`.
+pub(crate) fn constant_grid(
+    span: f64,
+    h_request: f64,
+    max_steps: usize,
+    t0: f64,
+) -> Result<(usize, f64), SolveError> {
+    let ratio = span / h_request;
+    if !ratio.is_finite() || ratio > max_steps as f64 {
+        return Err(SolveError::StepLimit { t: t0, max_steps });
+    }
+    let nsteps = if (ratio - ratio.round()).abs() <= 1e-9 * ratio.max(1.0) {
+        ratio.round()
+    } else {
+        ratio.ceil()
+    }
+    .max(1.0) as usize;
+    Ok((nsteps, span / nsteps as f64))
+}

@@ -1,0 +1,118 @@
+//! The error estimate and the choice of the next order and step, in the
+//! manner of Cash's MEBDF code (itself after Gear's and Hindmarsh's codes).
+//!
+//! *Error estimate*: the local error of the order-`p` step is
+//! `|C_p| ‖y_{n+1} − P_p(t_{n+1})‖`, the predictor `P_p` being the polynomial
+//! of degree `p` through `y_n, …, y_{n−p}`: the difference is
+//! `∇^(p+1) y_{n+1} ≈ h^(p+1) y^(p+1)`, `C_p` the error constant of the
+//! formula ([`super::coeffs`]). The same with `p ∓ 1` estimates the errors
+//! the neighbouring orders would have made.
+//!
+//! *Step and order*: after `p + 1` steps at the same order and step size,
+//! the ratios `r_q = 1/(c_q est_q^(1/(q+1)) + 10⁻⁶)` of orders
+//! `q = p − 1, p, p + 1` (biases `c = 1.3, 1.2, 1.4` favouring the current
+//! order) are compared and the largest wins; before, the step is kept. A
+//! ratio below 1.1 at the same order keeps the step; increases are at most
+//! ×10 until the first rejection, ×2 after; decreases at least ×0.2. After a
+//! rejected error test: `r_p` clamped to `[0.1, 0.9]`, or the lower order if
+//! it promises a larger step; from the third failure on one step, order one
+//! and `r = 1/4`.
+
+use super::coeffs::MAX_ORDER;
+use super::step::Integrator;
+
+/// Step ratio `1/(bias · est^(1/(q+1)) + 10⁻⁶ bias)` for an error `est` at
+/// order `q`.
+fn ratio(est: f64, q: usize, bias: f64) -> f64 {
+    1.0 / (bias * est.powf(1.0 / (q + 1) as f64) + 1e-6 * bias)
+}
+
+impl Integrator<'_> {
+    /// The solution of the current attempt.
+    fn solution(&self) -> &[f64] {
+        if self.p == 1 {
+            &self.y1
+        } else {
+            &self.y3
+        }
+    }
+
+    /// `|C_q| ‖y_{n+1} − P_q(t_{n+1})‖` for the current attempt.
+    fn estimate_at(&mut self, q: usize) -> f64 {
+        let mut d = std::mem::take(&mut self.delta);
+        self.hist.difference_to(self.solution(), q, &mut d);
+        let est = self.coef.error_constant[q] * self.weights.norm(&d);
+        self.delta = d;
+        if est.is_nan() {
+            f64::INFINITY
+        } else {
+            est
+        }
+    }
+
+    /// The error norm of the current attempt (accepted when at most one).
+    pub(super) fn error_estimate(&mut self) -> f64 {
+        self.estimate_at(self.p)
+    }
+
+    /// Order and step ratio after an accepted step with error `err`.
+    pub(super) fn propose(&mut self, err: f64) -> (usize, f64) {
+        let p = self.p;
+        self.same += 1;
+        let max_order = self.cfg.max_order;
+        let r_same = ratio(err, p, 1.2);
+        let (mut p_new, mut r) = (p, 1.0);
+        if self.same > p {
+            r = r_same;
+            if self.cfg.fixed_order {
+                if p < max_order {
+                    let r_up = ratio(self.estimate_at(p + 1), p + 1, 1.4);
+                    p_new = p + 1;
+                    r = r_up.min(r_same);
+                }
+            } else {
+                if p > 1 {
+                    let r_down = ratio(self.estimate_at(p - 1), p - 1, 1.3);
+                    if r_down > r {
+                        (p_new, r) = (p - 1, r_down);
+                    }
+                }
+                if p < max_order.min(MAX_ORDER) {
+                    let r_up = ratio(self.estimate_at(p + 1), p + 1, 1.4);
+                    if r_up > r {
+                        (p_new, r) = (p + 1, r_up);
+                    }
+                }
+            }
+            if p_new == p && (1.0..1.1).contains(&r) {
+                r = 1.0;
+            }
+        }
+        let r_max = if self.ramp { 10.0 } else { 2.0 };
+        r = r.clamp(0.2, r_max);
+        if r > 1.0 && self.h * r > self.cfg.hmax {
+            r = (self.cfg.hmax / self.h).max(1.0);
+        }
+        (p_new, r)
+    }
+
+    /// After the `failures`-th rejected error test (error `err`) on this
+    /// step: the new order and step size.
+    pub(super) fn reject(&mut self, err: f64, failures: usize) {
+        let p = self.p;
+        if failures >= 3 {
+            self.p = 1;
+            self.h *= 0.25;
+            return;
+        }
+        let mut r = ratio(err, p, 1.2).clamp(0.1, 0.9);
+        if p > 1 && !self.cfg.fixed_order {
+            let r_down = ratio(self.estimate_at(p - 1), p - 1, 1.3).clamp(0.1, 0.9);
+            if r_down > r {
+                self.p = p - 1;
+                r = r_down;
+            }
+        }
+        self.h *= r;
+    }
+}

@@ -1,0 +1,207 @@
+//! Modified extended BDF (MEBDF) of Cash, variable step and variable order
+//! 1–8, for square DAEs `E y' = f(t, y)` with a constant leading matrix `E`
+//! — the method of the MEBDF/MEBDFDAE codes.
+//!
+//! # The method
+//!
+//! J. R. Cash, *On the integration of stiff systems of ODEs using extended
+//! backward differentiation formulae*, Numer. Math. 34 (1980) 235–246;
+//! *The integration of stiff initial value problems in ODEs using modified
+//! extended backward differentiation formulae*, Comp. & Maths. with Appls.
+//! 9 (1983) 645–657; the DAE code: T. J. Abdulla, J. R. Cash and
+//! M. T. Diamantakis, *An MEBDF package for the numerical solution of large
+//! sparse systems of stiff initial value problems*, Comp. & Maths. with
+//! Appls. 42 (2001) 121–129; Hairer & Wanner, *Solving ODEs II*, V.3.
+//!
+//! A step of order `p = k + 1` from `t_n` to `t_{n+1}` is made of three
+//! stages ([`stages`](self) explains them): a `k`-step BDF step to `t_{n+1}`,
+//! a second one to `t_{n+2}`, and the `k`-step extended BDF — order `k + 1`
+//! with the derivative at the future point `t_{n+2}` — modified so that its
+//! coefficient of `f(y_{n+1})` is the BDF's `β`. All three stages are
+//! `E (y + c) = hβ f(t, y)` with different known parts `c`, so they share
+//! one iteration matrix `E/(hβ) − J`. Order one is the implicit Euler step
+//! alone. The coefficients are those of constant steps, solved from the
+//! order conditions ([`coeffs`](self)).
+//!
+//! **Variable step by interpolation** (as Cash's code, which keeps a table
+//! of backward differences): the past values are held as backward
+//! differences on an equally spaced grid; when the step size changes, the
+//! polynomial of the current order through them is evaluated on the new
+//! grid (a Nordsieck-style rescaling) — the constant-step formulas then
+//! apply unchanged.
+//!
+//! **Error estimate and order selection** (see [`control`](self)): the local
+//! error of order `p` is `|C_p| ‖y_{n+1} − P_p(t_{n+1})‖` with the predictor
+//! of degree `p`, `≈ C_p h^(p+1) y^(p+1)`; the neighbouring orders are
+//! estimated the same way, and after `p + 1` steps of constant size the
+//! order with the largest admissible step is taken (biases 1.3 / 1.2 / 1.4
+//! for `p − 1, p, p + 1`, as in Gear- and LSODE-type codes). The start is
+//! order one with DASSL's initial step.
+//!
+//! **Higher index** (as RADAU5 and MEBDFDAE): every unknown is in the error
+//! test, the error of an index-`k` unknown ([`VarInfo::index`]) scaled by
+//! `h^(k−1)` (`core::weights`); the same norm measures the Newton
+//! increments. [`Options::index2_in_error_test`] is not used.
+//!
+//! [`VarInfo::index`]: dae_core::system::VarInfo
+//!
+//! # Options
+//!
+//! - [`Options::max_order`] and [`Options::fixed_order`] count the *steps*
+//!   `k` of the formulas: order `k + 1`. `max_order = k` bounds the order
+//!   by `k + 1` (the default 5 allows orders 1–6; the formulas exist up to
+//!   order 8, [`coeffs::MAX_ORDER`](self), but [`Options`] admits `k ≤ 5`);
+//!   `fixed_order = k` raises the order to `k + 1` as the history allows
+//!   and never lowers it by order selection (only the emergency fall-back to
+//!   order one after three error-test failures on one step).
+//! - [`Options::h0`] replaces the initial step, [`Options::h_max`] bounds
+//!   every step, [`Options::max_steps`] counts step attempts; a step below
+//!   `4 ε max(|t|, ε (t_end − t₀))` is [`SolveError::StepSizeTooSmall`].
+//! - [`Options::fixed_step`]: a constant step `h` on the grid
+//!   `t₀ + j h` and no error test, order `k + 1` with `k` from
+//!   `fixed_order` (else `max_order`); the `k − 1` starting values beyond
+//!   `y₀` come from an adaptive run at the caller's tolerances (as for
+//!   [`crate::bdf`]). For convergence studies.
+//! - [`Options::output_times`]: dense output by the polynomial of the last
+//!   step's order through the last values.
+//!
+//! # Example
+//!
+//! ```
+//! use dae_core::system::DaeSystem;
+//! use dae_solvers::mebdf::Mebdf;
+//! use dae_solvers::{Options, Problem, Solver};
+//! # fn run(sys: &dyn DaeSystem, y0: &[f64]) -> Result<(), dae_solvers::SolveError> {
+//! let problem = Problem { system: sys, t0: 0.0, y0, t_end: 2.0 };
+//! let solution = Mebdf.solve(&problem, &Options::with_tol(1e-8))?;
+//! println!("y(2) = {:?} after {} steps", solution.last(), solution.stats.steps);
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! # Resources
+//!
+//! Every buffer is allocated before the step loop; the loop does not
+//! allocate, except to record steps when [`Options::record_steps`] asks.
+
+mod coeffs;
+mod control;
+mod history;
+mod stages;
+mod step;
+
+use crate::core::{control as limits, driver, policy};
+use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
+use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver, Stats};
+use dae_core::system::FormulationInfo;
+use step::{Config, Integrator};
+
+/// Cash's modified extended BDF, orders 1–8, variable step by
+/// interpolation. See the [module documentation](self).
+pub struct Mebdf;
+
+impl Solver for Mebdf {
+    fn name(&self) -> &'static str {
+        "mebdf"
+    }
+
+    fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable> {
+        policy::square(info)?;
+        policy::constant_leading(info)
+    }
+
+    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+        self.accepts(problem.system.info())?;
+        integrate(problem, options)
+    }
+}
+
+/// Integrate `problem` (accepted) with the options.
+fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    let sys = problem.system;
+    problem.check(sys.info().unknowns(), options)?;
+    let (t0, t_end) = (problem.t0, problem.t_end);
+    let span = t_end - t0;
+
+    let mut spent = Stats::default();
+    let yp0 = initial_derivative_with(sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
+    spent.residual_evals += 1;
+    check_residuals(sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
+
+    let steps = options.fixed_order.unwrap_or(options.max_order);
+    let order = (steps + 1).min(coeffs::MAX_ORDER);
+    let cfg = Config {
+        max_order: order,
+        fixed_order: options.fixed_order.is_some(),
+        fixed_step: false,
+        hmax: options.h_max.unwrap_or(span),
+        max_steps: options.max_steps,
+        t_end,
+        span,
+    };
+    let integrator = |cfg: Config, stats: Stats| {
+        let mut integ = Integrator::new(sys, &options.tol, cfg);
+        integ.stats = stats;
+        integ
+    };
+    let Some(h_request) = options.fixed_step else {
+        let mut integ = integrator(cfg, spent);
+        let h0 = match options.h0 {
+            Some(h) => h.min(cfg.hmax).min(span),
+            None => integ.initial_step(problem.y0, &yp0),
+        };
+        integ.start(t0, problem.y0, &yp0, h0);
+        return driver::solve(&mut integ, options, t0, t_end);
+    };
+
+    // Constant step: k − 1 starting values from an adaptive run.
+    let (nsteps, h) = limits::constant_grid(span, h_request, options.max_steps, t0)?;
+    let grid = |j: usize| {
+        if j == nsteps {
+            t_end
+        } else {
+            t0 + j as f64 * h
+        }
+    };
+    let k = order - 1;
+    let constant = |spent: Stats| Config {
+        max_order: order,
+        fixed_order: true,
+        fixed_step: true,
+        hmax: h,
+        max_steps: options
+            .max_steps
+            .saturating_sub(spent.steps + spent.rejected),
+        ..cfg
+    };
+    let m = (k - 1).min(nsteps);
+    if m == 0 {
+        let mut integ = integrator(constant(spent), spent);
+        integ.start(t0, problem.y0, &yp0, h);
+        integ.p = order;
+        return driver::solve(&mut integ, options, t0, t_end);
+    }
+    let mut startup = integrator(
+        Config {
+            max_order: coeffs::MAX_ORDER.min(6),
+            fixed_order: false,
+            t_end: grid(m),
+            ..cfg
+        },
+        spent,
+    );
+    let h0 = startup.initial_step(problem.y0, &yp0).min(h);
+    startup.start(t0, problem.y0, &yp0, h0);
+    let build = |startup: &Integrator<'_>, values: &[Vec<f64>]| {
+        if m == nsteps {
+            return None;
+        }
+        let mut integ = integrator(constant(startup.stats), Stats::default());
+        let mut history: Vec<&[f64]> = Vec::with_capacity(k);
+        history.push(problem.y0);
+        history.extend(values.iter().map(|v| v.as_slice()));
+        integ.start_from_values(grid(k - 1), &history, h, order);
+        Some(integ)
+    };
+    driver::solve_with_startup(&mut startup, (1..=m).map(grid), build, options, t0, t_end)
+}

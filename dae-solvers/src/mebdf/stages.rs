@@ -1,0 +1,253 @@
+//! The three stages of a step and their simplified Newton iterations, all
+//! with the one iteration matrix `E/(hβ) − J`.
+//!
+//! With the back values `y_{n+1−j}` and `k = max(p − 1, 1)`:
+//!
+//! 1. `ȳ_{n+1}` from BDF-`k`: `E (ȳ_{n+1} + c_1) = hβ f(t_{n+1}, ȳ_{n+1})`,
+//!    `c_1 = Σ_{j≥1} α_j y_{n+1−j}` (for `p = 1` this is the step);
+//! 2. `ȳ_{n+2}` from BDF-`k` one step further, with `ȳ_{n+1}` as the
+//!    newest value: `c_2 = α_1 ȳ_{n+1} + Σ_{j≥2} α_j y_{n+2−j}`;
+//! 3. `y_{n+1}` from EBDF-`k` with `b̂_0 f_{n+1}` split as
+//!    `β f(y_{n+1}) + (b̂_0 − β) f̄_{n+1}` (Cash's modification): since
+//!    `hβ f̄_{n+i}` is `E d_i`, `d_i = ȳ_{n+i} + c_i`, this is again
+//!    `E (y + c_3) = hβ f(t_{n+1}, y)` with
+//!    `c_3 = Σ_{j≥1} â_j y_{n+1−j} − (b̂_0 − β)/β d_1 − b̂_1/β d_2`.
+//!
+//! Every stage is `F(t, y, (y + c)/(hβ)) = 0`, solved from its predictor
+//! with the matrix `E/(hβ) − J` (`J = ∂f/∂y`, evaluated at the first
+//! predictor of the step when it is due and kept over steps until a Newton
+//! iteration fails with it; refactored whenever `hβ` changes). Increments
+//! are measured in the index-scaled norm of `core::weights`; convergence by
+//! DASSL's rate estimate (`core::newton`).
+
+use super::step::Integrator;
+use crate::core::control::Failure;
+use crate::core::matrix::{Corrector, Rows};
+use crate::core::newton::{Contraction, Rule, Verdict};
+
+/// Newton iterations per stage.
+const MAX_ITER: usize = 5;
+/// Newton iterations per stage with a constant step (no smaller step can
+/// rescue a failure).
+const MAX_ITER_FIXED_STEP: usize = 20;
+/// Convergence `η ‖Δ‖ ≤ KAPPA`: tighter than DASSL's 0.33, since the errors
+/// of the first two stages enter the third through `d_1`, `d_2`.
+const KAPPA: f64 = 0.01;
+
+/// Smallest rate factor carried into a new iteration: a first increment is
+/// accepted alone only when it is below `KAPPA/ETA_MIN`.
+const ETA_MIN: f64 = 0.05;
+
+/// Whether `J` is current.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum JacState {
+    /// Must be evaluated before the next iteration.
+    Needed,
+    /// Evaluated during this attempt.
+    Fresh,
+    /// Evaluated on an earlier step.
+    Stale,
+}
+
+/// Which stage buffer a Newton iteration works on.
+#[derive(Clone, Copy)]
+enum Stage {
+    One,
+    Two,
+    Three,
+}
+
+/// `c += Σ_j coef[j] · back_j`, `back_j` the `j`-th column of `back` (the
+/// back values `y_n, y_{n−1}, …`).
+fn accumulate(c: &mut [f64], coef: &[f64], back: &[f64]) {
+    for (a, col) in coef.iter().zip(back.chunks_exact(c.len())) {
+        for (ci, b) in c.iter_mut().zip(col) {
+            *ci += a * b;
+        }
+    }
+}
+
+impl Integrator<'_> {
+    /// The step number `k` of the formulas at order `p`.
+    pub(super) fn steps_of(p: usize) -> usize {
+        p.saturating_sub(1).max(1)
+    }
+
+    /// The stages of the current attempt from `t` to `t + h`, retried once
+    /// with a fresh `J` when an old one fails.
+    pub(super) fn attempt(&mut self) -> Result<(), Failure> {
+        loop {
+            let stale = self.jac_state == JacState::Stale;
+            match self.stages() {
+                Ok(()) => {
+                    self.jac_state = JacState::Stale;
+                    return Ok(());
+                }
+                Err(Failure::Newton) if stale => self.jac_state = JacState::Needed,
+                Err(fail) => {
+                    self.jac_state = JacState::Needed;
+                    return Err(fail);
+                }
+            }
+        }
+    }
+
+    /// Solve the three stages (one for `p = 1`).
+    fn stages(&mut self) -> Result<(), Failure> {
+        let n = self.n;
+        let p = self.p;
+        let k = Self::steps_of(p);
+        let h = self.h;
+        let t1 = if self.last {
+            self.cfg.t_end
+        } else {
+            self.t + h
+        };
+        let t2 = t1 + h;
+        let beta = self.coef.bdf_beta[k];
+        let hb = h * beta;
+        for j in 0..k {
+            self.hist
+                .eval(-(j as f64), j, &mut self.back[j * n..(j + 1) * n]);
+        }
+        let alpha = self.coef.bdf_alpha[k];
+
+        // Stage 1.
+        self.c.fill(0.0);
+        accumulate(&mut self.c, &alpha[1..=k], &self.back);
+        self.hist.eval(1.0, p, &mut self.ypred);
+        self.y1.copy_from_slice(&self.ypred);
+        self.ensure_matrix(t1, hb)?;
+        self.newton(t1, hb, Stage::One)?;
+        if p == 1 {
+            return Ok(());
+        }
+        for ((d, y), c) in self.d1.iter_mut().zip(&self.y1).zip(&self.c) {
+            *d = y + c;
+        }
+
+        // Stage 2: ȳ_{n+1} is the newest value.
+        for (c, y) in self.c.iter_mut().zip(&self.y1) {
+            *c = alpha[1] * y;
+        }
+        accumulate(&mut self.c, &alpha[2..=k], &self.back);
+        self.hist.eval(2.0, p, &mut self.y2);
+        for ((y2, y1), yp) in self.y2.iter_mut().zip(&self.y1).zip(&self.ypred) {
+            *y2 += y1 - yp;
+        }
+        self.newton(t2, hb, Stage::Two)?;
+        for ((d, y), c) in self.d2.iter_mut().zip(&self.y2).zip(&self.c) {
+            *d = y + c;
+        }
+
+        // Stage 3: the modified extended formula.
+        let a = self.coef.ebdf_a[k];
+        let w1 = (self.coef.ebdf_b0[k] - beta) / beta;
+        let w2 = self.coef.ebdf_b1[k] / beta;
+        for ((c, d1), d2) in self.c.iter_mut().zip(&self.d1).zip(&self.d2) {
+            *c = -w1 * d1 - w2 * d2;
+        }
+        accumulate(&mut self.c, &a[1..=k], &self.back);
+        self.y3.copy_from_slice(&self.y1);
+        self.newton(t1, hb, Stage::Three)
+    }
+
+    /// Evaluate `J` at the predictor when due, and factor `E/(hβ) − J`
+    /// when `J` or `hβ` changed.
+    fn ensure_matrix(&mut self, t: f64, hb: f64) -> Result<(), Failure> {
+        if self.jac_state == JacState::Needed {
+            self.sys.rhs_jacobian(t, &self.y1, &mut self.jac);
+            self.stats.jacobian_evals += 1;
+            self.jac_state = JacState::Fresh;
+            self.hb_factored = 0.0;
+        }
+        if hb == self.hb_factored {
+            return Ok(());
+        }
+        let inv = 1.0 / hb;
+        let a = self.lu.matrix_mut().as_mut_slice();
+        for ((g, e), j) in a
+            .iter_mut()
+            .zip(self.lead.as_slice())
+            .zip(self.jac.as_slice())
+        {
+            *g = inv * e - j;
+        }
+        if !a.iter().all(|v| v.is_finite()) {
+            return Err(Failure::NonFinite("iteration matrix"));
+        }
+        self.stats.factorizations += 1;
+        self.eta = 100.0;
+        self.hb_factored = 0.0;
+        let rows = Rows {
+            exact: Vec::new(),
+            weight: Vec::new(),
+        };
+        self.lu.factor(&rows).map_err(|_| Failure::Singular)?;
+        self.hb_factored = hb;
+        Ok(())
+    }
+
+    /// `δ = F(t, y, y')` for the stage iterate `y`.
+    fn residual(&mut self, t: f64, y: &[f64]) -> bool {
+        self.sys.residual(t, y, &self.yp, &mut self.delta);
+        self.stats.residual_evals += 1;
+        self.delta.iter().all(|v| v.is_finite())
+    }
+
+    /// Simplified Newton iteration on `F(t, y, (y + c)/(hβ)) = 0` from the
+    /// stage's current value.
+    fn newton(&mut self, t: f64, hb: f64, stage: Stage) -> Result<(), Failure> {
+        let mut y = std::mem::take(match stage {
+            Stage::One => &mut self.y1,
+            Stage::Two => &mut self.y2,
+            Stage::Three => &mut self.y3,
+        });
+        let result = self.iterate(t, hb, &mut y);
+        match stage {
+            Stage::One => self.y1 = y,
+            Stage::Two => self.y2 = y,
+            Stage::Three => self.y3 = y,
+        }
+        result
+    }
+
+    /// The iteration of [`Self::newton`] on `y`.
+    fn iterate(&mut self, t: f64, hb: f64, y: &mut [f64]) -> Result<(), Failure> {
+        let inv = 1.0 / hb;
+        for ((yp, yi), c) in self.yp.iter_mut().zip(y.iter()).zip(&self.c) {
+            *yp = (yi + c) * inv;
+        }
+        self.last_iterations = 0;
+        if !self.residual(t, y) {
+            return Err(Failure::NonFinite("residual"));
+        }
+        let tiny = 100.0 * f64::EPSILON * self.weights.norm(y);
+        let maxit = if self.cfg.fixed_step {
+            MAX_ITER_FIXED_STEP
+        } else {
+            MAX_ITER
+        };
+        let mut monitor = Contraction::new(Rule::Dassl, maxit, KAPPA, self.eta.max(ETA_MIN));
+        loop {
+            self.lu.solve(&mut self.delta);
+            self.stats.newton_iterations += 1;
+            self.last_iterations += 1;
+            for ((yi, yp), d) in y.iter_mut().zip(self.yp.iter_mut()).zip(&self.delta) {
+                *yi -= d;
+                *yp -= d * inv;
+            }
+            let norm = self.weights.norm(&self.delta);
+            let verdict = monitor.observe(norm, tiny);
+            self.eta = monitor.eta;
+            match verdict {
+                Verdict::Converged => return Ok(()),
+                Verdict::Diverged | Verdict::TooSlow { .. } => return Err(Failure::Newton),
+                Verdict::Continue => {}
+            }
+            if !self.residual(t, y) {
+                return Err(Failure::Newton);
+            }
+        }
+    }
+}

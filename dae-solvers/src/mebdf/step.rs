@@ -1,0 +1,317 @@
+//! The integrator: the settings of a run, its state and workspace, the
+//! driver's view of it, and one accepted step with its retries after failed
+//! attempts.
+
+use super::coeffs::{Coefficients, MAX_ORDER};
+use super::history::History;
+use super::stages::JacState;
+use crate::core::control::{self, Budget, Failure};
+use crate::core::driver::Method;
+use crate::core::matrix::{Corrector, SquareLu};
+use crate::core::weights::Weights;
+use crate::options::Tolerances;
+use crate::{SolveError, Stats};
+use dae_core::system::DaeSystem;
+use nalgebra::DMatrix;
+
+/// Settings of one integrator.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Config {
+    /// Largest order `p` (1 … [`MAX_ORDER`]).
+    pub(super) max_order: usize,
+    /// Raise the order to `max_order` as soon as possible and never lower
+    /// it by order selection.
+    pub(super) fixed_order: bool,
+    /// Constant step, no error test.
+    pub(super) fixed_step: bool,
+    /// Largest step.
+    pub(super) hmax: f64,
+    /// Step attempts allowed (accepted + rejected).
+    pub(super) max_steps: usize,
+    /// Where to stop (never stepped over).
+    pub(super) t_end: f64,
+    /// Length of the whole horizon (scale of the smallest step).
+    pub(super) span: f64,
+}
+
+/// Why a step attempt was rejected.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Rejection {
+    /// A stage did not converge.
+    Newton(Failure),
+    /// The local error estimate exceeded the tolerance (its norm).
+    ErrorTest(f64),
+}
+
+/// State and workspace of the MEBDF step (`N` unknowns).
+pub(super) struct Integrator<'a> {
+    /// The formulation.
+    pub(super) sys: &'a dyn DaeSystem,
+    /// Settings of this run.
+    pub(super) cfg: Config,
+    /// The formulas.
+    pub(super) coef: Coefficients,
+    /// Unknowns `N`.
+    pub(super) n: usize,
+    /// Error weights, index-scaled.
+    pub(super) weights: Weights,
+    /// Differences of the past values.
+    pub(super) hist: History,
+
+    /// Current time `t_n`.
+    pub(super) t: f64,
+    /// Step size of the next attempt.
+    pub(super) h: f64,
+    /// Order of the next attempt.
+    pub(super) p: usize,
+    /// Order of the last accepted step (0 before the first).
+    pub(super) p_old: usize,
+    /// Accepted steps since the last change of step size or order.
+    pub(super) same: usize,
+    /// No step has been rejected yet: larger step increases are allowed.
+    pub(super) ramp: bool,
+    /// The current attempt reaches `t_end`.
+    pub(super) last: bool,
+
+    /// `E` (constant).
+    pub(super) lead: DMatrix<f64>,
+    /// `∂f/∂y` at the last evaluation.
+    pub(super) jac: DMatrix<f64>,
+    /// `E/(hβ) − J`, factored.
+    pub(super) lu: SquareLu,
+    /// `hβ` of the factored matrix (0: none).
+    pub(super) hb_factored: f64,
+    /// Whether `J` is current.
+    pub(super) jac_state: JacState,
+    /// Newton rate factor `θ/(1−θ)`, carried between iterations.
+    pub(super) eta: f64,
+    /// Newton iterations of the last stage.
+    pub(super) last_iterations: usize,
+
+    /// The predictor `P(t_{n+1})` of degree `p`.
+    pub(super) ypred: Vec<f64>,
+    /// Stage 1: `ȳ_{n+1}` (BDF); the solution when `p = 1`.
+    pub(super) y1: Vec<f64>,
+    /// Stage 2: `ȳ_{n+2}` (BDF).
+    pub(super) y2: Vec<f64>,
+    /// Stage 3: `y_{n+1}` (the modified extended formula).
+    pub(super) y3: Vec<f64>,
+    /// The known part `c` of the stage being solved, `E (y + c) = hβ f`.
+    pub(super) c: Vec<f64>,
+    /// `ȳ_{n+1} + c_1`, `E d_1 = hβ f̄_{n+1}`.
+    pub(super) d1: Vec<f64>,
+    /// `ȳ_{n+2} + c_2`, `E d_2 = hβ f̄_{n+2}`.
+    pub(super) d2: Vec<f64>,
+    /// Back values `y_n, …, y_{n−k+1}`, one column each.
+    pub(super) back: Vec<f64>,
+    /// The stage's derivative `(y + c)/(hβ)`.
+    pub(super) yp: Vec<f64>,
+    /// Residual, then Newton update; scratch.
+    pub(super) delta: Vec<f64>,
+
+    /// Work counters.
+    pub(super) stats: Stats,
+    /// Step attempts and failures on this step.
+    pub(super) budget: Budget,
+}
+
+impl Method for Integrator<'_> {
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        self.hist.y()
+    }
+    fn dense(&self, tau: f64, out: &mut [f64]) {
+        self.hist.interpolate(self.t, tau, self.p_old.max(1), out)
+    }
+    fn finished(&self) -> bool {
+        self.t >= self.cfg.t_end
+    }
+    fn step(&mut self) -> Result<(), SolveError> {
+        Integrator::step(self)
+    }
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+}
+
+impl<'a> Integrator<'a> {
+    /// Allocate every buffer of the step loop; index-`k` unknowns are
+    /// weighted by `h^(k−1)`.
+    pub(super) fn new(sys: &'a dyn DaeSystem, tol: &Tolerances, cfg: Config) -> Self {
+        let info = sys.info();
+        let n = info.unknowns();
+        let index_power = info
+            .variables
+            .iter()
+            .map(|v| i32::from(v.index.max(1)) - 1)
+            .collect();
+        let mut lead = DMatrix::zeros(n, n);
+        sys.leading(&vec![0.0; n], &mut lead);
+        Integrator {
+            sys,
+            cfg,
+            coef: Coefficients::new(),
+            n,
+            weights: Weights::new(tol, |_| 1.0, vec![true; n], index_power),
+            hist: History::new(n),
+            t: 0.0,
+            h: 0.0,
+            p: 1,
+            p_old: 0,
+            same: 0,
+            ramp: true,
+            last: false,
+            lead,
+            jac: DMatrix::zeros(n, n),
+            lu: SquareLu::new(n, n),
+            hb_factored: 0.0,
+            jac_state: JacState::Needed,
+            eta: 100.0,
+            last_iterations: 0,
+            ypred: vec![0.0; n],
+            y1: vec![0.0; n],
+            y2: vec![0.0; n],
+            y3: vec![0.0; n],
+            c: vec![0.0; n],
+            d1: vec![0.0; n],
+            d2: vec![0.0; n],
+            back: vec![0.0; n * MAX_ORDER],
+            yp: vec![0.0; n],
+            delta: vec![0.0; n],
+            stats: Stats::default(),
+            budget: Budget::new(cfg.max_steps),
+        }
+    }
+
+    /// DASSL's initial step: `0.001 (t_end − t₀)`, reduced so that
+    /// `h ‖y'₀‖ ≤ 0.5` (unscaled weights), at most `h_max`.
+    pub(super) fn initial_step(&mut self, y0: &[f64], yp0: &[f64]) -> f64 {
+        self.weights.update(y0);
+        let mut h = 0.001 * self.cfg.span;
+        let ypnorm = self.weights.norm(yp0);
+        if ypnorm > 0.5 / h {
+            h = 0.5 / ypnorm;
+        }
+        h.min(self.cfg.hmax)
+    }
+
+    /// Start at `(t0, y0, y'0)` with order one and step `h`.
+    pub(super) fn start(&mut self, t0: f64, y0: &[f64], yp0: &[f64], h: f64) {
+        self.t = t0;
+        self.h = h;
+        self.p = 1;
+        self.p_old = 0;
+        self.hist.start(y0, yp0, h);
+    }
+
+    /// Start a constant-step run of order `p` at `t` from the values at
+    /// `t − (m−1)h, …, t` (oldest first).
+    pub(super) fn start_from_values(&mut self, t: f64, values: &[&[f64]], h: f64, p: usize) {
+        self.t = t;
+        self.h = h;
+        self.p = p;
+        self.p_old = values.len().saturating_sub(1);
+        self.ramp = false;
+        self.hist.start_from_values(values, h);
+    }
+
+    /// Take one step (retrying with smaller steps or lower order as needed).
+    fn step(&mut self) -> Result<(), SolveError> {
+        let remaining = self.cfg.t_end - self.t;
+        let fixed = self.cfg.fixed_step;
+        (self.h, self.last) =
+            control::approach_end(self.h, remaining, self.cfg.hmax, self.cfg.t_end, fixed);
+        self.fit_history();
+        let hmin = control::h_min(self.t, self.cfg.span);
+        if !self.last && self.h < hmin {
+            return Err(SolveError::StepSizeTooSmall {
+                t: self.t,
+                h: self.h,
+            });
+        }
+        let mut error_failures = 0usize;
+        loop {
+            self.budget.attempt(self.t)?;
+            self.weights.update_scaled(self.hist.y(), self.h);
+            let rejection = match self.attempt() {
+                Ok(()) if fixed => {
+                    self.accept(0.0);
+                    return Ok(());
+                }
+                Ok(()) => {
+                    let err = self.error_estimate();
+                    if err <= 1.0 {
+                        self.accept(err);
+                        return Ok(());
+                    }
+                    Rejection::ErrorTest(err)
+                }
+                Err(fail) => Rejection::Newton(fail),
+            };
+            self.stats.rejected += 1;
+            self.ramp = false;
+            self.last = false;
+            let h_failed = self.h;
+            if let Rejection::ErrorTest(_) = rejection {
+                error_failures += 1;
+            }
+            match rejection {
+                Rejection::Newton(fail) => {
+                    if fixed || self.budget.failed(fail) || 0.25 * self.h < hmin {
+                        return Err(Budget::error(fail, self.t, h_failed, self.last_iterations));
+                    }
+                    self.h *= 0.25;
+                }
+                Rejection::ErrorTest(err) => {
+                    self.reject(err, error_failures);
+                    if self.h < hmin {
+                        return Err(SolveError::StepSizeTooSmall {
+                            t: self.t,
+                            h: self.h,
+                        });
+                    }
+                }
+            }
+            let remaining = self.cfg.t_end - self.t;
+            (self.h, self.last) =
+                control::approach_end(self.h, remaining, self.cfg.hmax, self.cfg.t_end, fixed);
+            self.fit_history();
+        }
+    }
+
+    /// Bring the history to the step size of the next attempt (the
+    /// polynomial of the current order).
+    fn fit_history(&mut self) {
+        if self.h != self.hist.h {
+            self.hist.rescale(self.h, self.p);
+            self.same = 0;
+        }
+    }
+
+    /// After an accepted step of error norm `err` (0 with a constant step):
+    /// choose order and step of the next one, and advance the history.
+    fn accept(&mut self, err: f64) {
+        let (p_next, r) = if self.cfg.fixed_step {
+            (self.p, 1.0)
+        } else {
+            self.propose(err)
+        };
+        let y = if self.p == 1 { &self.y1 } else { &self.y3 };
+        self.hist.advance(y);
+        self.t = if self.last {
+            self.cfg.t_end
+        } else {
+            self.t + self.h
+        };
+        self.stats.steps += 1;
+        self.budget.accepted();
+        self.p_old = self.p;
+        if p_next != self.p || r != 1.0 {
+            self.same = 0;
+        }
+        self.p = p_next;
+        self.h *= r;
+    }
+}
