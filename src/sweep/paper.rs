@@ -402,7 +402,7 @@ pub fn compare_runs(
         note: format!(
             "our err_sum (sum over the check times of the errors of the five unknowns, positions, velocities and multiplier, against the exact \
              solution) next to the paper's ERR; more accurate: ours < paper/{EQUAL_FACTOR}, equal: within a factor \
-             {EQUAL_FACTOR}, behind: ours > {EQUAL_FACTOR}·paper. radau5 ↔ RADAU5, bdf ↔ DASSL and DASPK, odradau ↔ QUALIDAES and GEOMS, odbdf ↔ ODASSL and OVDBDF."
+             {EQUAL_FACTOR}, behind: ours > {EQUAL_FACTOR}·paper. radau5 ↔ RADAU5, bdf ↔ DASSL and DASPK, odradau ↔ QUALIDAES and GEOMS, odbdf ↔ ODASSL and OVDBDF, mebdf ↔ MEBDF."
         ),
         rows,
         illegible,
