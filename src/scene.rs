@@ -45,6 +45,7 @@
 //! # times = [0.03]
 //! # values = { x1 = [15.81], x2 = [-15.7] }
 //! # kind = "trajectory"         # a sampled solution (CSV), interpolated at the checks
+//! # columns = ["x1", "x2"]      # the columns to compare (default: all)
 //! # scaling = "relative"        # absolute (default) or relative, for every
 //! #                             # component, or per component: { x1 = "relative" }
 //! ```
@@ -727,6 +728,7 @@ struct RawReference {
     file: Option<Spanned<String>>,
     times: Option<Spanned<Vec<Spanned<f64>>>>,
     values: Option<Spanned<RawSeries>>,
+    columns: Option<Spanned<Vec<Spanned<String>>>>,
     scaling: Option<Spanned<toml::Value>>,
 }
 
@@ -1017,16 +1019,17 @@ impl Source<'_> {
         };
         let kind_name = kind.get_ref().as_str();
         // Fields that do not belong to the kind are refused, not ignored.
-        let given: [(&str, Option<Range<usize>>); 5] = [
+        let given: [(&str, Option<Range<usize>>); 6] = [
             ("closed_form", r.closed_form.as_ref().map(Spanned::span)),
             ("file", r.file.as_ref().map(Spanned::span)),
             ("times", r.times.as_ref().map(Spanned::span)),
             ("values", r.values.as_ref().map(Spanned::span)),
+            ("columns", r.columns.as_ref().map(Spanned::span)),
             ("scaling", r.scaling.as_ref().map(Spanned::span)),
         ];
         let allowed: &[&str] = match kind_name {
             "exact" | "pendulum-exact" => &["closed_form"],
-            "values" | "trajectory" => &["file", "times", "values", "scaling"],
+            "values" | "trajectory" => &["file", "times", "values", "columns", "scaling"],
             "none" => &[],
             other => {
                 return Err(SceneError::UnknownReference {
@@ -1066,6 +1069,10 @@ impl Source<'_> {
                 return Ok(ReferenceSpec::Exact { closed_form });
             }
             _ => self.reference_table(&r, table_span, base_dir)?,
+        };
+        let table = match &r.columns {
+            None => table,
+            Some(columns) => self.select_columns(table, columns)?,
         };
         let scaling = self.scaling(r.scaling.as_ref(), &table)?;
         Ok(if kind_name == "values" {
@@ -1160,6 +1167,45 @@ impl Source<'_> {
                 Err(self.missing("reference.times", Some(&values.span())))
             }
         }
+    }
+
+    /// `columns`: the columns of the table to compare, in that order.
+    fn select_columns(&self, table: Table, columns: &Spanned<Vec<Spanned<String>>>) -> Result<Table, SceneError> {
+        let mut index = Vec::new();
+        for c in columns.get_ref() {
+            let name = c.get_ref();
+            let j = table.names.iter().position(|n| n == name).ok_or_else(|| SceneError::InvalidValue {
+                at: self.at(&c.span()),
+                field: "reference.columns".into(),
+                reason: format!("`{name}` is not a column of the table (columns: {})", table.names.join(", ")),
+            })?;
+            if index.contains(&j) {
+                return Err(SceneError::Duplicate {
+                    at: self.at(&c.span()),
+                    field: "reference.columns".into(),
+                    name: name.clone(),
+                });
+            }
+            index.push(j);
+        }
+        if index.is_empty() {
+            return Err(SceneError::InvalidValue {
+                at: self.at(&columns.span()),
+                field: "reference.columns".into(),
+                reason: "must name at least one column".into(),
+            });
+        }
+        let names = index.iter().map(|&j| table.names[j].clone()).collect();
+        let rows = table
+            .rows
+            .iter()
+            .map(|row| index.iter().map(|&j| row[j]).collect())
+            .collect();
+        Ok(Table {
+            names,
+            times: table.times,
+            rows,
+        })
     }
 
     /// `scaling`: one name for every column, or a table of names per
