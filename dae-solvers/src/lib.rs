@@ -12,6 +12,7 @@
 //! | [`bdf`] | BDF orders 1–5, fixed leading coefficient (DASSL/DASPK) | square |
 //! | [`odradau`] | Radau IIA 5 with least-squares stage equations (QUALIDAES/GEOMS) | `M ≥ N`, c-level ≤ 1 |
 //! | [`odbdf`] | BDF 1–5 with a least-squares corrector (ODASSL/OVDBDF) | `M ≥ N`, c-level 0 |
+//! | [`idec`] | linearly implicit Euler + iterated defect correction (Somali) | square, constant `E`, index ≤ 2 |
 //!
 //! [`init`] computes consistent initial values from the model's constraint
 //! chain, and the initial derivative BDF starts from. Every solver returns
@@ -22,6 +23,7 @@
 pub mod bdf;
 pub mod core;
 pub mod error;
+pub mod idec;
 pub mod init;
 mod linalg;
 pub mod odbdf;
@@ -92,9 +94,10 @@ pub fn solver_by_name(name: &str) -> Option<Box<dyn Solver + Send + Sync>> {
         "bdf" => Some(Box::new(bdf::Bdf)),
         "odradau" => Some(Box::new(odradau::OdRadau)),
         "odbdf" => Some(Box::new(odbdf::OdBdf)),
+        "idec" => Some(Box::new(idec::Idec::default())),
         _ => None,
     }
 }
 
 /// Names of all solvers, in report order.
-pub const SOLVER_NAMES: [&str; 4] = ["radau5", "bdf", "odradau", "odbdf"];
+pub const SOLVER_NAMES: [&str; 5] = ["radau5", "bdf", "odradau", "odbdf", "idec"];
