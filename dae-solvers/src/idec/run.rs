@@ -41,6 +41,8 @@ pub(super) struct Integrator<'a> {
     dense_nodes: Vec<f64>,
     /// Scratch for the error estimate.
     diff: Vec<f64>,
+    /// The step `E − hJ` is factorised for (none after a new Jacobian).
+    factored: Option<f64>,
     /// The next interval reaches `t_end`; `t_end` reached; the Jacobian
     /// at `t` is evaluated; the last attempt was rejected.
     last: bool,
@@ -140,6 +142,7 @@ impl<'a> Integrator<'a> {
             h_prev: h,
             dense_nodes: vec![0.0; (m + 1) * n],
             diff: vec![0.0; n],
+            factored: None,
             last: false,
             done: false,
             have_jacobian: false,
@@ -161,7 +164,11 @@ impl<'a> Integrator<'a> {
             None => 100.0 * f64::EPSILON * t.abs().max(self.t_end.abs()),
         };
         if t + m * self.h >= self.t_end - slack {
-            self.h = rest / m;
+            // Keep a step that reaches `t_end` up to the slack (constant
+            // steps keep their factorisation).
+            if (rest - m * self.h).abs() > slack {
+                self.h = rest / m;
+            }
             self.last = true;
         } else if self.fixed.is_none() && t + 2.0 * m * self.h > self.t_end {
             self.h = 0.5 * rest / m;
@@ -172,6 +179,7 @@ impl<'a> Integrator<'a> {
     fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
         self.sys.rhs_jacobian(t, &self.y, &mut self.sweep.jac);
         self.stats.jacobian_evals += 1;
+        self.factored = None;
         if self.sweep.jac.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
@@ -182,10 +190,15 @@ impl<'a> Integrator<'a> {
         }
     }
 
-    /// Factorise `E − hJ` and run one interval from `t`.
+    /// Factorise `E − hJ` (unless it is for this `h` and Jacobian) and run
+    /// one interval from `t`.
     fn attempt(&mut self, t: f64, h: f64) -> Result<(), Failure> {
-        self.sweep.factor(h)?;
-        self.stats.factorizations += 1;
+        if self.factored != Some(h) {
+            self.factored = None;
+            self.sweep.factor(h)?;
+            self.factored = Some(h);
+            self.stats.factorizations += 1;
+        }
         self.sweep.run(self.sys, &mut self.stats, t, h)
     }
 
@@ -223,10 +236,19 @@ impl<'a> Integrator<'a> {
             return Err(Budget::error(failure, t, h, 0));
         }
         self.accept(t, h);
-        self.sweep.carry_over();
         if !self.done {
             self.h = self.fixed.unwrap_or(h);
             self.clip_to_end();
+        }
+        if self.h == h {
+            self.sweep.carry_over();
+        } else {
+            // A shorter last interval: the levels carried over hold the
+            // error expansion of the old step, which a new step would mix
+            // with its own (the index-2 unknowns go wrong by O(1)); it
+            // starts afresh from the best value instead.
+            self.sweep.restart_at(&self.y);
+            self.have_jacobian = false;
         }
         Ok(())
     }
