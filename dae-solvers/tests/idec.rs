@@ -369,7 +369,9 @@ fn no_allocation_in_the_step_loop() {
     let test_problem = Sys(common::Idec::new());
     let cases: [(&dyn DaeSystem, Vec<f64>, Options, [f64; 2]); 2] = [
         (&pendulum, pendulum.y0(), Options::with_tol(1e-7), [0.5, 4.0]),
-        (&test_problem, common::Idec::exact(0.0), fixed, [0.05, 0.4]),
+        // Horizons that are multiples of m h: the test model allocates in
+        // its Jacobian, which a shorter last interval evaluates again.
+        (&test_problem, common::Idec::exact(0.0), fixed, [0.048, 0.4]),
     ];
     for (sys, y0, options, ends) in cases {
         let mut steps = [0usize; 2];
