@@ -93,7 +93,10 @@ fn seed_orders_on_the_index2_test_problem() {
     // more accurate than the one before, in every component.
     for i in [0, 1, 4, 5] {
         for l in 0..3 {
-            assert!(e[3][l + 1][i] * 10.0 < e[3][l][i], "component {i}, level {l}");
+            assert!(
+                e[3][l + 1][i] * 10.0 < e[3][l][i],
+                "component {i}, level {l}"
+            );
         }
     }
 }
@@ -179,8 +182,8 @@ fn s01_pendulum_with_error_control() {
                 form.name()
             );
             let s = sol.stats;
-            assert!(s.steps > 0 && s.steps % 4 == 0);
-            assert_eq!(s.jacobian_evals, s.steps / 4, "one Jacobian per interval");
+            assert!(s.steps > 0);
+            assert_eq!(4 * s.jacobian_evals, s.steps, "one Jacobian per interval");
             assert!(s.factorizations >= s.jacobian_evals);
         }
     }
@@ -234,7 +237,12 @@ fn accepts_and_refuses_typed() {
     let sys = Pendulum::new(Form::Ori2);
     let r = run(idec, &sys, &sys.y0(), 1.0, &Options::default());
     assert!(
-        matches!(r, Err(SolveError::NotApplicable(NotApplicable::IndexTooHigh { .. }))),
+        matches!(
+            r,
+            Err(SolveError::NotApplicable(
+                NotApplicable::IndexTooHigh { .. }
+            ))
+        ),
         "{r:?}"
     );
 }
@@ -297,11 +305,26 @@ fn non_finite_values_are_typed_errors() {
         &Options::default(),
     );
     assert!(
-        matches!(r, Err(SolveError::NonFinite { what: "initial values", .. })),
+        matches!(
+            r,
+            Err(SolveError::NonFinite {
+                what: "initial values",
+                ..
+            })
+        ),
         "{r:?}"
     );
-    let r = run(Idec::default(), &nan_rhs(), &[1.0], 1.0, &Options::default());
-    assert!(matches!(r, Err(SolveError::NonFinite { t, .. }) if t == 0.0), "{r:?}");
+    let r = run(
+        Idec::default(),
+        &nan_rhs(),
+        &[1.0],
+        1.0,
+        &Options::default(),
+    );
+    assert!(
+        matches!(r, Err(SolveError::NonFinite { t, .. }) if t == 0.0),
+        "{r:?}"
+    );
     // NaN beyond t = 0.5: the intervals shrink towards 0.5 and stop there.
     let r = run(
         Idec::default(),
@@ -323,7 +346,13 @@ fn non_finite_values_are_typed_errors() {
 /// `y' = y²`, `y(0) = 1` blows up at t = 1: the intervals collapse there.
 #[test]
 fn blow_up_is_a_typed_error() {
-    let r = run(Idec::default(), &blow_up(), &[1.0], 2.0, &Options::with_tol(1e-6));
+    let r = run(
+        Idec::default(),
+        &blow_up(),
+        &[1.0],
+        2.0,
+        &Options::with_tol(1e-6),
+    );
     assert!(
         matches!(
             r,
@@ -357,6 +386,9 @@ fn singular_matrix_and_step_limit() {
     );
 }
 
+/// A system, its start, options and two horizons.
+type AllocCase<'a> = (&'a dyn DaeSystem, Vec<f64>, Options, [f64; 2]);
+
 /// The number of allocations does not depend on the number of intervals
 /// (error control on the pendulum, constant steps on the test problem).
 #[test]
@@ -367,8 +399,13 @@ fn no_allocation_in_the_step_loop() {
     };
     let pendulum = Pendulum::new(Form::Rcd1);
     let test_problem = Sys(common::Idec::new());
-    let cases: [(&dyn DaeSystem, Vec<f64>, Options, [f64; 2]); 2] = [
-        (&pendulum, pendulum.y0(), Options::with_tol(1e-7), [0.5, 4.0]),
+    let cases: [AllocCase; 2] = [
+        (
+            &pendulum,
+            pendulum.y0(),
+            Options::with_tol(1e-7),
+            [0.5, 4.0],
+        ),
         // Horizons that are multiples of m h: the test model allocates in
         // its Jacobian, which a shorter last interval evaluates again.
         (&test_problem, common::Idec::exact(0.0), fixed, [0.048, 0.4]),

@@ -101,7 +101,11 @@ mod tests {
     #[test]
     fn exact_for_polynomials_of_the_degree() {
         for m in 1..=MAX_DEGREE {
-            let p = |x: f64| (0..=m).map(|e| (e as f64 + 1.0) * x.powi(e as i32)).sum::<f64>();
+            let p = |x: f64| {
+                (0..=m)
+                    .map(|e| (e as f64 + 1.0) * x.powi(e as i32))
+                    .sum::<f64>()
+            };
             let dp = |x: f64| {
                 (1..=m)
                     .map(|e| (e as f64 + 1.0) * e as f64 * x.powi(e as i32 - 1))
@@ -113,13 +117,19 @@ mod tests {
                 let mut out = [0.0];
                 nodes.derivative(k, |l| &values[l][..], &mut out);
                 let want = dp(k as f64);
-                assert!((out[0] - want).abs() <= 1e-9 * want.abs().max(1.0), "m {m} k {k}");
+                assert!(
+                    (out[0] - want).abs() <= 1e-9 * want.abs().max(1.0),
+                    "m {m} k {k}"
+                );
             }
             for theta in [0.0, 0.3, 1.7, m as f64 - 0.2, m as f64] {
                 let w = weights(m, theta);
                 let v: f64 = (0..=m).map(|l| w[l] * values[l][0]).sum();
                 let want = p(theta);
-                assert!((v - want).abs() <= 1e-9 * want.abs().max(1.0), "m {m} θ {theta}");
+                assert!(
+                    (v - want).abs() <= 1e-9 * want.abs().max(1.0),
+                    "m {m} θ {theta}"
+                );
             }
         }
     }
