@@ -13,6 +13,7 @@
 //! | [`odradau`] | Radau IIA 5 with least-squares stage equations (QUALIDAES/GEOMS) | `M ≥ N`, c-level ≤ 1 |
 //! | [`odbdf`] | BDF 1–5 with a least-squares corrector (ODASSL/OVDBDF) | `M ≥ N`, c-level 0 |
 //! | [`mebdf`] | modified extended BDF orders 1–8 (Cash's MEBDF/MEBDFDAE) | square, constant `E` |
+//! | [`idec`] | linearly implicit Euler + iterated defect correction (Somali) | square, constant `E`, index ≤ 2 |
 //!
 //! [`init`] computes consistent initial values from the model's constraint
 //! chain, and the initial derivative BDF starts from. Every solver returns
@@ -23,6 +24,7 @@
 pub mod bdf;
 pub mod core;
 pub mod error;
+pub mod idec;
 pub mod init;
 mod linalg;
 pub mod mebdf;
@@ -95,9 +97,10 @@ pub fn solver_by_name(name: &str) -> Option<Box<dyn Solver + Send + Sync>> {
         "odradau" => Some(Box::new(odradau::OdRadau)),
         "odbdf" => Some(Box::new(odbdf::OdBdf)),
         "mebdf" => Some(Box::new(mebdf::Mebdf)),
+        "idec" => Some(Box::new(idec::Idec::default())),
         _ => None,
     }
 }
 
 /// Names of all solvers, in report order.
-pub const SOLVER_NAMES: [&str; 5] = ["radau5", "bdf", "odradau", "odbdf", "mebdf"];
+pub const SOLVER_NAMES: [&str; 6] = ["radau5", "bdf", "odradau", "odbdf", "mebdf", "idec"];

@@ -39,7 +39,10 @@ pub(crate) trait Method {
 
 /// Step `method` to the end, calling `after_step` after every accepted
 /// step.
-fn drive<M: Method>(method: &mut M, mut after_step: impl FnMut(&M)) -> Result<(), SolveError> {
+pub(crate) fn drive<M: Method>(
+    method: &mut M,
+    mut after_step: impl FnMut(&M),
+) -> Result<(), SolveError> {
     while !method.finished() {
         method.step()?;
         after_step(method);

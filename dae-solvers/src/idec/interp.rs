@@ -1,0 +1,137 @@
+//! The interpolating polynomial of one interval: degree `m` through the
+//! `m + 1` equally spaced nodes `θ = 0, 1, …, m` (`t = t_i + θ h`), in
+//! Lagrange form.
+//!
+//! Two things are needed of it: its derivative at the nodes `0 … m − 1`
+//! where the defect is sampled (the differentiation matrix `D`, computed
+//! once, `p'(t_i + k h) = (1/h) Σ_l D_kl η_l`), and its value anywhere in
+//! the interval for dense output (the Lagrange weights, computed on the
+//! stack).
+
+/// Highest interpolation degree (bounds the stack arrays of dense output;
+/// equally spaced interpolation of higher degree is ill-conditioned
+/// anyway).
+pub const MAX_DEGREE: usize = 8;
+
+/// Differentiation matrix of the Lagrange basis on the nodes `0 … m`.
+pub(super) struct Nodes {
+    /// Degree `m`.
+    m: usize,
+    /// `D_kl = l_l'(k)`, row-major, `(m + 1)²` entries.
+    d: Vec<f64>,
+}
+
+impl Nodes {
+    /// The nodes of degree `m` (`1 ≤ m ≤ MAX_DEGREE`).
+    pub(super) fn new(m: usize) -> Self {
+        let n = m + 1;
+        let mut d = vec![0.0; n * n];
+        for k in 0..n {
+            for l in 0..n {
+                d[k * n + l] = if k == l {
+                    // l_k'(k) = Σ_{q ≠ k} 1/(k − q)
+                    (0..n)
+                        .filter(|&q| q != k)
+                        .map(|q| 1.0 / (k as f64 - q as f64))
+                        .sum()
+                } else {
+                    // l_l'(k) = Π_{q ≠ l, k} (k − q) / Π_{q ≠ l} (l − q)
+                    let num: f64 = (0..n)
+                        .filter(|&q| q != l && q != k)
+                        .map(|q| k as f64 - q as f64)
+                        .product();
+                    let den: f64 = (0..n)
+                        .filter(|&q| q != l)
+                        .map(|q| l as f64 - q as f64)
+                        .product();
+                    num / den
+                };
+            }
+        }
+        Nodes { m, d }
+    }
+
+    /// The degree.
+    pub(super) fn degree(&self) -> usize {
+        self.m
+    }
+
+    /// `out = Σ_l D_kl values(l)`: `h` times the derivative at node `k` of
+    /// the polynomial through `values(0) … values(m)` (each of length
+    /// `out.len()`).
+    pub(super) fn derivative<'v>(
+        &self,
+        k: usize,
+        values: impl Fn(usize) -> &'v [f64],
+        out: &mut [f64],
+    ) {
+        let n = self.m + 1;
+        out.fill(0.0);
+        for l in 0..n {
+            let c = self.d[k * n + l];
+            for (o, v) in out.iter_mut().zip(values(l)) {
+                *o += c * v;
+            }
+        }
+    }
+}
+
+/// The Lagrange weights `l_0(θ) … l_m(θ)` on the nodes `0 … m` into the
+/// first `m + 1` entries of the result.
+pub(super) fn weights(m: usize, theta: f64) -> [f64; MAX_DEGREE + 1] {
+    let mut w = [0.0; MAX_DEGREE + 1];
+    for (l, wl) in w.iter_mut().enumerate().take(m + 1) {
+        let mut p = 1.0;
+        for q in 0..=m {
+            if q != l {
+                p *= (theta - q as f64) / (l as f64 - q as f64);
+            }
+        }
+        *wl = p;
+    }
+    w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Degree-`m` interpolation reproduces polynomials of degree `m`
+    /// exactly, values and derivatives.
+    #[test]
+    fn exact_for_polynomials_of_the_degree() {
+        for m in 1..=MAX_DEGREE {
+            let p = |x: f64| {
+                (0..=m)
+                    .map(|e| (e as f64 + 1.0) * x.powi(e as i32))
+                    .sum::<f64>()
+            };
+            let dp = |x: f64| {
+                (1..=m)
+                    .map(|e| (e as f64 + 1.0) * e as f64 * x.powi(e as i32 - 1))
+                    .sum::<f64>()
+            };
+            let values: Vec<[f64; 1]> = (0..=m).map(|k| [p(k as f64)]).collect();
+            let nodes = Nodes::new(m);
+            for k in 0..=m {
+                let mut out = [0.0];
+                nodes.derivative(k, |l| &values[l][..], &mut out);
+                let want = dp(k as f64);
+                // Relative to the data (up to 9·8⁸ for m = 8): the weights
+                // sum values of that size to a derivative of size 2 at
+                // node 0, so round-off is relative to the values.
+                let scale = values.iter().map(|v| v[0].abs()).fold(1.0, f64::max);
+                assert!((out[0] - want).abs() <= 1e-12 * scale, "m {m} k {k}");
+            }
+            for theta in [0.0, 0.3, 1.7, m as f64 - 0.2, m as f64] {
+                let w = weights(m, theta);
+                let v: f64 = (0..=m).map(|l| w[l] * values[l][0]).sum();
+                let want = p(theta);
+                assert!(
+                    (v - want).abs() <= 1e-9 * want.abs().max(1.0),
+                    "m {m} θ {theta}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,336 @@
+//! The IDeC integrator as the driver sees it: one accepted interval per
+//! [`Method::step`], constant steps (the seed's scheme) or error-controlled
+//! ones.
+
+use super::interp::weights;
+use super::sweep::Sweep;
+use super::{Idec, FAC, H0_DEFAULT, RATIO_MAX, RATIO_MIN};
+use crate::core::control::{self, Budget, Failure};
+use crate::core::driver::Method;
+use crate::core::weights::Weights;
+use crate::{Options, Problem, SolveError, Stats};
+use dae_core::system::DaeSystem;
+
+/// State of one IDeC integration.
+pub(super) struct Integrator<'a> {
+    sys: &'a dyn DaeSystem,
+    /// Unknowns `N`, degree `m`, corrections `J`.
+    n: usize,
+    m: usize,
+    corrections: usize,
+    t0: f64,
+    t_end: f64,
+    /// The interval workspace.
+    pub(super) sweep: Sweep,
+    weights: Weights,
+    stats: Stats,
+    budget: Budget,
+    /// Constant Euler step, if any.
+    fixed: Option<f64>,
+    /// Largest Euler step.
+    h_max: f64,
+    /// End of the last accepted interval and the best value there.
+    t: f64,
+    y: Vec<f64>,
+    /// Euler step of the next attempt.
+    h: f64,
+    /// Start and Euler step of the last accepted interval, and the best
+    /// level at its nodes (dense output).
+    t_prev: f64,
+    h_prev: f64,
+    dense_nodes: Vec<f64>,
+    /// Scratch for the error estimate.
+    diff: Vec<f64>,
+    /// The step `E − hJ` is factorised for (none after a new Jacobian).
+    factored: Option<f64>,
+    /// The next interval reaches `t_end`; `t_end` reached; the Jacobian
+    /// at `t` is evaluated; the last attempt was rejected.
+    last: bool,
+    done: bool,
+    have_jacobian: bool,
+    reject: bool,
+}
+
+impl Method for Integrator<'_> {
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+    fn dense(&self, tau: f64, out: &mut [f64]) {
+        let theta = (tau - self.t_prev) / self.h_prev;
+        let w = weights(self.m, theta);
+        out.fill(0.0);
+        for (l, wl) in w.iter().enumerate().take(self.m + 1) {
+            let node = &self.dense_nodes[l * self.n..(l + 1) * self.n];
+            for (o, v) in out.iter_mut().zip(node) {
+                *o += wl * v;
+            }
+        }
+    }
+    fn finished(&self) -> bool {
+        self.done
+    }
+    fn step(&mut self) -> Result<(), SolveError> {
+        match self.fixed {
+            Some(_) => self.step_fixed(),
+            None => self.step_adaptive(),
+        }
+    }
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+}
+
+impl<'a> Integrator<'a> {
+    /// The integrator of `problem` with `idec`'s parameters at `t₀`: `E`
+    /// evaluated, buffers allocated, the first step chosen.
+    pub(super) fn new(
+        idec: &Idec,
+        problem: &Problem<'a>,
+        options: &Options,
+    ) -> Result<Self, SolveError> {
+        let sys = problem.system;
+        let info = sys.info();
+        let n = info.unknowns();
+        let (m, corrections) = (idec.m, idec.j);
+        let span = problem.t_end - problem.t0;
+        let mut sweep = Sweep::new(info, corrections, m);
+        sys.leading(problem.y0, &mut sweep.e);
+        if sweep.e.iter().any(|v| !v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                t: problem.t0,
+                what: "leading matrix",
+            });
+        }
+        sweep.restart_at(problem.y0);
+        // Index-k unknowns are measured with h^(k−1) (see the module
+        // documentation, "Error estimate").
+        let index_power = info
+            .variables
+            .iter()
+            .map(|v| i32::from(v.index.max(1)) - 1)
+            .collect();
+        let weights = Weights::new(&options.tol, |_| 1.0, vec![true; n], index_power);
+        let h_max = options.h_max.unwrap_or(span).min(span / m as f64);
+        let h = match options.fixed_step {
+            Some(h) => h,
+            None => options
+                .h0
+                .unwrap_or(H0_DEFAULT)
+                .min(h_max)
+                .max(100.0 * control::h_min(problem.t0, span)),
+        };
+        let mut it = Integrator {
+            sys,
+            n,
+            m,
+            corrections,
+            t0: problem.t0,
+            t_end: problem.t_end,
+            sweep,
+            weights,
+            stats: Stats::default(),
+            budget: Budget::new(options.max_steps),
+            fixed: options.fixed_step,
+            h_max,
+            t: problem.t0,
+            y: problem.y0.to_vec(),
+            h,
+            t_prev: problem.t0,
+            h_prev: h,
+            dense_nodes: vec![0.0; (m + 1) * n],
+            diff: vec![0.0; n],
+            factored: None,
+            last: false,
+            done: false,
+            have_jacobian: false,
+            reject: false,
+        };
+        it.clip_to_end();
+        Ok(it)
+    }
+
+    /// Shorten the next interval to end exactly at `t_end` when it would
+    /// pass it or leave a remainder below round-off (constant steps: below
+    /// `10⁻⁸ h`); with error control, split a remainder of less than two
+    /// intervals evenly.
+    fn clip_to_end(&mut self) {
+        let (t, m) = (self.t, self.m as f64);
+        let rest = self.t_end - self.t;
+        let slack = match self.fixed {
+            Some(_) => 1e-8 * self.h,
+            None => 100.0 * f64::EPSILON * t.abs().max(self.t_end.abs()),
+        };
+        if t + m * self.h >= self.t_end - slack {
+            // Keep a step that reaches `t_end` up to the slack (constant
+            // steps keep their factorisation).
+            if (rest - m * self.h).abs() > slack {
+                self.h = rest / m;
+            }
+            self.last = true;
+        } else if self.fixed.is_none() && t + 2.0 * m * self.h > self.t_end {
+            self.h = 0.5 * rest / m;
+        }
+    }
+
+    /// `J = ∂f/∂y` at `(t, y)`, counted.
+    fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
+        self.sys.rhs_jacobian(t, &self.y, &mut self.sweep.jac);
+        self.stats.jacobian_evals += 1;
+        self.factored = None;
+        if self.sweep.jac.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(SolveError::NonFinite {
+                t,
+                what: "Jacobian",
+            })
+        }
+    }
+
+    /// Factorise `E − hJ` (unless it is for this `h` and Jacobian) and run
+    /// one interval from `t`.
+    fn attempt(&mut self, t: f64, h: f64) -> Result<(), Failure> {
+        if self.factored != Some(h) {
+            self.factored = None;
+            self.sweep.factor(h)?;
+            self.factored = Some(h);
+            self.stats.factorizations += 1;
+        }
+        self.sweep.run(self.sys, &mut self.stats, t, h)
+    }
+
+    /// Record the interval just computed as accepted.
+    fn accept(&mut self, t: f64, h: f64) {
+        self.budget.accepted();
+        self.stats.steps += self.m;
+        self.t_prev = t;
+        self.h_prev = h;
+        let best = self.corrections;
+        for k in 0..=self.m {
+            let dst = &mut self.dense_nodes[k * self.n..(k + 1) * self.n];
+            dst.copy_from_slice(self.sweep.node(best, k));
+        }
+        self.y.copy_from_slice(self.sweep.node(best, self.m));
+        self.t = if self.last {
+            self.t_end
+        } else {
+            t + self.m as f64 * h
+        };
+        self.done = self.last;
+    }
+
+    /// Constant steps: the seed's scheme, the Jacobian evaluated once at
+    /// `t₀`, every level and neighbouring problem carried from interval to
+    /// interval.
+    fn step_fixed(&mut self) -> Result<(), SolveError> {
+        let (t, h) = (self.t, self.h);
+        if !self.have_jacobian {
+            self.jacobian(t)?;
+            self.have_jacobian = true;
+        }
+        self.budget.attempt(t)?;
+        if let Err(failure) = self.attempt(t, h) {
+            return Err(Budget::error(failure, t, h, 0));
+        }
+        self.accept(t, h);
+        if !self.done {
+            self.h = self.fixed.unwrap_or(h);
+            self.clip_to_end();
+        }
+        if self.h == h {
+            self.sweep.carry_over();
+        } else {
+            // A shorter last interval: the levels carried over hold the
+            // error expansion of the old step, which a new step would mix
+            // with its own (the index-2 unknowns go wrong by O(1)); it
+            // starts afresh from the best value instead.
+            self.sweep.restart_at(&self.y);
+            self.have_jacobian = false;
+        }
+        Ok(())
+    }
+
+    /// Error control: the Jacobian at the start of each interval, every
+    /// level started from the accepted value, the difference of the last
+    /// two corrections at the end of the interval as error estimate.
+    fn step_adaptive(&mut self) -> Result<(), SolveError> {
+        let span = self.t_end - self.t0;
+        let order = self.corrections.min(self.m) as f64;
+        loop {
+            let (t, h) = (self.t, self.h);
+            if h < control::h_min(t, span) {
+                return Err(SolveError::StepSizeTooSmall { t, h });
+            }
+            if !self.have_jacobian {
+                self.jacobian(t)?;
+                self.have_jacobian = true;
+            }
+            self.budget.attempt(t)?;
+            self.sweep.restart_at(&self.y);
+            let outcome = self.attempt(t, h);
+            let err = match outcome {
+                Ok(()) => self.error_norm(h),
+                Err(_) => f64::NAN,
+            };
+            if !err.is_finite() {
+                self.stats.rejected += 1;
+                let failure = outcome.err().unwrap_or(Failure::NonFinite("solution"));
+                if self.budget.failed(failure) {
+                    return Err(Budget::error(failure, t, h, 0));
+                }
+                self.retry(0.5 * h);
+                continue;
+            }
+            let ratio = if err == 0.0 {
+                RATIO_MAX
+            } else {
+                (FAC * err.powf(-1.0 / (order + 1.0))).clamp(RATIO_MIN, RATIO_MAX)
+            };
+            if err > 1.0 {
+                self.stats.rejected += 1;
+                self.retry(h * ratio);
+                continue;
+            }
+            self.accept(t, h);
+            if !self.done {
+                let ratio = if self.reject { ratio.min(1.0) } else { ratio };
+                self.reject = false;
+                self.have_jacobian = false;
+                self.h = (h * ratio).min(self.h_max);
+                self.clip_to_end();
+            }
+            return Ok(());
+        }
+    }
+
+    /// After a failed or rejected attempt: try again with Euler step `h`.
+    fn retry(&mut self, h: f64) {
+        self.reject = true;
+        self.last = false;
+        self.h = h.min(self.h_max);
+        self.clip_to_end();
+    }
+
+    /// `‖η^[J] − η^[J−1]‖` at the end of the interval, weighted at the
+    /// interval's start value with index scaling by the interval length.
+    fn error_norm(&mut self, h: f64) -> f64 {
+        let (jj, m, n) = (self.corrections, self.m, self.n);
+        self.weights.update_scaled(&self.y, m as f64 * h);
+        let (best, prev) = (self.sweep.node(jj, m), self.sweep.node(jj - 1, m));
+        for ((d, a), b) in self.diff[..n].iter_mut().zip(best).zip(prev) {
+            *d = a - b;
+        }
+        self.weights.norm(&self.diff)
+    }
+
+    /// All levels at the end of the last interval (constant steps: the
+    /// seed's tables).
+    pub(super) fn levels(&self) -> Vec<Vec<f64>> {
+        (0..=self.corrections)
+            .map(|l| self.sweep.node(l, self.m).to_vec())
+            .collect()
+    }
+}

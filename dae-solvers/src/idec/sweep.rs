@@ -1,0 +1,208 @@
+//! One interval of IDeC: the linearly implicit Euler solution of the
+//! original problem and, for each correction, the neighbouring problem
+//! solved by the same scheme and the corrected values (seed 002, (2.1)–
+//! (2.5)); every buffer allocated once.
+
+use super::interp::Nodes;
+use crate::core::control::Failure;
+use crate::core::matrix::{Corrector, Rows, SquareLu};
+use crate::linalg::mat_vec;
+use crate::Stats;
+use dae_core::system::{DaeSystem, FormulationInfo};
+use nalgebra::DMatrix;
+
+/// The workspace of one interval of `m` Euler steps with `J` corrections.
+pub(super) struct Sweep {
+    /// Unknowns `N`.
+    n: usize,
+    /// Corrections `J`.
+    corrections: usize,
+    /// The interpolation nodes (degree `m`).
+    nodes: Nodes,
+    /// `η^[l]` at the nodes `k = 0 … m`: entry `(l (m + 1) + k) N + i`.
+    eta: Vec<f64>,
+    /// `η^[l]` at the start of the interval, `l = 0 … J`.
+    pub(super) start: Vec<f64>,
+    /// The neighbouring problems' Euler solutions `π^[j]` at the start of
+    /// the interval, `j = 0 … J − 1`.
+    pub(super) np_start: Vec<f64>,
+    /// `π^[j]` at the end of the interval, after [`Sweep::run`].
+    pub(super) np_end: Vec<f64>,
+    /// `f(t_k, η^[j]_k)`, `k = 0 … m − 1`, for the correction in progress.
+    f_eta: Vec<f64>,
+    /// Scratch: the current `π`, `f`, `h p'`, `E h p'`, the right-hand side.
+    pi: Vec<f64>,
+    f: Vec<f64>,
+    dp: Vec<f64>,
+    edp: Vec<f64>,
+    rhs: Vec<f64>,
+    /// The constant leading matrix `E`.
+    pub(super) e: DMatrix<f64>,
+    /// The Jacobian `J = ∂f/∂y` the iteration matrix is built from.
+    pub(super) jac: DMatrix<f64>,
+    /// `E − h J`, factorised.
+    lu: SquareLu,
+    rows: Rows,
+}
+
+impl Sweep {
+    /// Buffers for `info` with `corrections` corrections and degree `m`.
+    pub(super) fn new(info: &FormulationInfo, corrections: usize, m: usize) -> Self {
+        let n = info.unknowns();
+        Sweep {
+            n,
+            corrections,
+            nodes: Nodes::new(m),
+            eta: vec![0.0; (corrections + 1) * (m + 1) * n],
+            start: vec![0.0; (corrections + 1) * n],
+            np_start: vec![0.0; corrections * n],
+            np_end: vec![0.0; corrections * n],
+            f_eta: vec![0.0; m * n],
+            pi: vec![0.0; n],
+            f: vec![0.0; n],
+            dp: vec![0.0; n],
+            edp: vec![0.0; n],
+            rhs: vec![0.0; n],
+            e: DMatrix::zeros(n, n),
+            jac: DMatrix::zeros(n, n),
+            lu: SquareLu::new(n, n),
+            rows: Rows::new(info),
+        }
+    }
+
+    /// `η^[l]` at node `k` of the last interval.
+    pub(super) fn node(&self, l: usize, k: usize) -> &[f64] {
+        let m = self.nodes.degree();
+        let at = (l * (m + 1) + k) * self.n;
+        &self.eta[at..at + self.n]
+    }
+
+    /// Every level and every `π^[j]` starts the next interval at `y`
+    /// (variable steps: the accepted, best value; the first interval).
+    pub(super) fn restart_at(&mut self, y: &[f64]) {
+        for chunk in self
+            .start
+            .chunks_exact_mut(self.n)
+            .chain(self.np_start.chunks_exact_mut(self.n))
+        {
+            chunk.copy_from_slice(y);
+        }
+    }
+
+    /// After an accepted interval with constant steps: each level and each
+    /// `π^[j]` continues from its own value at the end (the global
+    /// connection of the seed, (2.7) and (3.6)).
+    pub(super) fn carry_over(&mut self) {
+        let (n, m) = (self.n, self.nodes.degree());
+        for l in 0..=self.corrections {
+            let at = (l * (m + 1) + m) * n;
+            self.start[l * n..(l + 1) * n].copy_from_slice(&self.eta[at..at + n]);
+        }
+        self.np_start.copy_from_slice(&self.np_end);
+    }
+
+    /// Factorise `E − h J`.
+    pub(super) fn factor(&mut self, h: f64) -> Result<(), Failure> {
+        let a = self.lu.matrix_mut();
+        for (a, (e, j)) in a
+            .as_mut_slice()
+            .iter_mut()
+            .zip(self.e.as_slice().iter().zip(self.jac.as_slice()))
+        {
+            *a = e - h * j;
+        }
+        self.lu.factor(&self.rows).map_err(|_| Failure::Singular)
+    }
+
+    /// `f(t, y)` into `out`, counted; non-finite values are a failure.
+    fn rhs(
+        sys: &dyn DaeSystem,
+        stats: &mut Stats,
+        t: f64,
+        y: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), Failure> {
+        sys.rhs(t, y, out);
+        stats.residual_evals += 1;
+        if out.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(Failure::NonFinite("residual"))
+        }
+    }
+
+    /// One interval of `m` Euler steps of size `h` from `t`, with the
+    /// factorisation of [`Sweep::factor`] for this `h`: every level `η^[l]`
+    /// at the `m + 1` nodes, from [`Sweep::start`] and
+    /// [`Sweep::np_start`]; `π^[j]` at the end into [`Sweep::np_end`].
+    pub(super) fn run(
+        &mut self,
+        sys: &dyn DaeSystem,
+        stats: &mut Stats,
+        t: f64,
+        h: f64,
+    ) -> Result<(), Failure> {
+        let (n, m) = (self.n, self.nodes.degree());
+        let block = (m + 1) * n;
+        // The linearly implicit Euler solution of the original problem,
+        // (E − hJ)(η_{k+1} − η_k) = h f(t_k, η_k).
+        self.eta[..n].copy_from_slice(&self.start[..n]);
+        for k in 0..m {
+            let tk = t + k as f64 * h;
+            let (done, next) = self.eta.split_at_mut((k + 1) * n);
+            let eta_k = &done[k * n..];
+            let f_k = &mut self.f_eta[k * n..(k + 1) * n];
+            Self::rhs(sys, stats, tk, eta_k, f_k)?;
+            for (r, f) in self.rhs.iter_mut().zip(f_k.iter()) {
+                *r = h * f;
+            }
+            self.lu.solve(&mut self.rhs);
+            for ((y1, y0), d) in next[..n].iter_mut().zip(eta_k).zip(&self.rhs) {
+                *y1 = y0 + d;
+            }
+        }
+        // The corrections: the neighbouring problem E y' = f(t, y) + d(t),
+        // d(t) = E p'(t) − f(t, p(t)), p the interpolant of η^[j], solved
+        // by the same scheme from π^[j](t_start); then
+        // η^[j+1] = η^[0] − (π^[j] − η^[j]) at the nodes.
+        for j in 0..self.corrections {
+            let (lower, upper) = self.eta.split_at_mut((j + 1) * block);
+            let eta0 = &lower[..block];
+            let eta_j = &lower[j * block..];
+            let eta_next = &mut upper[..block];
+            if j > 0 {
+                for k in 0..m {
+                    let tk = t + k as f64 * h;
+                    let f_k = &mut self.f_eta[k * n..(k + 1) * n];
+                    Self::rhs(sys, stats, tk, &eta_j[k * n..(k + 1) * n], f_k)?;
+                }
+            }
+            self.pi.copy_from_slice(&self.np_start[j * n..(j + 1) * n]);
+            eta_next[..n].copy_from_slice(&self.start[(j + 1) * n..(j + 2) * n]);
+            for k in 0..m {
+                let tk = t + k as f64 * h;
+                self.nodes
+                    .derivative(k, |l| &eta_j[l * n..(l + 1) * n], &mut self.dp);
+                mat_vec(&self.e, &self.dp, &mut self.edp);
+                Self::rhs(sys, stats, tk, &self.pi, &mut self.f)?;
+                let f_k = &self.f_eta[k * n..(k + 1) * n];
+                for (i, r) in self.rhs.iter_mut().enumerate() {
+                    *r = h * (self.f[i] - f_k[i]) + self.edp[i];
+                }
+                self.lu.solve(&mut self.rhs);
+                let at = (k + 1) * n;
+                for i in 0..n {
+                    self.pi[i] += self.rhs[i];
+                    eta_next[at + i] = eta0[at + i] - (self.pi[i] - eta_j[at + i]);
+                }
+            }
+            self.np_end[j * n..(j + 1) * n].copy_from_slice(&self.pi);
+        }
+        let last = self.node(self.corrections, m);
+        if last.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(Failure::NonFinite("solution"))
+        }
+    }
+}
