@@ -1170,14 +1170,23 @@ impl Source<'_> {
     }
 
     /// `columns`: the columns of the table to compare, in that order.
-    fn select_columns(&self, table: Table, columns: &Spanned<Vec<Spanned<String>>>) -> Result<Table, SceneError> {
+    fn select_columns(
+        &self,
+        table: Table,
+        columns: &Spanned<Vec<Spanned<String>>>,
+    ) -> Result<Table, SceneError> {
         let mut index = Vec::new();
         for c in columns.get_ref() {
             let name = c.get_ref();
-            let j = table.names.iter().position(|n| n == name).ok_or_else(|| SceneError::InvalidValue {
-                at: self.at(&c.span()),
-                field: "reference.columns".into(),
-                reason: format!("`{name}` is not a column of the table (columns: {})", table.names.join(", ")),
+            let j = table.names.iter().position(|n| n == name).ok_or_else(|| {
+                SceneError::InvalidValue {
+                    at: self.at(&c.span()),
+                    field: "reference.columns".into(),
+                    reason: format!(
+                        "`{name}` is not a column of the table (columns: {})",
+                        table.names.join(", ")
+                    ),
+                }
             })?;
             if index.contains(&j) {
                 return Err(SceneError::Duplicate {

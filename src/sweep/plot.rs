@@ -244,6 +244,9 @@ pub fn figures(report: &SweepReport) -> Figures {
             "no successful run with a finite error: the work-precision diagram is left out".into(),
         ),
     }
+    if let Some(f) = scd_figure(report) {
+        out.figures.push(f);
+    }
     out
 }
 
@@ -443,15 +446,12 @@ fn subscript(level: u8) -> &'static str {
     ["₀", "₁", "₂"].get(level as usize).copied().unwrap_or("")
 }
 
-fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
-    let with_ref = report.has_reference();
-    let y_of = |r: &SweepRun| -> Option<f64> {
-        if with_ref {
-            r.record.err
-        } else {
-            r.record.residuals.level(0)
-        }
-    };
+/// One series per applicable pair through its successful runs, loose to
+/// tight tolerance, with the points `point` gives (finite ones only).
+fn pair_series(
+    report: &SweepReport,
+    point: impl Fn(&SweepRun) -> Option<(f64, f64)>,
+) -> (Vec<Series>, Vec<(String, Look, bool)>) {
     let mut series = Vec::new();
     let mut legend = Vec::new();
     for p in report.pairs.iter().filter(|p| p.not_applicable.is_none()) {
@@ -464,16 +464,11 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
                     && r.record.status == "ok"
             })
             .collect();
-        // Through the tolerances, loose to tight.
         runs.sort_by(|a, b| b.record.tol.total_cmp(&a.record.tol));
         let pts: Vec<(f64, f64)> = runs
             .iter()
-            .filter_map(|r| {
-                y_of(r)
-                    .filter(|y| y.is_finite())
-                    .map(|y| (r.record.tsim_s, y))
-            })
-            .filter(|(t, _)| *t > 0.0 && t.is_finite())
+            .filter_map(|r| point(r))
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
             .collect();
         if pts.is_empty() {
             continue;
@@ -487,6 +482,57 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
             points: pts,
         });
     }
+    (series, legend)
+}
+
+/// The IVP Test Set's work-precision diagram: the integration time against
+/// the significant correct digits, for a reference with its own values.
+fn scd_figure(report: &SweepReport) -> Option<Figure> {
+    let (series, legend) = pair_series(report, |r| {
+        r.record
+            .scd
+            .map(|scd| (scd, r.record.tsim_s))
+            .filter(|(_, t)| *t > 0.0)
+    });
+    if series.is_empty() {
+        return None;
+    }
+    Some(Figure {
+        file: "scd".into(),
+        title: format!("{}: significant correct digits", report.scene.name),
+        caption: format!(
+            "The integration time tsim (median of {} timed runs, log scale) against the significant correct \
+             digits scd = −log10 of the largest scaled error of the unknowns the reference gives, over its \
+             times — the IVP Test Set's work-precision diagram; one line per solver(formulation) through its \
+             successful tolerances. Further right is more accurate, lower is cheaper.",
+            report.repeats
+        ),
+        panels: vec![Panel {
+            title: "integration time against significant correct digits".into(),
+            x_label: "scd".into(),
+            y_label: "tsim [s]".into(),
+            x_log: false,
+            y_log: true,
+            markers: true,
+            drop_zeros: true,
+            series,
+        }],
+        cols: 1,
+        size: (1300, 850),
+        legend,
+    })
+}
+
+fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
+    let with_ref = report.has_reference();
+    let (mut series, mut legend) = pair_series(report, |r| {
+        let y = if with_ref {
+            r.record.err
+        } else {
+            r.record.residuals.level(0)
+        };
+        y.map(|y| (r.record.tsim_s, y)).filter(|(t, _)| *t > 0.0)
+    });
     if series.is_empty() {
         return None;
     }
@@ -515,7 +561,7 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
     let (title, y_label, what) = if with_ref {
         (
             format!("{}: work-precision diagram", report.scene.name),
-            "err [m, m/s]".to_string(),
+            "err".to_string(),
             "err (largest pointwise error of the differential unknowns over the check times)"
                 .to_string(),
         )
