@@ -47,7 +47,7 @@ pub enum ModelError {
     Invalid(String),
 }
 
-/// A model's text and the name its messages show (what [`derive`] reads).
+/// A model's text and the name its messages show (what [`derive()`] reads).
 #[derive(Clone, Debug)]
 pub struct ModelText {
     /// Name shown in messages (`pendulum` or the path).

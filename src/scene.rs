@@ -19,7 +19,7 @@
 //! [reference]
 //! kind = "exact"              # the pendulum's closed form; see below
 //! [sweep]                     # optional; defaults: every solver, formulation,
-//! solvers = ["radau5", "bdf", "odradau", "odbdf"] # and the tolerances 1e-5 … 1e-12
+//! solvers = ["radau5", "bdf", "odradau", "odbdf", "mebdf", "idec"] # and the tolerances 1e-5 … 1e-12
 //! formulations = ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0"]
 //! tolerances = [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
 //! ```
@@ -557,10 +557,15 @@ impl Scene {
     /// directory.
     pub fn load(path_or_builtin: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path_or_builtin.as_ref();
-        if !path.exists() {
+        // A built-in name is a file only if a file of that name exists: a
+        // directory called `s01` in the working directory does not hide the
+        // built-in scene.
+        if !path.is_file() {
             if let Some(scene) = path.to_str().and_then(Scene::builtin) {
                 return Ok(scene);
             }
+        }
+        if !path.exists() {
             return Err(SceneError::NotFound {
                 path: path.to_path_buf(),
             });

@@ -12,7 +12,7 @@
 //! one row saying so, at the stage where it was refused.
 //!
 //! The output is a text table ([`text`]), a JSON document ([`json`]) and a
-//! heat map ([`render_heat_map`]: rows case × tolerance, columns solver ×
+//! heat map ([`draw_heat_map`]: rows case × tolerance, columns solver ×
 //! formulation, colour log₁₀(err / tol) for finished runs with a reference,
 //! a fixed colour per failure class otherwise). `dae sweep --extremes`
 //! writes all three.

@@ -308,3 +308,25 @@ fn inconsistent_start_is_projected_or_refused() {
         "{v}"
     );
 }
+
+/// A directory named like a built-in scene in the working directory does
+/// not hide the built-in (it used to be read as the scene file and fail).
+#[test]
+fn a_directory_named_s01_does_not_hide_the_builtin_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("s01")).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_dae"))
+        .args([
+            "run", "s01", "--solver", "radau5", "--tol", "1e-5", "--format", "text",
+        ])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.starts_with("S01 radau5("), "{out}");
+}

@@ -174,6 +174,32 @@ impl FormulationInfo {
 /// must already have the documented shape. Implementations may panic on
 /// wrong buffer sizes (a programming error), never on values: non-finite
 /// inputs give non-finite outputs for the solver to detect.
+///
+/// The `dae!` macro (or the interpreter, for a `.dae` file read at run time)
+/// implements it for every formulation a model lists:
+///
+/// ```
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+/// use nalgebra::DMatrix;
+///
+/// let sys = Pendulum::default().rcd1(); // E y' = f(t, y), y = (x, y, v, w, lambda)
+/// let info = sys.info();
+/// assert_eq!((info.unknowns(), info.equations(), info.d_index), (5, 5, Some(2)));
+/// let names: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
+/// assert_eq!(names, ["x", "y", "v", "w", "lambda"]);
+///
+/// let y = [1.0, 0.0, 0.0, 0.0, 0.0]; // at rest, rod horizontal
+/// let mut f = vec![0.0; 5];
+/// sys.rhs(0.0, &y, &mut f);
+/// assert_eq!(f[3], -Pendulum::default().g); // w' = -2 y lambda / m - g
+/// let mut e = DMatrix::zeros(5, 5);
+/// sys.leading(&y, &mut e); // E: identity on x, y, v, w; zero row for the constraint
+/// assert_eq!((e[(0, 0)], e[(4, 4)]), (1.0, 0.0));
+/// let mut g = vec![0.0; info.constraints.len()];
+/// sys.constraints(0.0, &y, &mut g); // the chain: x² + y² − l², 2xv + 2yw, …
+/// assert_eq!(&g[..2], [0.0, 0.0]);
+/// ```
 pub trait DaeSystem {
     /// Static description: variables, rows, structural numbers.
     fn info(&self) -> &FormulationInfo;

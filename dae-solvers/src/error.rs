@@ -3,6 +3,29 @@
 use serde::Serialize;
 
 /// Why an integration stopped.
+///
+/// Every solver returns these instead of panicking; [`SolveError::kind`]
+/// and [`SolveError::t`] are the machine-readable parts:
+///
+/// ```
+/// use dae::dae_solvers::radau5::Radau5;
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().rcd0();
+/// let y0 = [1.0, 0.0, 0.0, 0.0, 0.0];
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &y0, t_end: 20.0 };
+/// // Too few steps allowed for the horizon: a typed error, not a panic.
+/// let options = Options { max_steps: 10, ..Options::with_tol(1e-8) };
+/// let err = Radau5.solve(&problem, &options).unwrap_err();
+/// assert!(matches!(err, SolveError::StepLimit { max_steps: 10, .. }));
+/// assert_eq!(err.kind(), "step_limit");
+/// assert!(err.t().unwrap() < 20.0);
+/// // A negative tolerance is refused before any work, naming it.
+/// let err = Radau5.solve(&problem, &Options::with_tol(-1e-6)).unwrap_err();
+/// assert_eq!(err.kind(), "invalid_input");
+/// assert_eq!(err.t(), None);
+/// ```
 #[derive(Clone, Debug, PartialEq, thiserror::Error, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum SolveError {

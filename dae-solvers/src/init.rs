@@ -783,6 +783,24 @@ fn projection_stage(
 ///   constraint that cannot be satisfied (e.g. a rank-zero Jacobian at the
 ///   given point);
 /// * [`SolveError::NonFinite`] — the model produced NaN or ∞.
+///
+/// ```
+/// use dae::dae_solvers::init::{consistent, InitMode, InitOptions};
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().rcd1(); // x, y, v, w, lambda
+/// // Off the circle and with a radial velocity: projected with least change.
+/// let start = consistent(&sys, 0.0, &[1.1, 0.0, 0.3, 0.0, 0.0], &InitOptions::default())?;
+/// let [x, y, v, w, lambda] = start.y[..] else { unreachable!() };
+/// assert!((x * x + y * y - 1.0).abs() < 1e-12 && (x * v + y * w).abs() < 1e-12);
+/// assert!(start.report.projected && lambda.is_finite());
+/// // Refused instead of projected:
+/// let strict = InitOptions { mode: InitMode::Strict, ..InitOptions::default() };
+/// let err = consistent(&sys, 0.0, &[1.1, 0.0, 0.0, 0.0, 0.0], &strict).unwrap_err();
+/// assert_eq!(err.kind(), "inconsistent_initial_values");
+/// # Ok::<(), SolveError>(())
+/// ```
 pub fn consistent(
     sys: &dyn DaeSystem,
     t0: f64,

@@ -44,6 +44,19 @@ pub use stats::Stats;
 use dae_core::system::{DaeSystem, FormulationInfo};
 
 /// An initial value problem: a formulation, a consistent start, a horizon.
+///
+/// ```
+/// use dae::dae_solvers::init;
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().rcd1();
+/// // The start must be consistent: computed from the positions.
+/// let start = init::consistent(&sys, 0.0, &[1.0, 0.0, 0.0, 0.0, 0.0], &Default::default())?;
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &start.y, t_end: 20.0 };
+/// assert_eq!(problem.y0.len(), sys.info().unknowns());
+/// # Ok::<(), SolveError>(())
+/// ```
 #[derive(Clone, Copy)]
 pub struct Problem<'a> {
     /// The formulation to integrate.
@@ -78,6 +91,27 @@ impl Problem<'_> {
 }
 
 /// A DAE integrator.
+///
+/// Solvers are also found by name, and say (typed) which formulations they
+/// cannot take:
+///
+/// ```
+/// use dae::dae_solvers::{solver_by_name, NotApplicable, SOLVER_NAMES};
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let ovd0 = Pendulum::default().ovd0(); // overdetermined: 8 equations, 5 unknowns
+/// for name in SOLVER_NAMES {
+///     let solver = solver_by_name(name).unwrap();
+///     match solver.accepts(ovd0.info()) {
+///         Ok(()) => println!("{name} integrates ovd0"),
+///         Err(why) => println!("{name}: {why}"),
+///     }
+/// }
+/// let radau5 = solver_by_name("radau5").unwrap();
+/// assert!(matches!(radau5.accepts(ovd0.info()), Err(NotApplicable::Overdetermined { .. })));
+/// assert!(solver_by_name("odradau").unwrap().accepts(ovd0.info()).is_ok());
+/// ```
 pub trait Solver {
     /// Short name used on the command line (`radau5`, `bdf`, …).
     fn name(&self) -> &'static str;

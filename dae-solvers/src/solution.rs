@@ -3,6 +3,30 @@
 use crate::stats::Stats;
 
 /// Solution values at the requested output times, plus statistics.
+///
+/// ```
+/// use dae::prelude::*;
+/// use dae::dae_solvers::radau5::Radau5;
+///
+/// dae! {
+///     /// y' = −y, y(0) = 1, as a one-unknown DAE.
+///     pub Decay {
+///         parameters { k = 1.0 }
+///         differential { y }
+///         equations { der(y) = -k * y; }
+///     }
+/// }
+///
+/// let sys = Decay::default().ori2();
+/// let options = Options { output_times: vec![0.5, 1.0], ..Options::with_tol(1e-10) };
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &[1.0], t_end: 2.0 };
+/// let solution = Radau5.solve(&problem, &options).unwrap();
+/// // The requested output times, then t_end.
+/// assert_eq!(solution.t, [0.5, 1.0, 2.0]);
+/// assert!((solution.y[1][0] - (-1.0f64).exp()).abs() < 1e-9);
+/// assert_eq!(solution.last(), Some(&solution.y[2][..]));
+/// assert!(solution.stats.steps > 0);
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Solution {
     /// Output times (those of `Options::output_times` inside the horizon,

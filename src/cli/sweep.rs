@@ -45,7 +45,7 @@ pub struct SweepArgs {
     /// Threads for the accuracy pass (timing stays sequential).
     #[arg(long, default_value_t = 1)]
     pub jobs: usize,
-    /// Output directory (default: out/<scene name in lower case>, e.g.
+    /// Output directory (default: `out/<scene name in lower case>`, e.g.
     /// out/s01; `dae` without arguments writes to out/s01). Replaced as a
     /// whole when the sweep is complete; refused if it holds files a sweep
     /// does not write.

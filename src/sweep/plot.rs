@@ -917,7 +917,7 @@ fn draw_legend<DB: DrawingBackend>(
 }
 
 /// Draw a figure on any backend; `segmented` strokes lines segment by
-/// segment (for the bitmap backend, see [`stroke`]).
+/// segment (for the bitmap backend, whose thick lines are drawn as quads).
 pub fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     fig: &Figure,

@@ -172,6 +172,25 @@ use run::Run;
 
 /// Variable-order (1–5), variable-step BDF in fixed-leading-coefficient form
 /// (DASSL/DASPK). See the [module documentation](self).
+///
+/// The pendulum in the index-1 formulation `rcd0` (its multiplier is
+/// algebraic, index 1), with output every half second:
+///
+/// ```
+/// use dae::dae_solvers::{bdf::Bdf, init};
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().rcd0();
+/// let start = init::consistent(&sys, 0.0, &[1.0, 0.0, 0.0, 0.0, 0.0], &Default::default())?;
+/// let options = Options { output_times: vec![0.5, 1.0, 1.5], ..Options::with_tol(1e-8) };
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &start.y, t_end: 2.0 };
+/// let solution = Bdf.solve(&problem, &options)?;
+/// assert_eq!(solution.t, [0.5, 1.0, 1.5, 2.0]);
+/// // Half a period: the pendulum is at the other side, x = -1.
+/// assert!((solution.y[1][0] + 1.0).abs() < 1e-4);
+/// # Ok::<(), SolveError>(())
+/// ```
 pub struct Bdf;
 
 impl Solver for Bdf {
