@@ -85,8 +85,10 @@
 //!
 //! - [`Options::max_order`] and [`Options::fixed_order`] count the *steps*
 //!   `k` of the formulas: order `k + 1`. `max_order = k` bounds the order
-//!   by `k + 1` (the default 5 allows orders 1–6; the formulas exist up to
-//!   order 8, [`coeffs::MAX_ORDER`](self), but [`Options`] admits `k ≤ 5`);
+//!   by `k + 1`, `k ≤ 7`: the library default `max_order = 5` (chosen for
+//!   the BDF methods) therefore gives orders 1–6 here, and `max_order = 7`
+//!   orders up to 8 ([`coeffs::MAX_ORDER`](self)); `k = 0` or `k > 7` is
+//!   [`SolveError::InvalidInput`] naming the field and the range `1..=7`;
 //!   `fixed_order = k` raises the order to `k + 1` as the history allows
 //!   and never lowers it by order selection (only the emergency fall-back to
 //!   order one after three error-test failures on one step).
@@ -156,6 +158,11 @@ impl Solver for Mebdf {
 fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
     let sys = problem.system;
     problem.check(sys.info().unknowns(), options)?;
+    // The options count steps k: order k + 1 ≤ MAX_ORDER.
+    options.check_orders(
+        coeffs::MAX_ORDER - 1,
+        "mebdf (the step number k, order k + 1)",
+    )?;
     let (t0, t_end) = (problem.t0, problem.t_end);
     let span = t_end - t0;
 
