@@ -263,9 +263,18 @@ pub struct Options {
     /// Integrate with this constant step size and no error control
     /// (convergence studies).
     pub fixed_step: Option<f64>,
-    /// BDF only: use this order only (1–5).
+    /// Multistep methods only: use this order only. Its meaning and range
+    /// are the method's: the BDF methods (`bdf`, `odbdf`) take the order
+    /// `1..=5`; `mebdf` takes the step number `k` of its formulas, `1..=7`
+    /// (order `k + 1`, up to 8). [`Options::validate`] checks only
+    /// `1..=`[`ORDER_BOUND`]; a method refuses what it cannot do with
+    /// [`SolveError::InvalidInput`] naming the field and its range. The
+    /// Runge–Kutta methods (`radau5`, `odradau`) ignore it.
     pub fixed_order: Option<usize>,
-    /// BDF only: largest order (1–5).
+    /// Multistep methods only: largest order, with the meaning and range of
+    /// [`Options::fixed_order`]. The default 5 is order 5 for the BDF
+    /// methods and step number 5 (orders up to 6) for `mebdf`;
+    /// `max_order = 7` lets `mebdf` reach order 8.
     pub max_order: usize,
 }
 
@@ -286,7 +295,32 @@ impl Default for Options {
     }
 }
 
+/// The largest [`Options::max_order`] and [`Options::fixed_order`] that
+/// [`Options::validate`] lets through; each method has its own, smaller,
+/// limit (see [`Options::fixed_order`]).
+pub const ORDER_BOUND: usize = 16;
+
 impl Options {
+    /// [`Options::max_order`] and [`Options::fixed_order`] (when set) in
+    /// `1..=limit`, else [`SolveError::InvalidInput`] naming the field, its
+    /// value, the range and `method` (whose limit it is).
+    pub(crate) fn check_orders(&self, limit: usize, method: &str) -> Result<(), SolveError> {
+        let fields = [
+            ("max_order", Some(self.max_order)),
+            ("fixed_order", self.fixed_order),
+        ];
+        for (name, value) in fields {
+            if let Some(v) = value {
+                if !(1..=limit).contains(&v) {
+                    return Err(SolveError::invalid(format!(
+                        "{name} = {v} must be in 1..={limit} for {method}"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Options with uniform tolerance `tol`.
     pub fn with_tol(tol: f64) -> Self {
         Options {
@@ -319,19 +353,7 @@ impl Options {
         if self.max_steps == 0 {
             return Err(SolveError::invalid("max_steps must be at least 1"));
         }
-        if !(1..=5).contains(&self.max_order) {
-            return Err(SolveError::invalid(format!(
-                "max_order = {} must be in 1..=5",
-                self.max_order
-            )));
-        }
-        if let Some(k) = self.fixed_order {
-            if !(1..=5).contains(&k) {
-                return Err(SolveError::invalid(format!(
-                    "fixed_order = {k} must be in 1..=5"
-                )));
-            }
-        }
+        self.check_orders(ORDER_BOUND, "any method")?;
         if self.output_times.iter().any(|t| !t.is_finite()) {
             return Err(SolveError::invalid("output_times must be finite"));
         }

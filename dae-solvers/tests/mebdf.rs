@@ -94,6 +94,37 @@ fn fixed_step_orders() {
     }
 }
 
+/// Orders 6 and 7 (`fixed_order = 5, 6`) at a constant step, on the ODE
+/// over [0, 4] from h = 0.4 and on the index-1 DAE from h = 0.1 (larger
+/// steps than for k ≤ 4: with smaller ones the error reaches the floor of
+/// the starting values and round-off, ≈ 1e-11 … 1e-10, within two
+/// halvings). Measured:
+/// - k = 5: ode 5.637, 5.940, 5.987, 5.556 (the last pair at 2.9e-11, on
+///   the floor); dae1 5.738, 5.912, 5.554, −0.95 (floor 5e-12);
+/// - k = 6: ode 5.001, 8.134, 5.798, 0.129 — errors 1.7e-4, 5.3e-6,
+///   1.9e-8, 3.4e-10, 3.1e-10: order 7 is visible only between h = 0.2 and
+///   0.05 (two halvings, 13.9 halvings' worth of digits in all: mean order
+///   6.97), after which the 3e-10 floor dominates; on dae1 the floor
+///   (≈ 1e-10) is reached after one halving, so it is not observable there.
+///   What is asserted for k = 6 is the mean order over h = 0.2 → 0.05.
+#[test]
+fn fixed_step_high_orders() {
+    let (errors, orders) = observed_orders(&ode(), ode_exact, 4.0, 0.4, 5, 5);
+    for p in &orders[1..3] {
+        assert!((p - 6.0).abs() < 0.3, "k = 5: {errors:?}, {orders:?}");
+    }
+    let (errors, orders) = observed_orders(&dae1(), dae1_exact, 1.2, 0.1, 5, 3);
+    for p in &orders {
+        assert!(
+            (p - 6.0).abs() < 0.35,
+            "k = 5, dae1: {errors:?}, {orders:?}"
+        );
+    }
+    let (errors, orders) = observed_orders(&ode(), ode_exact, 4.0, 0.4, 6, 4);
+    let mean = (orders[1] + orders[2]) / 2.0;
+    assert!((mean - 7.0).abs() < 0.3, "k = 6: {errors:?}, {orders:?}");
+}
+
 /// The adaptive solver with an order bound reaches tighter tolerances with
 /// smaller errors: on the ODE at order ≤ 3 (`max_order = 2` steps) and
 /// unbounded, errors at t = 2 shrink with the tolerance.
@@ -208,11 +239,52 @@ fn invalid_input_is_a_typed_error() {
     assert!(is_invalid(run(&sys, &y0, 1.0, &options)));
     assert!(is_invalid(run(&sys, &y0, 0.0, &Options::default())));
     assert!(is_invalid(run(&sys, &y0[..4], 1.0, &Options::default())));
-    let options = Options {
-        fixed_order: Some(6),
-        ..Options::default()
-    };
-    assert!(is_invalid(run(&sys, &y0, 1.0, &options)));
+    // The step number k of mebdf is limited to 7 (order 8), typed and named.
+    for (options, field) in [
+        (
+            Options {
+                max_order: 8,
+                ..Options::default()
+            },
+            "max_order = 8",
+        ),
+        (
+            Options {
+                fixed_order: Some(8),
+                ..Options::default()
+            },
+            "fixed_order = 8",
+        ),
+        (
+            Options {
+                max_order: 0,
+                ..Options::default()
+            },
+            "max_order = 0",
+        ),
+    ] {
+        match run(&sys, &y0, 1.0, &options) {
+            Err(SolveError::InvalidInput { what }) => {
+                // k = 0 is refused for every method by Options::validate,
+                // k = 8 by mebdf with its own range.
+                let range = if field.ends_with('0') {
+                    "1..="
+                } else {
+                    "1..=7 for mebdf"
+                };
+                assert!(what.contains(field) && what.contains(range), "{what}")
+            }
+            other => panic!("{field}: {other:?}"),
+        }
+    }
+    // Orders 7 and 8 (k = 6, 7) are admitted.
+    for k in [6, 7] {
+        let options = Options {
+            max_order: k,
+            ..Options::with_tol(1e-8)
+        };
+        assert!(run(&sys, &y0, 1.0, &options).is_ok(), "max_order = {k}");
+    }
     let options = Options {
         h0: Some(-1.0),
         ..Options::default()

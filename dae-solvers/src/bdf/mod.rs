@@ -225,6 +225,7 @@ pub(crate) fn integrate<L: Corrector>(
     let sys = problem.system;
     let info = sys.info();
     problem.check(info.unknowns(), options)?;
+    options.check_orders(MAX_ORDER, "the BDF methods (bdf, odbdf)")?;
     let t0 = problem.t0;
 
     // Components in the error test and the Newton norm.

@@ -6,7 +6,9 @@
 //! of degree `p` through `y_n, …, y_{n−p}`: the difference is
 //! `∇^(p+1) y_{n+1} ≈ h^(p+1) y^(p+1)`, `C_p` the error constant of the
 //! formula ([`super::coeffs`]). The same with `p ∓ 1` estimates the errors
-//! the neighbouring orders would have made.
+//! the neighbouring orders would have made. The norm is the root mean
+//! square over the unknowns of index at most two; index-3 unknowns are left
+//! out (the module documentation of [`super`] gives the measurements).
 //!
 //! *Step and order*: after `p + 1` steps at the same order and step size,
 //! the ratios `r_q = 1/(c_q est_q^(1/(q+1)) + 10⁻⁶)` of orders
@@ -41,7 +43,12 @@ impl Integrator<'_> {
     fn estimate_at(&mut self, q: usize) -> f64 {
         let mut d = std::mem::take(&mut self.delta);
         self.hist.difference_to(self.solution(), q, &mut d);
-        let est = self.coef.error_constant[q] * self.weights.norm(&d);
+        for (di, &inside) in d.iter_mut().zip(&self.estimated) {
+            if !inside {
+                *di = 0.0;
+            }
+        }
+        let est = self.coef.error_constant[q] * self.estimate_scale * self.weights.norm(&d);
         self.delta = d;
         if est.is_nan() {
             f64::INFINITY

@@ -55,6 +55,13 @@ pub(super) struct Integrator<'a> {
     pub(super) n: usize,
     /// Error weights, index-scaled.
     pub(super) weights: Weights,
+    /// Unknowns in the error estimate: index at most two (the index-3
+    /// multipliers are left out, see the module documentation).
+    pub(super) estimated: Vec<bool>,
+    /// `sqrt(N / N_estimated)`: turns the norm over all `N` unknowns of a
+    /// difference with the left-out entries zeroed into the root mean
+    /// square over the estimated ones.
+    pub(super) estimate_scale: f64,
     /// Differences of the past values.
     pub(super) hist: History,
 
@@ -147,6 +154,8 @@ impl<'a> Integrator<'a> {
             .iter()
             .map(|v| i32::from(v.index.max(1)) - 1)
             .collect();
+        let estimated: Vec<bool> = info.variables.iter().map(|v| v.index <= 2).collect();
+        let count = estimated.iter().filter(|&&b| b).count().max(1);
         let mut lead = DMatrix::zeros(n, n);
         sys.leading(&vec![0.0; n], &mut lead);
         Integrator {
@@ -156,6 +165,8 @@ impl<'a> Integrator<'a> {
             n,
             weights: Weights::new(tol, |_| 1.0, vec![true; n], index_power),
             hist: History::new(n),
+            estimated,
+            estimate_scale: (n.max(1) as f64 / count as f64).sqrt(),
             t: 0.0,
             h: 0.0,
             p: 1,
