@@ -31,7 +31,8 @@ td.X{background:#d8f0d8}td.x{background:#fff3c4}td.o{background:#f8d0d0}td.na{ba
 td.fail{color:#a00}td.more{background:#d8f0d8}td.eq{background:#eef}td.behind{background:#f8d0d0}\
 figure{margin:1.5em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.9em;color:#444}\
 .note{background:#fff8e0;border-left:4px solid #e0b000;padding:.4em .8em}\
-small.bad{color:#a00;font-weight:bold}.scroll{overflow-x:auto}\
+small.bad{color:#a00;font-weight:bold}.scroll{overflow-x:auto}table.paper{font-size:.78em}\
+table.paper td{padding:.2em .4em;line-height:1.25}\
 code{background:#f3f3f3;padding:0 .2em}";
 
 fn table(rows: &[Vec<String>], left_cols: usize) -> String {
@@ -121,7 +122,7 @@ fn paper_html(summary: &Summary) -> String {
             tols.push(cell.tol);
         }
     }
-    let mut s = format!("<p>{}: {}</p>\n<div class=\"scroll\"><table>\n<tr><th class=\"l\">ours</th><th class=\"l\">paper</th>", esc(&c.table), esc(&c.note));
+    let mut s = format!("<p>{}: {}</p>\n<div class=\"scroll\"><table class=\"paper\">\n<tr><th class=\"l\">ours</th><th class=\"l\">paper</th>", esc(&c.table), esc(&c.note));
     for t in &tols {
         let _ = write!(s, "<th>{}</th>", tol_label(*t));
     }
@@ -149,7 +150,7 @@ fn paper_html(summary: &Summary) -> String {
                         .map_or_else(|| "failed".to_string(), |v| sci(Some(v)));
                     let _ = write!(
                         s,
-                        "<td class=\"{class}\">{} / {}<br><small>{}</small></td>",
+                        "<td class=\"{class}\">{}<br>{}<br><small>{}</small></td>",
                         esc(&ours),
                         esc(&paper_cell(cell.paper)),
                         cell.verdict.label()
@@ -160,7 +161,7 @@ fn paper_html(summary: &Summary) -> String {
         }
         s.push_str("</tr>\n");
     }
-    s.push_str("</table></div>\n<p>Cells: ours (err_sum) / paper (ERR). ");
+    s.push_str("</table></div>\n<p>Cells: ours (err_sum), the paper's ERR below it, the verdict. ");
     let counts: Vec<String> = c
         .counts
         .iter()

@@ -126,6 +126,9 @@ pub struct Series {
     pub look: Look,
     /// Data points.
     pub points: Vec<(f64, f64)>,
+    /// Text drawn beside some points: `(index into points, text)` (the
+    /// tolerances at the ends of a work-precision line).
+    pub labels: Vec<(usize, String)>,
 }
 
 /// One chart of a figure.
@@ -235,8 +238,12 @@ pub fn figures(report: &SweepReport) -> Figures {
                  diagram plots the position-constraint residual instead of the error"
             ));
         }
-        out.figures
-            .push(residual_figure(report, &runs, &tol, sampled_at));
+        out.figures.push(residual_figure(
+            report,
+            &per_formulation(report, &runs),
+            &tol,
+            sampled_at,
+        ));
     }
     match work_precision_figure(report) {
         Some(f) => out.figures.push(f),
@@ -275,6 +282,7 @@ fn solution_figure(
                     Some(Series {
                         label: label(r),
                         look: look(&r.record.solver, &r.record.formulation),
+                        labels: Vec::new(),
                         points: tr.t.iter().zip(&tr.y).map(|(t, y)| (*t, y[i])).collect(),
                     })
                 })
@@ -308,6 +316,7 @@ fn error_figure(report: &SweepReport, runs: &[&SweepRun], tol: &str, sampled_at:
             Series {
                 label: label(r),
                 look: look(&r.record.solver, &r.record.formulation),
+                labels: Vec::new(),
                 points: tr.err.clone(),
             }
         })
@@ -338,6 +347,33 @@ fn error_figure(report: &SweepReport, runs: &[&SweepRun], tol: &str, sampled_at:
         size: (1300, 700),
         legend: legend_of(runs, false),
     }
+}
+
+/// One run per formulation, in the sweep's formulation order: the most
+/// accurate at the figure tolerance (smallest `err`; without a reference
+/// the smallest position residual). The residuals are the formulation's
+/// (drift or none); one curve each keeps the panels readable with many
+/// solvers.
+fn per_formulation<'a>(report: &SweepReport, runs: &[&'a SweepRun]) -> Vec<&'a SweepRun> {
+    let score = |r: &SweepRun| {
+        if report.has_reference() {
+            r.record.err
+        } else {
+            r.record.residuals.level(0)
+        }
+        .filter(|v| v.is_finite())
+        .unwrap_or(f64::INFINITY)
+    };
+    report
+        .formulations
+        .iter()
+        .filter_map(|f| {
+            runs.iter()
+                .copied()
+                .filter(|r| &r.record.formulation == f)
+                .min_by(|a, b| score(a).total_cmp(&score(b)))
+        })
+        .collect()
 }
 
 fn residual_figure(
@@ -390,6 +426,7 @@ fn residual_figure(
                         Series {
                             label: label(r),
                             look: look(&r.record.solver, &r.record.formulation),
+                            labels: Vec::new(),
                             points: tr
                                 .t
                                 .iter()
@@ -418,6 +455,7 @@ fn residual_figure(
                     Series {
                         label: label(r),
                         look: look(&r.record.solver, &r.record.formulation),
+                        labels: Vec::new(),
                         points: tr.t.iter().zip(&tr.drift).map(|(t, d)| (*t, *d)).collect(),
                     }
                 })
@@ -431,6 +469,7 @@ fn residual_figure(
         caption: format!(
             "Absolute residuals of the constraints per level, hidden ones included (largest over the constraints of \
              a level), and the drift of the {} at RTOL = ATOL = {tol}{sampled_at}; log scale (paper Fig. 5 / 11). \
+             One curve per formulation: its most accurate solver at this tolerance (named in the legend). \
              Residuals are in the units of the constraints as written. Values below 1e-16, exact zeros \
              included, are drawn on the lower edge.",
             report.invariants.first().map_or("first invariant", String::as_str)
@@ -465,13 +504,18 @@ fn pair_series(
             })
             .collect();
         runs.sort_by(|a, b| b.record.tol.total_cmp(&a.record.tol));
-        let pts: Vec<(f64, f64)> = runs
+        let (pts, tols): (Vec<(f64, f64)>, Vec<f64>) = runs
             .iter()
-            .filter_map(|r| point(r))
-            .filter(|(x, y)| x.is_finite() && y.is_finite())
-            .collect();
+            .filter_map(|r| point(r).map(|q| (q, r.record.tol)))
+            .filter(|((x, y), _)| x.is_finite() && y.is_finite())
+            .unzip();
         if pts.is_empty() {
             continue;
+        }
+        // The tolerances at the two ends of the line.
+        let mut labels = vec![(0, tol_label(tols[0]))];
+        if pts.len() > 1 {
+            labels.push((pts.len() - 1, tol_label(tols[pts.len() - 1])));
         }
         let l = format!("{}({})", p.solver, p.formulation);
         let lk = look(&p.solver, &p.formulation);
@@ -479,6 +523,7 @@ fn pair_series(
         series.push(Series {
             label: l,
             look: lk,
+            labels,
             points: pts,
         });
     }
@@ -552,6 +597,7 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
                 Series {
                     label: "Pareto front".into(),
                     look: lk,
+                    labels: Vec::new(),
                     points: front.iter().map(|p| (p.tsim_s, p.err)).collect(),
                 },
             );
@@ -837,6 +883,17 @@ where
             for q in &px {
                 draw_marker(&screen, *q, s.look.marker, style)?;
             }
+        }
+        for (i, text) in &s.labels {
+            let Some(&(x, y)) = s.points.get(*i) else { continue };
+            if !(x.is_finite() && y.is_finite()) || (p.x_log && x <= 0.0) || (p.y_log && y <= 0.0) {
+                continue;
+            }
+            let (sx, sy) = area.map_coordinate(&(x, y));
+            let font = ("sans-serif", 12).into_font().color(&s.look.color);
+            screen
+                .draw(&Text::new(text.clone(), (sx + 6, sy - 14), font))
+                .map_err(draw_err)?;
         }
     }
     Ok(())
