@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(s) => s.parse()?,
         None => 1.0,
     };
-    let exact = PendulumExact::from_start(1.0, 0.0, 1.0, 13.7503716373294544, 1.0)?;
+    let exact = PendulumExact::from_start(1.0, 0.0, 1.0, 13.750371637329454, 1.0)?;
     let end = exact.state(t_end);
     let p = Pendulum::default();
     let (rcd1, ggl1) = (p.rcd1(), p.ggl1());
@@ -78,8 +78,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             println!("observed orders");
             for k in 0..HS.len() - 1 {
                 print!("{:>9}", "");
-                for l in 0..LEVELS.len() {
-                    print!(" {:>9.2}", (errors[k][l][c] / errors[k + 1][l][c]).log2());
+                for (coarse, fine) in errors[k].iter().zip(&errors[k + 1]) {
+                    print!(" {:>9.2}", (coarse[c] / fine[c]).log2());
                 }
                 println!();
             }
