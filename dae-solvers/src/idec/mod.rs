@@ -67,6 +67,22 @@
 //! would mix with its own: the index-2 unknowns went wrong by `O(1)`). [`Idec::levels`] returns every `η^[l]` at `t_end`, the
 //! seed's tables.
 //!
+//! # Constant steps on the pendulum (`Idec::levels_with`, `Jacobian::EveryStep`)
+//!
+//! The frozen Jacobian goes non-finite on the pendulum (t ≈ 0.5). With the
+//! global connection kept and `J` evaluated at every Euler step at that
+//! step's own point (the basic solution at `η^[0]_k`, each neighbouring
+//! problem at `π^[j]_k`) the orders are 1, 2, 3, 4 after 0…3 corrections on
+//! `rcd1` and `ggl1`, in x, y, v, w and in λ (t = 1, `examples/
+//! idec_pendulum.rs`). Measured alternatives that do *not* give them: a
+//! Jacobian per interval at the best value with the global connection
+//! (2.DC and 3.DC stay at order ≈ 2: the constraint rows are linearised at
+//! a point that jumps at every interval start, a sawtooth in `t` that the
+//! error expansion inherits); any restart of the levels from the accepted
+//! value (order 2, with or without a Jacobian per step, with or without
+//! extrapolating `z` at the first node). Over S01's 20 s the uncorrected
+//! basic solution's phase error becomes O(1) and the corrections fail.
+//!
 //! # Variable steps (the default)
 //!
 //! A Jacobian frozen at `t₀` cannot carry the pendulum over 20 s: on a
@@ -163,6 +179,24 @@ use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 use run::Integrator;
 
+/// Where the constant-step scheme ([`Idec::levels_with`]) evaluates the
+/// Jacobian `J` of its matrix `E − hJ`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Jacobian {
+    /// Once, at `(t₀, y₀)`, for the whole integration: the seed's scheme
+    /// (2.2), one factorisation.
+    Frozen,
+    /// At the start of every Euler step, at that step's own point: the
+    /// basic solution at `η^[0]_k`, each neighbouring problem at its own
+    /// `π^[j]_k` (`m (J + 1)` Jacobians and factorisations per interval).
+    /// Each level's matrix is then a smooth function of its own solution,
+    /// so its error expansion stays smooth across intervals; a Jacobian per
+    /// interval (evaluated at the best value) does not have that property
+    /// and costs the corrections their order on the pendulum (module
+    /// documentation, "Constant steps on the pendulum").
+    EveryStep,
+}
+
 /// Most corrections [`Idec::j`] may ask for.
 pub const MAX_CORRECTIONS: usize = 12;
 
@@ -234,11 +268,24 @@ impl Idec {
     /// at `t₀`): every level `η^[0]` (LIE), `η^[1]` (1.DC), …, `η^[J]` at
     /// `t_end`.
     pub fn levels(&self, problem: &Problem<'_>, h: f64) -> Result<Vec<Vec<f64>>, SolveError> {
+        self.levels_with(problem, h, Jacobian::Frozen)
+    }
+
+    /// The constant-step scheme with the global connection and the
+    /// Jacobian as `jacobian` says: every level at `t_end`, as
+    /// [`Idec::levels`].
+    pub fn levels_with(
+        &self,
+        problem: &Problem<'_>,
+        h: f64,
+        jacobian: Jacobian,
+    ) -> Result<Vec<Vec<f64>>, SolveError> {
         let options = Options {
             fixed_step: Some(h),
             ..Options::default()
         };
         let mut integrator = self.integrator(problem, &options)?;
+        integrator.sweep.every_step = jacobian == Jacobian::EveryStep;
         driver::drive(&mut integrator, |_| {})?;
         Ok(integrator.levels())
     }

@@ -43,6 +43,10 @@ pub(super) struct Sweep {
     /// `E − h J`, factorised.
     lu: SquareLu,
     rows: Rows,
+    /// Evaluate `J` and factorise `E − hJ` at the start of every Euler
+    /// step, at that step's own point (each level and each neighbouring
+    /// problem at its own values), instead of once per interval.
+    pub(super) every_step: bool,
 }
 
 impl Sweep {
@@ -67,6 +71,7 @@ impl Sweep {
             jac: DMatrix::zeros(n, n),
             lu: SquareLu::new(n, n),
             rows: Rows::new(info),
+            every_step: false,
         }
     }
 
@@ -103,15 +108,45 @@ impl Sweep {
 
     /// Factorise `E − h J`.
     pub(super) fn factor(&mut self, h: f64) -> Result<(), Failure> {
-        let a = self.lu.matrix_mut();
+        Self::factor_parts(&mut self.lu, &self.rows, &self.e, &self.jac, h)
+    }
+
+    /// `E − hJ` into `lu`, factorised.
+    fn factor_parts(
+        lu: &mut SquareLu,
+        rows: &Rows,
+        e: &DMatrix<f64>,
+        jac: &DMatrix<f64>,
+        h: f64,
+    ) -> Result<(), Failure> {
+        let a = lu.matrix_mut();
         for (a, (e, j)) in a
             .as_mut_slice()
             .iter_mut()
-            .zip(self.e.as_slice().iter().zip(self.jac.as_slice()))
+            .zip(e.as_slice().iter().zip(jac.as_slice()))
         {
             *a = e - h * j;
         }
-        self.lu.factor(&self.rows).map_err(|_| Failure::Singular)
+        lu.factor(rows).map_err(|_| Failure::Singular)
+    }
+
+    /// `J` at `(t, y)` into `jac` and `E − hJ` factorised, both counted
+    /// ([`Sweep::every_step`]).
+    fn step_matrix(
+        sys: &dyn DaeSystem,
+        stats: &mut Stats,
+        (lu, rows, e, jac): (&mut SquareLu, &Rows, &DMatrix<f64>, &mut DMatrix<f64>),
+        t: f64,
+        y: &[f64],
+        h: f64,
+    ) -> Result<(), Failure> {
+        sys.rhs_jacobian(t, y, jac);
+        stats.jacobian_evals += 1;
+        if jac.iter().any(|v| !v.is_finite()) {
+            return Err(Failure::NonFinite("Jacobian"));
+        }
+        stats.factorizations += 1;
+        Self::factor_parts(lu, rows, e, jac, h)
     }
 
     /// `f(t, y)` into `out`, counted; non-finite values are a failure.
@@ -151,6 +186,10 @@ impl Sweep {
             let tk = t + k as f64 * h;
             let (done, next) = self.eta.split_at_mut((k + 1) * n);
             let eta_k = &done[k * n..];
+            if self.every_step {
+                let parts = (&mut self.lu, &self.rows, &self.e, &mut self.jac);
+                Self::step_matrix(sys, stats, parts, tk, eta_k, h)?;
+            }
             let f_k = &mut self.f_eta[k * n..(k + 1) * n];
             Self::rhs(sys, stats, tk, eta_k, f_k)?;
             for (r, f) in self.rhs.iter_mut().zip(f_k.iter()) {
@@ -185,6 +224,10 @@ impl Sweep {
                     .derivative(k, |l| &eta_j[l * n..(l + 1) * n], &mut self.dp);
                 mat_vec(&self.e, &self.dp, &mut self.edp);
                 Self::rhs(sys, stats, tk, &self.pi, &mut self.f)?;
+                if self.every_step {
+                    let parts = (&mut self.lu, &self.rows, &self.e, &mut self.jac);
+                    Self::step_matrix(sys, stats, parts, tk, &self.pi, h)?;
+                }
                 let f_k = &self.f_eta[k * n..(k + 1) * n];
                 for (i, r) in self.rhs.iter_mut().enumerate() {
                     *r = h * (self.f[i] - f_k[i]) + self.edp[i];
