@@ -885,7 +885,9 @@ where
             }
         }
         for (i, text) in &s.labels {
-            let Some(&(x, y)) = s.points.get(*i) else { continue };
+            let Some(&(x, y)) = s.points.get(*i) else {
+                continue;
+            };
             if !(x.is_finite() && y.is_finite()) || (p.x_log && x <= 0.0) || (p.y_log && y <= 0.0) {
                 continue;
             }

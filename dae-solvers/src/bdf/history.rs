@@ -181,7 +181,7 @@ impl<L: Corrector> Integrator<'_, L> {
         let n = self.n;
         // φ_{k+2} = e (for the order-raise test), φ_{k+1} += e, then
         // φ_i += φ_{i+1} for i = k … 1: the differences at t_{n+1}.
-        if k < self.cfg.maxord {
+        if k < self.cfg.max_order {
             self.phi[(k + 1) * n..(k + 2) * n].copy_from_slice(&self.e);
         }
         for (p, e) in self.phi[k * n..(k + 1) * n].iter_mut().zip(&self.e) {

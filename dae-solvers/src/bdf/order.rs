@@ -85,8 +85,8 @@ impl<L: Corrector> Integrator<'_, L> {
 
         let mut hnew = self.h;
         if let Some(test) = test {
-            let maxord = self.cfg.maxord;
-            if test.knew + 1 == k || k == maxord {
+            let max_order = self.cfg.max_order;
+            if test.knew + 1 == k || k == max_order {
                 self.ramp = false;
             }
             if self.ramp {
@@ -96,11 +96,11 @@ impl<L: Corrector> Integrator<'_, L> {
                 let mut newk = k;
                 let mut est = test.est;
                 if self.cfg.fixed_order {
-                    newk = (k + 1).min(maxord);
+                    newk = (k + 1).min(max_order);
                 } else if test.knew + 1 == k {
                     newk = k - 1;
                     est = test.erkm1;
-                } else if k < maxord && k + 1 < self.ns && kdiff != 1 {
+                } else if k < max_order && k + 1 < self.ns && kdiff != 1 {
                     for ((d, e), p) in self
                         .delta
                         .iter_mut()

@@ -44,12 +44,12 @@ impl<'a> Run<'a> {
     pub(super) fn adaptive<L: Corrector>(&self) -> Result<Solution, SolveError> {
         let opts = self.options;
         let span = self.t_end - self.t0;
-        let (maxord, fixed_order) = match opts.fixed_order {
+        let (max_order, fixed_order) = match opts.fixed_order {
             Some(k) => (k, true),
             None => (opts.max_order, false),
         };
         let cfg = Config {
-            maxord,
+            max_order,
             fixed_order,
             fixed_step: false,
             hmax: opts.h_max.unwrap_or(span),
@@ -85,7 +85,7 @@ impl<'a> Run<'a> {
         // The constant-step run, within what is left of the step budget
         // after the work `spent` before it.
         let constant = |spent: Stats| Config {
-            maxord: k,
+            max_order: k,
             fixed_order: true,
             fixed_step: true,
             hmax: h,
@@ -103,7 +103,7 @@ impl<'a> Run<'a> {
             return driver::solve(&mut integ, opts, self.t0, self.t_end);
         }
         let cfg = Config {
-            maxord: MAX_ORDER,
+            max_order: MAX_ORDER,
             fixed_order: false,
             fixed_step: false,
             hmax: span,

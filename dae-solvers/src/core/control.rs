@@ -152,3 +152,24 @@ pub(crate) fn constant_grid(
     .max(1.0) as usize;
     Ok((nsteps, span / nsteps as f64))
 }
+
+/// Settings of a multistep integrator's step loop (BDF, MEBDF): the order
+/// range, fixed order or step, and the limits of the driver.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StepConfig {
+    /// Largest order (in the method's own count).
+    pub(crate) max_order: usize,
+    /// Never lower the order by order selection; raise it to `max_order`
+    /// as soon as possible.
+    pub(crate) fixed_order: bool,
+    /// Constant step, no error test.
+    pub(crate) fixed_step: bool,
+    /// Largest step.
+    pub(crate) hmax: f64,
+    /// Step attempts allowed (accepted + rejected).
+    pub(crate) max_steps: usize,
+    /// Where to stop (never stepped over).
+    pub(crate) t_end: f64,
+    /// Length of the whole horizon (scale of the smallest step).
+    pub(crate) span: f64,
+}

@@ -14,25 +14,8 @@ use crate::{SolveError, Stats};
 use dae_core::system::DaeSystem;
 use nalgebra::DMatrix;
 
-/// Settings of one integrator.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Config {
-    /// Largest order `p` (1 … [`MAX_ORDER`]).
-    pub(super) max_order: usize,
-    /// Raise the order to `max_order` as soon as possible and never lower
-    /// it by order selection.
-    pub(super) fixed_order: bool,
-    /// Constant step, no error test.
-    pub(super) fixed_step: bool,
-    /// Largest step.
-    pub(super) hmax: f64,
-    /// Step attempts allowed (accepted + rejected).
-    pub(super) max_steps: usize,
-    /// Where to stop (never stepped over).
-    pub(super) t_end: f64,
-    /// Length of the whole horizon (scale of the smallest step).
-    pub(super) span: f64,
-}
+/// Settings of one integrator (the order in this method's count).
+pub(super) use crate::core::control::StepConfig as Config;
 
 /// Why a step attempt was rejected.
 #[derive(Clone, Copy, Debug)]
