@@ -45,10 +45,9 @@ fn main() -> Result<(), SolveError> {
         t_end: 10.0,
     };
     let solution = Radau5.solve(&problem, &Options::with_tol(1e-10))?;
-    println!(
-        "y(10) = {:?} after {} steps",
-        solution.last(),
-        solution.stats.steps
-    );
+    if let Some(&[x, y, v, w, ..]) = solution.last() {
+        println!("at t = 10: x = {x:.10}, y = {y:.10}, v = {v:.10}, w = {w:.10}");
+    }
+    println!("{} steps", solution.stats.steps);
     Ok(())
 }

@@ -8,6 +8,8 @@ pub use dae_macros::dae;
 pub use dae_solvers;
 
 pub mod cli;
+#[doc = include_str!("../docs/guide.md")]
+pub mod guide {}
 pub mod inputs;
 pub mod models;
 pub mod reference;
