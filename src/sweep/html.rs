@@ -211,12 +211,12 @@ pub fn index(
     for n in notes {
         let _ = writeln!(s, "<p class=\"note\">{}</p>", esc(n));
     }
-    s.push_str("<h2>Success matrix</h2>\n");
+    s.push_str("<h2 id=\"success\">Success matrix</h2>\n");
     s.push_str(&success_html(summary));
     let _ = writeln!(s, "<p class=\"note\">{}</p>", esc(&accuracy_line(report)));
     if report.has_reference() {
         s.push_str(
-            "<h2>The trade</h2>\n<p>Both summaries use <code>err</code>, the largest pointwise error of the \
+            "<h2 id=\"trade\">The trade</h2>\n<p>Both summaries use <code>err</code>, the largest pointwise error of the \
              differential unknowns over the check times. Pareto front: successful runs that no other successful run \
              beats on both tsim and err (at least as good in both, strictly better in one), by increasing tsim.</p>\n",
         );
@@ -265,14 +265,14 @@ pub fn index(
         s.push_str(&table(&rows, 2));
     } else {
         s.push_str(
-            "<h2>The trade</h2>\n<p class=\"note\">This scene has no reference (<code>[reference] kind = \
+            "<h2 id=\"trade\">The trade</h2>\n<p class=\"note\">This scene has no reference (<code>[reference] kind = \
              \"none\"</code>): errors are not measured, so there is no Pareto front and no target table. Residuals \
              and drift are reported below.</p>\n",
         );
     }
-    s.push_str("<h2>Against the paper</h2>\n");
+    s.push_str("<h2 id=\"paper\">Against the paper</h2>\n");
     s.push_str(&paper_html(summary));
-    s.push_str("<h2>Figures</h2>\n");
+    s.push_str("<h2 id=\"figures\">Figures</h2>\n");
     for f in figures {
         let _ = writeln!(
             s,
@@ -286,7 +286,7 @@ pub fn index(
     let inv = report.invariants.first().map_or("I", String::as_str);
     let _ = write!(
         s,
-        "<h2>Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds; err: largest pointwise \
+        "<h2 id=\"efficiency\">Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds; err: largest pointwise \
          error of the differential unknowns over the reference's times; err_sum: sum over those times of the errors \
          of all unknowns the reference gives (the paper's ERR reading); err_alg: largest error of the algebraic \
          unknowns (multipliers); evals / jac / LU: \
