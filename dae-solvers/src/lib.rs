@@ -21,6 +21,8 @@
 //! allocation happens inside the step loop. [`Solver::accepts`] says, typed,
 //! why a solver cannot take a formulation.
 
+#![warn(missing_docs)]
+
 pub mod bdf;
 pub mod core;
 pub mod error;

@@ -76,7 +76,9 @@ pub struct Look {
 }
 
 /// Colours of the formulations (in [`dae_core::system::FORMULATION_NAMES`]
-/// order), a colour-blind-friendly categorical palette.
+/// order), a categorical palette whose colours stay apart also in the
+/// darker shade of every other solver ([`look`]): psi0 is olive, not the
+/// palette's cyan, whose darker shade was hard to tell from ori2's.
 const FORMULATION_COLORS: [RGBColor; 8] = [
     RGBColor(31, 119, 180),  // ori2 blue
     RGBColor(255, 127, 14),  // rcd1 orange
@@ -85,7 +87,7 @@ const FORMULATION_COLORS: [RGBColor; 8] = [
     RGBColor(148, 103, 189), // ovd0 purple
     RGBColor(140, 86, 75),   // ggl1 brown
     RGBColor(227, 119, 194), // psi1 pink
-    RGBColor(23, 190, 207),  // psi0 cyan
+    RGBColor(188, 189, 34),  // psi0 olive
 ];
 
 /// The look of a pair: colour from the formulation, shade, dash and marker
