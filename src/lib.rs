@@ -1,6 +1,5 @@
 // The crate docs are the README, so its example is compiled and run as a doctest.
 #![doc = include_str!("../README.md")]
-
 #![warn(missing_docs)]
 
 extern crate self as dae;
