@@ -16,7 +16,9 @@
 //!
 //! - RADAU5: `θ_k = sqrt(q_k q_{k−1})` with `q_k = ‖Δ_k‖/‖Δ_{k−1}‖` (the
 //!   first estimate is `q_2`), divergence at `θ ≥ 0.99`, and an early exit
-//!   when `η ‖Δ_k‖ θ^(k_max − k − 1) ≥ κ`;
+//!   when `η ‖Δ_k‖ θ^(k_max − k − 1) ≥ κ`; before both, convergence when
+//!   the increments have stopped contracting at the round-off floor
+//!   (`θ ≥ 0.9` with `‖Δ_k‖ ≤ 10⁻²`, see `ROUND_OFF_FLOOR`);
 //! - DASSL: `θ_k = (‖Δ_k‖/‖Δ_1‖)^(1/(k−1))`, divergence at `θ > 0.9`, and
 //!   convergence as soon as `‖Δ_k‖ ≤ 100 ε ‖y‖`.
 //!
@@ -54,6 +56,19 @@ pub(crate) enum Rule {
 
 /// Unit round-off.
 const UROUND: f64 = f64::EPSILON * 0.5;
+
+/// RADAU5 rule: `θ` at which the increments have stopped contracting.
+const STAGNANT: f64 = 0.9;
+
+/// RADAU5 rule: an increment of at most this weighted norm (a hundredth of
+/// the tolerance) that no longer contracts (`θ ≥` [`STAGNANT`]) is the
+/// round-off of the linear solves, not a distance still to go: the iterate
+/// is as close as the arithmetic allows, and the iteration has converged.
+/// Without this exit a badly scaled iteration matrix whose round-off floor
+/// lies above `κ` — Andrews' squeezer at tol ≤ 1e-8, where accelerations
+/// of 5·10⁵ meet angles of 15 — is declared divergent at every step size
+/// until the step collapses.
+const ROUND_OFF_FLOOR: f64 = 1e-2;
 
 /// State of one Newton iteration (see the [module documentation](self)).
 pub(crate) struct Contraction {
@@ -121,6 +136,9 @@ impl Contraction {
                     let q = norm / self.reference;
                     self.theta = if k == 2 { q } else { (q * self.q_prev).sqrt() };
                     self.q_prev = q;
+                    if self.theta >= STAGNANT && norm <= ROUND_OFF_FLOOR {
+                        return Verdict::Converged;
+                    }
                     if self.theta >= 0.99 {
                         return Verdict::Diverged;
                     }
@@ -195,5 +213,21 @@ mod tests {
         // Round-off: DASSL accepts a negligible first increment at once.
         let mut c = Contraction::new(Rule::Dassl, 4, 0.33, 100.0);
         assert_eq!(c.observe(1e-20, 1e-14), Verdict::Converged);
+    }
+
+    #[test]
+    fn radau5_accepts_increments_stagnating_at_the_round_off_floor() {
+        // Increments that stop contracting far below the tolerance but
+        // above a tight κ: round-off, converged.
+        let mut c = Contraction::new(Rule::Radau5 { slow_exit: true }, 7, 1e-5, 1.0);
+        assert_eq!(c.observe(3e-3, 0.0), Verdict::Continue);
+        assert_eq!(c.observe(2.9e-3, 0.0), Verdict::Converged);
+        // The same stagnation at the tolerance's size is no convergence.
+        let mut c = Contraction::new(Rule::Radau5 { slow_exit: true }, 7, 1e-5, 1.0);
+        assert_eq!(c.observe(0.3, 0.0), Verdict::Continue);
+        assert!(matches!(c.observe(0.29, 0.0), Verdict::TooSlow { .. }));
+        let mut c = Contraction::new(Rule::Radau5 { slow_exit: true }, 7, 1e-5, 1.0);
+        assert_eq!(c.observe(0.3, 0.0), Verdict::Continue);
+        assert_eq!(c.observe(0.31, 0.0), Verdict::Diverged);
     }
 }
