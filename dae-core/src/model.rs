@@ -248,6 +248,7 @@ impl Model {
         {
             let mut scope = Scope::new(&params, &vars, dupes.clone());
             scope.forward = derived_asts.iter().map(|d| (*d).clone()).collect();
+            scope.definition_names = def_decls.iter().map(|d| d.name.name.clone()).collect();
             for (k, d) in derived_asts.iter().enumerate() {
                 scope.mode = Mode::Derived(k, n_base);
                 let Some(e) = scope.lower(&d.expr, &mut errors) else {
@@ -615,6 +616,9 @@ struct Scope<'a> {
     defs: HashMap<String, Expr>,
     /// Definitions that failed to lower (already reported).
     failed: HashSet<String>,
+    /// Every definition's name (for messages about derived parameters,
+    /// lowered before the definitions).
+    definition_names: HashSet<String>,
     /// The definitions, or the derived parameters, being lowered in order:
     /// to tell a use before the definition from a cycle.
     forward: Vec<crate::dsl::NamedExpr>,
@@ -638,6 +642,7 @@ impl<'a> Scope<'a> {
             dupes,
             defs: HashMap::new(),
             failed: HashSet::new(),
+            definition_names: HashSet::new(),
             forward: Vec::new(),
             mode: Mode::Model,
         }
@@ -744,7 +749,7 @@ impl Scope<'_> {
                     Some(Sym::Var(_)) => format!("`{name}` is an unknown"),
                     Some(_) => return None,
                     None if name == TIME => "time `t` is not".into(),
-                    None if self.defs.contains_key(name) || self.failed.contains(name) => {
+                    None if self.definition_names.contains(name) => {
                         format!("`{name}` is a definition")
                     }
                     None => return None,
