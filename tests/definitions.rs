@@ -98,7 +98,8 @@ fn same_numbers(a: &dyn DaeSystem, b: &dyn DaeSystem, points: usize, tol: f64, l
 /// the pasted model: the same rows, indices and compiled tapes.
 #[test]
 fn andrews_definitions_derive_the_pasted_formulations() {
-    let with = Derived::from_str(ANDREWS).unwrap_or_else(|e| panic!("{}", render_error(&e, "andrews")));
+    let with =
+        Derived::from_str(ANDREWS).unwrap_or_else(|e| panic!("{}", render_error(&e, "andrews")));
     let pasted = Derived::from_str(ANDREWS_PASTED).unwrap();
     assert_eq!(with.model.definitions.len(), 6);
     assert_eq!(with.formulations.len(), pasted.formulations.len());
@@ -123,7 +124,10 @@ fn andrews_definitions_agree_interpreted_and_compiled() {
         for (label, sys) in [
             ("interpreted", interp.formulation(name).unwrap()),
             ("compiled", compiled.formulation(name).unwrap()),
-            ("compiled pasted", compiled_pasted.formulation(name).unwrap()),
+            (
+                "compiled pasted",
+                compiled_pasted.formulation(name).unwrap(),
+            ),
         ] {
             same_numbers(&*sys, &*reference, 3, 1e-12, &format!("{label}/{name}"));
         }

@@ -147,7 +147,10 @@ impl Model {
                         n.span,
                         format!("{kind} `{}` clashes with the {first_kind} `{}`: every name of a model is unique", n.name, n.name),
                     );
-                    errors.push(*first, format!("the {first_kind} `{}` is declared here", n.name));
+                    errors.push(
+                        *first,
+                        format!("the {first_kind} `{}` is declared here", n.name),
+                    );
                 } else {
                     errors.push(n.span, format!("`{}` is declared twice", n.name));
                     errors.push(*first, format!("`{}` is first declared here", n.name));
@@ -257,9 +260,11 @@ impl Model {
                 };
                 // In the base parameters only.
                 let base = expr::subs(&e, &|s| match s {
-                    Sym::Param(j) if j as usize >= n_base => {
-                        Some(derived_exprs[j as usize - n_base].clone().unwrap_or_else(Expr::zero))
-                    }
+                    Sym::Param(j) if j as usize >= n_base => Some(
+                        derived_exprs[j as usize - n_base]
+                            .clone()
+                            .unwrap_or_else(Expr::zero),
+                    ),
                     _ => None,
                 });
                 let value = base.eval(&|s| match s {
@@ -269,7 +274,10 @@ impl Model {
                 if !value.is_finite() {
                     errors.push(
                         d.name.span,
-                        format!("derived parameter `{}` is {value} at the parameters' defaults", d.name.name),
+                        format!(
+                            "derived parameter `{}` is {value} at the parameters' defaults",
+                            d.name.name
+                        ),
                     );
                 }
                 derived_defaults.push((n_base + k, value));
@@ -658,8 +666,7 @@ impl<'a> Scope<'a> {
         }
         // Depth-first from `to` through the names each expression uses,
         // looking for `from`: the path back is the cycle.
-        let index: HashMap<&str, usize> =
-            (0..self.forward.len()).map(|k| (name(k), k)).collect();
+        let index: HashMap<&str, usize> = (0..self.forward.len()).map(|k| (name(k), k)).collect();
         let mut path = vec![to];
         let mut visited = HashSet::from([to]);
         let mut stack = vec![idents(&self.forward[to].expr)];
@@ -678,7 +685,11 @@ impl<'a> Scope<'a> {
                 cycle.push(name(from));
                 return format!(
                     "{what}s form a cycle: {}",
-                    cycle.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(" → ")
+                    cycle
+                        .iter()
+                        .map(|n| format!("`{n}`"))
+                        .collect::<Vec<_>>()
+                        .join(" → ")
                 );
             }
             if visited.insert(k) {

@@ -348,7 +348,9 @@ pub enum ParameterError {
     },
     /// A value that makes a derived parameter NaN or infinite (nothing was
     /// changed).
-    #[error("setting `{name}` to {value} makes derived parameter `{derived}` non-finite ({result})")]
+    #[error(
+        "setting `{name}` to {value} makes derived parameter `{derived}` non-finite ({result})"
+    )]
     DerivedNotFinite {
         /// The parameter being set.
         name: String,
