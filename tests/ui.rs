@@ -1,6 +1,6 @@
 //! Compile-fail and pass tests of the `dae!` macro (trybuild): one small
 //! file and its exact diagnostics per case, grouped by kind — `parse/`,
-//! `structure/`, `index/`, `formulation/` — plus `pass/`, which must build
+//! `structure/`, `definitions/`, `index/`, `formulation/` — plus `pass/`, which must build
 //! without a warning under `#![deny(warnings)]`.
 //!
 //! Regenerate the `.stderr` files with `TRYBUILD=overwrite`, then read every
@@ -11,7 +11,7 @@
 fn ui() {
     let t = trybuild::TestCases::new();
     // `tests/ui/*/*.rs` would also match `pass/`: list the kinds.
-    for kind in ["parse", "structure", "index", "formulation"] {
+    for kind in ["parse", "structure", "definitions", "index", "formulation"] {
         t.compile_fail(format!("tests/ui/{kind}/*.rs"));
     }
     t.pass("tests/ui/pass/*.rs");

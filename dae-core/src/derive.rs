@@ -76,6 +76,7 @@ impl Derived {
                 .map(|p| ParamInfo {
                     name: p.name.clone(),
                     default: p.default,
+                    derived: p.derived.as_ref().map(|e| m.text(e)),
                 })
                 .collect(),
             constraints: self.constraint_infos(),

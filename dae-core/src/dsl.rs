@@ -20,6 +20,18 @@
 //! }
 //! ```
 //!
+//! Two more sections name expressions, each `name = expr;`, read in order:
+//!
+//! - `derived { l2 = l^2; }` — derived parameters, expressions of the
+//!   parameters and of earlier derived parameters ([`ModelAst::derived`]);
+//! - `definitions { r2 = x^2 + y^2; }` — named subexpressions of
+//!   parameters, unknowns, `t` and earlier definitions, usable in
+//!   equations, invariants and later definitions
+//!   ([`ModelAst::definitions`]).
+//!
+//! Sections may come in any order; the parser keeps each as written and
+//! [`crate::model::Model::check`] resolves the names.
+//!
 //! Expressions have their own grammar (a Pratt parser): Rust's `syn::Expr`
 //! would read `^` as XOR with the wrong precedence. Binding, loosest first:
 //! `+ -` (left), `* /` (left), unary `-` / `+`, `^` (right). So `-x^2` is
@@ -106,14 +118,19 @@ pub struct Equation {
     pub span: Span,
 }
 
-/// `name = expr;` in `invariants { … }`.
+/// `name = expr;` in `invariants { … }`, `definitions { … }` or
+/// `derived { … }`.
 #[derive(Clone, Debug)]
 pub struct InvariantDecl {
-    /// Invariant name.
+    /// The name being defined.
     pub name: Name,
     /// Its expression.
     pub expr: Ast,
 }
+
+/// `name = expr;` in `definitions { … }` or `derived { … }`: the same
+/// shape as an invariant.
+pub type NamedExpr = InvariantDecl;
 
 /// A parsed (not yet checked) model.
 #[derive(Clone, Debug)]
@@ -134,6 +151,10 @@ pub struct ModelAst {
     pub equations: Vec<Equation>,
     /// Invariants in order.
     pub invariants: Vec<InvariantDecl>,
+    /// Derived parameters (`derived { k = m * l^2; }`) in order.
+    pub derived: Vec<NamedExpr>,
+    /// Definitions (`definitions { r2 = x^2 + y^2; }`) in order.
+    pub definitions: Vec<NamedExpr>,
     /// Requested formulations (`None` when the block is absent).
     pub formulations: Option<Vec<Name>>,
     /// Span of the model body (for errors about the whole model).
@@ -316,6 +337,8 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
         algebraic: Vec::new(),
         equations: Vec::new(),
         invariants: Vec::new(),
+        derived: Vec::new(),
+        definitions: Vec::new(),
         formulations: None,
         body_span: body.span(),
     };
@@ -326,7 +349,7 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
         let TokenTree::Ident(kw) = &sections[j] else {
             errors.push(
                 sections[j].span(),
-                "expected a section: parameters, differential, algebraic, equations, invariants or formulations",
+                "expected a section: parameters, derived, differential, algebraic, definitions, equations, invariants or formulations",
             );
             break;
         };
@@ -349,10 +372,12 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
             "algebraic" => model.algebraic.extend(parse_names(&inner, &mut errors)),
             "equations" => model.equations.extend(parse_equations(&inner, &mut errors)),
             "invariants" => model.invariants.extend(parse_invariants(&inner, &mut errors)),
+            "derived" => model.derived.extend(parse_invariants(&inner, &mut errors)),
+            "definitions" => model.definitions.extend(parse_invariants(&inner, &mut errors)),
             "formulations" => model.formulations = Some(parse_names(&inner, &mut errors)),
             other => errors.push(
                 kw.span(),
-                format!("unknown section `{other}` (expected parameters, differential, algebraic, equations, invariants or formulations)"),
+                format!("unknown section `{other}` (expected parameters, derived, differential, algebraic, definitions, equations, invariants or formulations)"),
             ),
         }
         j += 2;

@@ -230,7 +230,9 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
     let mut extra_names = Vec::new();
     if name == "ggl1" {
         let taken = |s: &str| {
-            model.vars.iter().any(|v| v.name == s) || model.params.iter().any(|p| p.name == s)
+            model.vars.iter().any(|v| v.name == s)
+                || model.params.iter().any(|p| p.name == s)
+                || model.definitions.iter().any(|d| d.name == s)
         };
         for (i, c) in an.chains.iter().enumerate() {
             let mut base = if an.chains.len() == 1 {

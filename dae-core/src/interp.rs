@@ -4,11 +4,12 @@
 
 use crate::compile::{compile, Compiled, Sparse};
 use crate::derive::Derived;
+use crate::expr::Expr;
 use crate::system::{
     check_parameter, BoxedSystem, DaeSystem, FormulationError, FormulationInfo, Model, ModelInfo,
     ParameterError,
 };
-use crate::tape::{Inputs, Tape};
+use crate::tape::{Inputs, Tape, TapeBuilder};
 use nalgebra::DMatrix;
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -17,7 +18,12 @@ use std::sync::Arc;
 #[derive(Clone, Debug)]
 pub struct InterpretedModel {
     info: ModelInfo,
+    /// Every parameter's value: the base ones, then the derived ones.
     params: Vec<f64>,
+    /// Number of base parameters.
+    n_base: usize,
+    /// The derived parameters from the base ones: one output each.
+    derived: Tape,
     formulations: Vec<Arc<Compiled>>,
 }
 
@@ -27,6 +33,14 @@ impl InterpretedModel {
         InterpretedModel {
             info: d.model_info(),
             params: d.model.params.iter().map(|p| p.default).collect(),
+            n_base: d.model.n_base,
+            derived: {
+                let mut b = TapeBuilder::new();
+                for p in &d.model.params[d.model.n_base..] {
+                    b.output(p.derived.as_ref().unwrap_or(&Expr::zero()));
+                }
+                b.finish()
+            },
             formulations: d
                 .formulations
                 .iter()
@@ -93,7 +107,41 @@ impl Model for InterpretedModel {
                     .join(", "),
             })?;
         check_parameter(name, value)?;
-        self.params[k] = value;
+        if let Some(expr) = &self.info.parameters[k].derived {
+            return Err(ParameterError::Derived {
+                model: self.info.name.clone(),
+                name: name.to_string(),
+                expr: expr.clone(),
+            });
+        }
+        // Recompute the derived parameters from the new base values; keep
+        // the old ones if any would not be finite.
+        let mut base = self.params[..self.n_base].to_vec();
+        base[k] = value;
+        let mut scratch = vec![0.0; self.derived.nodes.len()];
+        let inputs = Inputs {
+            t: 0.0,
+            y: &[],
+            yp: &[],
+            p: &base,
+            z: &[],
+        };
+        self.derived.eval(&inputs, &mut scratch);
+        let mut derived = Vec::with_capacity(self.derived.outputs.len());
+        for j in 0..self.derived.outputs.len() {
+            let v = self.derived.output(&scratch, j);
+            if !v.is_finite() {
+                return Err(ParameterError::DerivedNotFinite {
+                    name: name.to_string(),
+                    value,
+                    derived: self.info.parameters[self.n_base + j].name.clone(),
+                    result: v,
+                });
+            }
+            derived.push(v);
+        }
+        base.extend(derived);
+        self.params = base;
         Ok(())
     }
     fn formulation(&self, name: &str) -> Result<BoxedSystem, FormulationError> {

@@ -1,6 +1,19 @@
 //! The checked model: names resolved, equations split into dynamic
 //! equations `c · der(u) = f` and constraints `0 = g`, every node keeping the
 //! span it came from.
+//!
+//! Definitions (`definitions { r2 = x^2 + y^2; }`) are resolved here and
+//! leave no trace in the symbolic model: each use is replaced by the
+//! definition's lowered expression, exactly as if it had been written out
+//! in parentheses, so hidden constraints, formulations and Jacobians are
+//! those of the pasted model. They are kept in [`Model::definitions`] for
+//! reports only.
+//!
+//! Derived parameters (`derived { k = m * l^2 / 2; }`) stay symbols: they
+//! are parameters `Sym::Param(k)` after the base ones, with
+//! [`ParamDef::derived`] their expression in the base parameters. Back ends
+//! compute their values from the base parameters (when a model is built or
+//! a base parameter is set), never per evaluation, and refuse to set them.
 
 use crate::dsl::{Ast, BinOp, Errors, ModelAst, Name};
 use crate::expr::{self, Expr, Func, Sym};
@@ -13,9 +26,24 @@ use std::collections::{HashMap, HashSet};
 pub struct ParamDef {
     /// Name.
     pub name: String,
-    /// Default value.
+    /// Default value (of a derived parameter: its value at the base
+    /// parameters' defaults).
     pub default: f64,
     /// Declaration span.
+    pub span: Span,
+    /// `Some(expr)` for a derived parameter: its value as an expression of
+    /// the base parameters only (earlier derived parameters substituted).
+    pub derived: Option<Expr>,
+}
+
+/// A definition: a named expression substituted at every use.
+#[derive(Clone, Debug)]
+pub struct DefinitionDef {
+    /// Name.
+    pub name: String,
+    /// The expression, definitions inside it already substituted.
+    pub expr: Expr,
+    /// Span of the name.
     pub span: Span,
 }
 
@@ -74,8 +102,14 @@ pub struct Model {
     pub doc: String,
     /// `pub` was written.
     pub public: bool,
-    /// Parameters in order.
+    /// Parameters in order: the base ones (`parameters { … }`), then the
+    /// derived ones (`derived { … }`).
     pub params: Vec<ParamDef>,
+    /// Number of base parameters (the first `n_base` of `params`); the
+    /// others are derived.
+    pub n_base: usize,
+    /// Definitions in order (already substituted wherever used).
+    pub definitions: Vec<DefinitionDef>,
     /// Unknowns: differential first (declaration order), then algebraic.
     pub vars: Vec<VarDef>,
     /// Number of differential unknowns (the first `n_diff` of `vars`).
@@ -101,14 +135,26 @@ impl Model {
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
         let mut errors = Errors::default();
         // Hash maps for lookups only (never iterated): linear in the names.
-        let mut seen: HashMap<String, Span> = HashMap::new();
+        let mut seen: HashMap<String, (Span, &'static str)> = HashMap::new();
         // Names declared twice or reserved: uses of them raise no further
         // errors.
         let mut dupes: HashSet<String> = HashSet::new();
-        let mut declare = |n: &Name, errors: &mut Errors| {
-            if let Some(first) = seen.get(&n.name) {
-                errors.push(n.span, format!("`{}` is declared twice", n.name));
-                errors.push(*first, format!("`{}` is first declared here", n.name));
+        let mut declare = |n: &Name, kind: &'static str, errors: &mut Errors| {
+            if let Some((first, first_kind)) = seen.get(&n.name) {
+                let named = [DEFINITION, DERIVED];
+                if named.contains(&kind) || named.contains(first_kind) {
+                    errors.push(
+                        n.span,
+                        format!("{kind} `{}` clashes with the {first_kind} `{}`: every name of a model is unique", n.name, n.name),
+                    );
+                    errors.push(
+                        *first,
+                        format!("the {first_kind} `{}` is declared here", n.name),
+                    );
+                } else {
+                    errors.push(n.span, format!("`{}` is declared twice", n.name));
+                    errors.push(*first, format!("`{}` is first declared here", n.name));
+                }
                 dupes.insert(n.name.clone());
                 return false;
             }
@@ -128,12 +174,12 @@ impl Model {
                 dupes.insert(n.name.clone());
                 return false;
             }
-            seen.insert(n.name.clone(), n.span);
+            seen.insert(n.name.clone(), (n.span, kind));
             true
         };
         let mut params = Vec::new();
         for p in &ast.parameters {
-            if declare(&p.name, &mut errors) {
+            if declare(&p.name, "parameter", &mut errors) {
                 if !p.value.is_finite() {
                     errors.push(
                         p.name.span,
@@ -144,12 +190,28 @@ impl Model {
                     name: p.name.name.clone(),
                     default: p.value,
                     span: p.name.span,
+                    derived: None,
                 });
+            }
+        }
+        let n_base = params.len();
+        // Derived parameters are declared now and lowered once every name
+        // is known; `derived_asts[k]` is the expression of `params[n_base + k]`.
+        let mut derived_asts = Vec::new();
+        for d in &ast.derived {
+            if declare(&d.name, DERIVED, &mut errors) {
+                params.push(ParamDef {
+                    name: d.name.name.clone(),
+                    default: f64::NAN,
+                    span: d.name.span,
+                    derived: None,
+                });
+                derived_asts.push(d);
             }
         }
         let mut vars = Vec::new();
         for n in &ast.differential {
-            if declare(n, &mut errors) {
+            if declare(n, "differential unknown", &mut errors) {
                 vars.push(VarDef {
                     name: n.name.clone(),
                     kind: VarKind::Differential,
@@ -159,7 +221,7 @@ impl Model {
         }
         let n_diff = vars.len();
         for n in &ast.algebraic {
-            if declare(n, &mut errors) {
+            if declare(n, "algebraic unknown", &mut errors) {
                 vars.push(VarDef {
                     name: n.name.clone(),
                     kind: VarKind::Algebraic,
@@ -174,7 +236,85 @@ impl Model {
             );
         }
 
-        let scope = Scope::new(&params, &vars, dupes);
+        let mut def_decls = Vec::new();
+        for d in &ast.definitions {
+            if declare(&d.name, DEFINITION, &mut errors) {
+                def_decls.push(d);
+            }
+        }
+
+        // Derived parameters, in order: each an expression of the base
+        // parameters and of earlier derived ones.
+        let mut derived_exprs: Vec<Option<Expr>> = Vec::new();
+        let base_defaults: Vec<f64> = params.iter().map(|p| p.default).collect();
+        let mut derived_defaults = Vec::new();
+        {
+            let mut scope = Scope::new(&params, &vars, dupes.clone());
+            scope.forward = derived_asts.iter().map(|d| (*d).clone()).collect();
+            scope.definition_names = def_decls.iter().map(|d| d.name.name.clone()).collect();
+            for (k, d) in derived_asts.iter().enumerate() {
+                scope.mode = Mode::Derived(k, n_base);
+                let Some(e) = scope.lower(&d.expr, &mut errors) else {
+                    derived_exprs.push(None);
+                    continue;
+                };
+                // In the base parameters only.
+                let base = expr::subs(&e, &|s| match s {
+                    Sym::Param(j) if j as usize >= n_base => Some(
+                        derived_exprs[j as usize - n_base]
+                            .clone()
+                            .unwrap_or_else(Expr::zero),
+                    ),
+                    _ => None,
+                });
+                let value = base.eval(&|s| match s {
+                    Sym::Param(j) => base_defaults[j as usize],
+                    _ => f64::NAN,
+                });
+                if !value.is_finite() {
+                    errors.push(
+                        d.name.span,
+                        format!(
+                            "derived parameter `{}` is {value} at the parameters' defaults",
+                            d.name.name
+                        ),
+                    );
+                }
+                derived_defaults.push((n_base + k, value));
+                derived_exprs.push(Some(base));
+            }
+        }
+        for (k, value) in derived_defaults {
+            params[k].default = value;
+        }
+        for (k, e) in derived_exprs.into_iter().enumerate() {
+            params[n_base + k].derived = Some(e.unwrap_or_else(Expr::zero));
+        }
+
+        let mut scope = Scope::new(&params, &vars, dupes);
+        // Definitions, in order: each lowered once and substituted at
+        // every later use.
+        scope.forward = def_decls.iter().map(|d| (*d).clone()).collect();
+        let mut definitions = Vec::new();
+        for (k, d) in def_decls.iter().enumerate() {
+            scope.mode = Mode::Definition(k);
+            match scope.lower(&d.expr, &mut errors) {
+                Some(e) => {
+                    scope.defs.insert(d.name.name.clone(), e.clone());
+                    definitions.push(DefinitionDef {
+                        name: d.name.name.clone(),
+                        expr: e,
+                        span: d.name.span,
+                    });
+                }
+                None => {
+                    // Already reported: uses of it stay quiet.
+                    scope.failed.insert(d.name.name.clone());
+                }
+            }
+        }
+        scope.mode = Mode::Model;
+        let scope = scope;
         let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
         let mut constraints = Vec::new();
         // An equation that failed to lower already has its error; counting
@@ -369,6 +509,8 @@ impl Model {
             doc: ast.doc.clone(),
             public: ast.public,
             params,
+            n_base,
+            definitions,
             vars,
             n_diff,
             dynamics: dyns,
@@ -432,7 +574,10 @@ impl Model {
         let tokens: Vec<proc_macro2::TokenTree> = crate::dsl::lex(src)?.into_iter().collect();
         let mut errors = Errors::default();
         let ast = crate::dsl::parse_expr(&tokens, Span::call_site(), &mut errors);
-        let scope = Scope::new(&self.params, &self.vars, HashSet::new());
+        let mut scope = Scope::new(&self.params, &self.vars, HashSet::new());
+        for d in &self.definitions {
+            scope.defs.insert(d.name.clone(), d.expr.clone());
+        }
         let e = ast.and_then(|a| scope.lower(&a, &mut errors));
         match e {
             Some(e) => errors.finish(e),
@@ -450,12 +595,42 @@ impl Model {
     }
 }
 
+/// What `definition` is called in messages.
+const DEFINITION: &str = "definition";
+/// What a derived parameter is called in messages.
+const DERIVED: &str = "derived parameter";
+
+/// What is being lowered: the names it may use differ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    /// An equation or invariant: every name.
+    Model,
+    /// Definition `k` (of `Scope::forward`): parameters, unknowns, `t` and
+    /// definitions before it; no der().
+    Definition(usize),
+    /// Derived parameter `k` (parameter `n_base + k`, expression
+    /// `Scope::forward[k]`): parameters and derived parameters before it.
+    Derived(usize, usize),
+}
+
 struct Scope<'a> {
+    params: &'a [ParamDef],
     vars: &'a [VarDef],
     /// Every declared name.
     names: HashMap<&'a str, Sym>,
     /// Names declared twice or reserved (already reported).
     dupes: HashSet<String>,
+    /// Definitions lowered so far.
+    defs: HashMap<String, Expr>,
+    /// Definitions that failed to lower (already reported).
+    failed: HashSet<String>,
+    /// Every definition's name (for messages about derived parameters,
+    /// lowered before the definitions).
+    definition_names: HashSet<String>,
+    /// The definitions, or the derived parameters, being lowered in order:
+    /// to tell a use before the definition from a cycle.
+    forward: Vec<crate::dsl::NamedExpr>,
+    mode: Mode,
 }
 
 impl<'a> Scope<'a> {
@@ -468,7 +643,66 @@ impl<'a> Scope<'a> {
         for (i, v) in vars.iter().enumerate() {
             names.insert(v.name.as_str(), Sym::Var(i as u32));
         }
-        Scope { vars, names, dupes }
+        Scope {
+            params,
+            vars,
+            names,
+            dupes,
+            defs: HashMap::new(),
+            failed: HashSet::new(),
+            definition_names: HashSet::new(),
+            forward: Vec::new(),
+            mode: Mode::Model,
+        }
+    }
+
+    /// The message for a use of `forward[to]` while lowering `forward[from]`
+    /// (`to >= from`): a self-reference, a cycle, or a use before the
+    /// definition.
+    fn forward_use(&self, from: usize, to: usize, what: &str) -> String {
+        let name = |k: usize| self.forward[k].name.name.as_str();
+        if from == to {
+            return format!("{what} `{}` refers to itself", name(from));
+        }
+        // Depth-first from `to` through the names each expression uses,
+        // looking for `from`: the path back is the cycle.
+        let index: HashMap<&str, usize> = (0..self.forward.len()).map(|k| (name(k), k)).collect();
+        let mut path = vec![to];
+        let mut visited = HashSet::from([to]);
+        let mut stack = vec![idents(&self.forward[to].expr)];
+        while let Some(top) = stack.last_mut() {
+            let Some(next) = top.pop() else {
+                stack.pop();
+                path.pop();
+                continue;
+            };
+            let Some(&k) = index.get(next.as_str()) else {
+                continue;
+            };
+            if k == from {
+                let mut cycle = vec![name(from)];
+                cycle.extend(path.iter().map(|&k| name(k)));
+                cycle.push(name(from));
+                return format!(
+                    "{what}s form a cycle: {}",
+                    cycle
+                        .iter()
+                        .map(|n| format!("`{n}`"))
+                        .collect::<Vec<_>>()
+                        .join(" → ")
+                );
+            }
+            if visited.insert(k) {
+                path.push(k);
+                stack.push(idents(&self.forward[k].expr));
+            }
+        }
+        format!(
+            "{what} `{}` is used before it is defined: {what}s are read in order, so move `{}` above `{}`",
+            name(to),
+            name(to),
+            name(from)
+        )
     }
 
     fn lookup(&self, name: &str) -> Option<Sym> {
@@ -477,22 +711,118 @@ impl<'a> Scope<'a> {
         }
         (name == "t").then_some(Sym::Time)
     }
+}
+
+/// Every name an expression uses (not function names), last first.
+fn idents(ast: &Ast) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut stack = vec![ast];
+    while let Some(a) = stack.pop() {
+        match a {
+            Ast::Num(..) => {}
+            Ast::Ident(n, _) => out.push(n.clone()),
+            Ast::Call(_, _, args) => stack.extend(args.iter()),
+            Ast::Neg(e, _) => stack.push(e),
+            Ast::Bin(_, l, r, _) => {
+                stack.push(l);
+                stack.push(r);
+            }
+            Ast::Chain(first, rest) => {
+                stack.push(first);
+                stack.extend(rest.iter().map(|(_, e, _)| e));
+            }
+        }
+    }
+    out.reverse();
+    out
+}
+
+impl Scope<'_> {
+    /// A name of a definition or derived parameter not (yet) usable here;
+    /// `None` when it may be resolved normally.
+    fn restricted(&self, name: &str) -> Option<Option<String>> {
+        match self.mode {
+            Mode::Model => None,
+            Mode::Definition(from) => {
+                if self.failed.contains(name) {
+                    return Some(None);
+                }
+                let to = self.forward.iter().position(|d| d.name.name == name)?;
+                (to >= from).then(|| Some(self.forward_use(from, to, DEFINITION)))
+            }
+            Mode::Derived(from, n_base) => {
+                let d = &self.params[n_base + from].name;
+                let why = match self.names.get(name) {
+                    Some(Sym::Param(k)) if (*k as usize) < n_base + from => return None,
+                    Some(Sym::Param(k)) => {
+                        return Some(Some(self.forward_use(from, *k as usize - n_base, DERIVED)))
+                    }
+                    Some(Sym::Var(_)) => format!("`{name}` is an unknown"),
+                    Some(_) => return None,
+                    None if name == TIME => "time `t` is not".into(),
+                    None if self.definition_names.contains(name) => {
+                        format!("`{name}` is a definition")
+                    }
+                    None => return None,
+                };
+                Some(Some(format!(
+                    "derived parameter `{d}` may depend on parameters only, and {why}"
+                )))
+            }
+        }
+    }
 
     fn lower(&self, ast: &Ast, errors: &mut Errors) -> Option<Expr> {
         match ast {
             Ast::Num(v, _) => Some(Expr::num(v.clone())),
-            Ast::Ident(name, span) => match self.lookup(name) {
-                Some(s) => Some(Expr::sym(s)),
-                None => {
-                    let hint = if FUNCTIONS.contains(&name.as_str()) || name == "der" {
-                        format!(" (`{name}` is a function: write `{name}(…)`)")
-                    } else {
-                        String::new()
-                    };
-                    errors.push(*span, format!("unknown name `{name}`: not a parameter or an unknown of this model{hint}"));
+            Ast::Ident(name, span) => match self.restricted(name) {
+                Some(Some(msg)) => {
+                    errors.push(*span, msg);
                     None
                 }
+                Some(None) => None,
+                None => self.lookup_expr(name, *span, errors),
             },
+            Ast::Call(name, span, args) if name == "der" && self.mode != Mode::Model => {
+                let _ = args;
+                let what = match self.mode {
+                    Mode::Definition(_) => "a definition: a definition is an expression of parameters, unknowns and `t`; write der() in the equation",
+                    _ => "a derived parameter: a derived parameter is an expression of parameters",
+                };
+                errors.push(*span, format!("der() is not allowed in {what}"));
+                None
+            }
+            other => self.lower_rest(other, errors),
+        }
+    }
+
+    /// A name in an expression: a parameter, an unknown, `t`, or a
+    /// definition (its expression).
+    fn lookup_expr(&self, name: &str, span: Span, errors: &mut Errors) -> Option<Expr> {
+        if let Some(s) = self.lookup(name) {
+            return Some(Expr::sym(s));
+        }
+        if let Some(e) = self.defs.get(name) {
+            return Some(e.clone());
+        }
+        if self.failed.contains(name) {
+            return None;
+        }
+        let hint = if FUNCTIONS.contains(&name) || name == "der" {
+            format!(" (`{name}` is a function: write `{name}(…)`)")
+        } else {
+            String::new()
+        };
+        errors.push(
+            span,
+            format!("unknown name `{name}`: not a parameter, an unknown or a definition of this model{hint}"),
+        );
+        None
+    }
+
+    fn lower_rest(&self, ast: &Ast, errors: &mut Errors) -> Option<Expr> {
+        match ast {
+            Ast::Num(..) | Ast::Ident(..) => self.lower(ast, errors),
             Ast::Call(name, span, args) => {
                 if args.len() != 1 {
                     errors.push(

@@ -103,8 +103,13 @@ pub struct ConstraintInfo {
 pub struct ParamInfo {
     /// Name in the model.
     pub name: String,
-    /// Default value from the `parameters { … }` block.
+    /// Default value from the `parameters { … }` block (of a derived
+    /// parameter: its value at the base parameters' defaults).
     pub default: f64,
+    /// `Some(expression)` for a derived parameter (`derived { k = …; }`),
+    /// computed from the others and not settable.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub derived: Option<String>,
 }
 
 /// Static description of a formulation: everything a solver or a report
@@ -330,6 +335,31 @@ pub enum ParameterError {
         name: String,
         /// The offending value.
         value: f64,
+    },
+    /// A derived parameter: computed from the others, not settable.
+    #[error("parameter `{name}` of model `{model}` is derived (`{name} = {expr}`): set the parameters it is computed from instead")]
+    Derived {
+        /// Model name.
+        model: String,
+        /// Parameter name.
+        name: String,
+        /// Its expression, in the model language.
+        expr: String,
+    },
+    /// A value that makes a derived parameter NaN or infinite (nothing was
+    /// changed).
+    #[error(
+        "setting `{name}` to {value} makes derived parameter `{derived}` non-finite ({result})"
+    )]
+    DerivedNotFinite {
+        /// The parameter being set.
+        name: String,
+        /// Its refused value.
+        value: f64,
+        /// The derived parameter.
+        derived: String,
+        /// The derived parameter's value it would have had.
+        result: f64,
     },
 }
 

@@ -212,7 +212,32 @@ fn live(tape: &Tape) -> Vec<bool> {
 
 /// Straight-line code for one tape. Constants are written in place;
 /// every other live node becomes one `let`.
-fn body(tape: &Tape, out: Out<'_>, fields: &[Ident], avail: Available) -> Body {
+/// How generated code reads parameter `k`: a base parameter is a field of
+/// the model struct (`self.params.m` in a formulation, `this.m` in
+/// [`derived_values`]); a derived one is an element of the formulation's
+/// `derived` array, computed by its constructor.
+#[derive(Clone, Copy)]
+struct Params<'a> {
+    /// The base parameters' fields.
+    fields: &'a [Ident],
+    /// Inside a formulation (`self.params.f`) or on the model (`this.f`).
+    in_formulation: bool,
+}
+
+impl Params<'_> {
+    fn read(self, k: usize) -> TokenStream {
+        match self.fields.get(k) {
+            Some(field) if self.in_formulation => quote!(self.params.#field),
+            Some(field) => quote!(this.#field),
+            None => {
+                let j = index(k - self.fields.len());
+                quote!(self.derived[#j])
+            }
+        }
+    }
+}
+
+fn body(tape: &Tape, out: Out<'_>, fields: Params<'_>, avail: Available) -> Body {
     let live = live(tape);
     let mut uses = Uses::default();
     // A node as an operand: its variable, or its constant (typed, so that
@@ -252,10 +277,7 @@ fn body(tape: &Tape, out: Out<'_>, fields: &[Ident], avail: Available) -> Body {
                         quote!(::core::f64::NAN)
                     }
                 }
-                Sym::Param(p) => {
-                    let field = &fields[p as usize];
-                    quote!(self.params.#field)
-                }
+                Sym::Param(p) => fields.read(p as usize),
                 Sym::Time => {
                     if avail.t {
                         uses.t = true;
@@ -510,7 +532,14 @@ fn model_info(info: &ModelInfo) -> TokenStream {
             .map(|p| {
                 let name = string(&p.name);
                 let default = float(p.default, false);
-                quote!(::dae::__private::ParamInfo { name: #name, default: #default })
+                let derived = match &p.derived {
+                    Some(e) => {
+                        let e = string(e);
+                        quote!(::core::option::Option::Some(#e))
+                    }
+                    None => quote!(::core::option::Option::None),
+                };
+                quote!(::dae::__private::ParamInfo { name: #name, default: #default, derived: #derived })
             })
             .collect(),
     );
@@ -546,7 +575,7 @@ fn names(d: &Derived, spans: Spans) -> Result<Names, syn::Error> {
     let span = spans.pick(m.name_span);
     let model = ident(&m.name, span);
     let mut fields = Vec::new();
-    for p in &m.params {
+    for p in &m.params[..m.n_base] {
         match ident(&p.name, spans.pick(p.span)) {
             Ok(f) => fields.push(f),
             Err(e) => errors.push_error(e),
@@ -593,13 +622,28 @@ pub fn emit(d: &Derived, compiled: &[Compiled], spans: Spans) -> Result<TokenStr
     } else {
         doc_lines(&m.doc)
     };
-    let field_docs = m
-        .params
+    let base = &m.params[..m.n_base];
+    let derived = &m.params[m.n_base..];
+    let n_derived = derived.len();
+    let field_docs = base
         .iter()
         .map(|p| format!(" Parameter `{}` (default `{:?}`).", p.name, p.default));
-    let defaults: Vec<TokenStream> = m.params.iter().map(|p| float(p.default, false)).collect();
+    let defaults: Vec<TokenStream> = base.iter().map(|p| float(p.default, false)).collect();
+    let derived_doc = if derived.is_empty() {
+        TokenStream::new()
+    } else {
+        let mut text = String::from(
+            "\nDerived parameters (computed from the fields when a formulation is built; read them with `Model::parameter`):\n",
+        );
+        for p in derived {
+            let e = p.derived.as_ref().map(|e| m.text(e)).unwrap_or_default();
+            text.push_str(&format!("\n- `{} = {}`", p.name, e));
+        }
+        doc_lines(&text)
+    };
     let model_struct = quote_spanned! {*span=>
         #doc
+        #derived_doc
         #[derive(::core::clone::Clone, ::core::marker::Copy, ::core::fmt::Debug, ::core::cmp::PartialEq)]
         #allow
         #vis struct #model {
@@ -637,25 +681,56 @@ pub fn emit(d: &Derived, compiled: &[Compiled], spans: Spans) -> Result<TokenStr
         }
         doc.push_str("```");
         let doc = doc_lines(&doc);
-        types.extend(quote_spanned! {*span=>
-            #doc
-            #[derive(::core::clone::Clone, ::core::marker::Copy, ::core::fmt::Debug, ::core::cmp::PartialEq)]
-            #allow
-            #vis struct #ty {
-                /// Parameter values.
-                #vis params: #model,
-            }
-        });
-        let ctor_doc = format!(" Formulation `{}` with these parameter values.", info.name);
-        constructors.extend(quote! {
-            #[doc = #ctor_doc]
-            #vis fn #method(&self) -> #ty {
-                #ty { params: *self }
-            }
-        });
+        if derived.is_empty() {
+            types.extend(quote_spanned! {*span=>
+                #doc
+                #[derive(::core::clone::Clone, ::core::marker::Copy, ::core::fmt::Debug, ::core::cmp::PartialEq)]
+                #allow
+                #vis struct #ty {
+                    /// Parameter values.
+                    #vis params: #model,
+                }
+            });
+            let ctor_doc = format!(" Formulation `{}` with these parameter values.", info.name);
+            constructors.extend(quote! {
+                #[doc = #ctor_doc]
+                #vis fn #method(&self) -> #ty {
+                    #ty { params: *self }
+                }
+            });
+        } else {
+            // The derived parameters are computed once, here, and stored:
+            // the fields are private so that they cannot go stale.
+            let n = index(n_derived);
+            types.extend(quote_spanned! {*span=>
+                #doc
+                #[derive(::core::clone::Clone, ::core::marker::Copy, ::core::fmt::Debug, ::core::cmp::PartialEq)]
+                #allow
+                #vis struct #ty {
+                    params: #model,
+                    derived: [f64; #n],
+                }
+            });
+            let ctor_doc = format!(
+                " Formulation `{}` with these parameter values (the derived ones computed from them now).",
+                info.name
+            );
+            constructors.extend(quote! {
+                #[doc = #ctor_doc]
+                #vis fn #method(&self) -> #ty {
+                    #ty { params: *self, derived: derived_values(self) }
+                }
+            });
+        }
         let name = &info.name;
         arms.extend(quote!(#name => ::core::result::Result::Ok(::dae::__private::Box::new(self.#method())),));
-        impls.extend(system_impl(c, &ty, fields, &Shared::of(d)));
+        impls.extend(system_impl(
+            c,
+            &ty,
+            fields,
+            m.params.len() - m.n_base,
+            &Shared::of(d),
+        ));
     }
 
     // Known formulations this model does not provide.
@@ -684,8 +759,61 @@ pub fn emit(d: &Derived, compiled: &[Compiled], spans: Spans) -> Result<TokenStr
     let info = model_info(&d.model_info());
     let provided_lits = &provided;
 
-    let names: Vec<&str> = m.params.iter().map(|p| p.name.as_str()).collect();
-    let (get, set) = if fields.is_empty() {
+    let names: Vec<&str> = base.iter().map(|p| p.name.as_str()).collect();
+    let all_names: Vec<&str> = m.params.iter().map(|p| p.name.as_str()).collect();
+    let derived_fn = derived_values(d, model, fields);
+    let (get, set) = if !derived.is_empty() {
+        let derived_names: Vec<&str> = derived.iter().map(|p| p.name.as_str()).collect();
+        let exprs: Vec<TokenStream> = derived
+            .iter()
+            .map(|p| string(&p.derived.as_ref().map(|e| m.text(e)).unwrap_or_default()))
+            .collect();
+        let js: Vec<Literal> = (0..n_derived).map(index).collect();
+        (
+            quote! {
+                fn parameter(&self, name: &str) -> ::core::option::Option<f64> {
+                    match name {
+                        #(#names => ::core::option::Option::Some(self.#fields),)*
+                        #(#derived_names => ::core::option::Option::Some(derived_values(self)[#js]),)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+            },
+            quote! {
+                fn set_parameter(&mut self, name: &str, value: f64)
+                    -> ::core::result::Result<(), ::dae::__private::ParameterError> {
+                    let mut next = *self;
+                    let slot = match name {
+                        #(#names => &mut next.#fields,)*
+                        #(#derived_names => return ::core::result::Result::Err(
+                            ::dae::__private::ParameterError::Derived {
+                                model: #model_name,
+                                name: ::dae::__private::String::from(name),
+                                expr: ::dae::__private::String::from(#exprs),
+                            }),)*
+                        _ => return ::core::result::Result::Err(unknown_parameter(name)),
+                    };
+                    ::dae::__private::check_parameter(name, value)?;
+                    *slot = value;
+                    let values = derived_values(&next);
+                    const DERIVED: [&str; #n_derived] = [#(#derived_names),*];
+                    for (k, v) in values.iter().enumerate() {
+                        if !v.is_finite() {
+                            return ::core::result::Result::Err(
+                                ::dae::__private::ParameterError::DerivedNotFinite {
+                                    name: ::dae::__private::String::from(name),
+                                    value,
+                                    derived: ::dae::__private::String::from(DERIVED[k]),
+                                    result: *v,
+                                });
+                        }
+                    }
+                    *self = next;
+                    ::core::result::Result::Ok(())
+                }
+            },
+        )
+    } else if fields.is_empty() {
         (
             quote! {
                 fn parameter(&self, _name: &str) -> ::core::option::Option<f64> {
@@ -723,7 +851,7 @@ pub fn emit(d: &Derived, compiled: &[Compiled], spans: Spans) -> Result<TokenStr
             },
         )
     };
-    let known = string(&names.join(", "));
+    let known = string(&all_names.join(", "));
 
     Ok(quote! {
         #model_struct
@@ -732,6 +860,8 @@ pub fn emit(d: &Derived, compiled: &[Compiled], spans: Spans) -> Result<TokenStr
         const _: () = {
             #[automatically_derived]
             #allow
+            #derived_fn
+
             impl ::core::default::Default for #model {
                 fn default() -> Self {
                     #model { #(#fields: #defaults,)* }
@@ -811,7 +941,17 @@ impl Shared {
 }
 
 /// `DaeSystem` and `StaticSize` for one formulation.
-fn system_impl(c: &Compiled, ty: &Ident, fields: &[Ident], shared: &Shared) -> TokenStream {
+fn system_impl(
+    c: &Compiled,
+    ty: &Ident,
+    fields: &[Ident],
+    n_derived: usize,
+    shared: &Shared,
+) -> TokenStream {
+    let fields = Params {
+        fields,
+        in_formulation: true,
+    };
     let allow = allow();
     let info = formulation_info(&c.info, shared);
     let all = Available {
@@ -884,7 +1024,11 @@ fn system_impl(c: &Compiled, ty: &Ident, fields: &[Ident], shared: &Shared) -> T
         }
     };
 
-    let values = vec_of(fields.iter().map(|f| quote!(self.params.#f)).collect());
+    let values = vec_of(
+        (0..fields.fields.len() + n_derived)
+            .map(|k| fields.read(k))
+            .collect(),
+    );
     let (unknowns, equations, chain) = (
         index(c.info.unknowns()),
         index(c.info.equations()),
@@ -920,6 +1064,40 @@ fn system_impl(c: &Compiled, ty: &Ident, fields: &[Ident], shared: &Shared) -> T
             const UNKNOWNS: usize = #unknowns;
             const EQUATIONS: usize = #equations;
             const CONSTRAINTS: usize = #chain;
+        }
+    }
+}
+
+/// `fn derived_values(this: &Model) -> [f64; K]`: the derived parameters
+/// from the base ones (empty when there are none).
+fn derived_values(d: &Derived, model: &Ident, fields: &[Ident]) -> TokenStream {
+    let m = &d.model;
+    let derived = &m.params[m.n_base..];
+    if derived.is_empty() {
+        return TokenStream::new();
+    }
+    let mut b = dae_core::tape::TapeBuilder::new();
+    for p in derived {
+        b.output(p.derived.as_ref().unwrap_or(&dae_core::expr::Expr::zero()));
+    }
+    let tape = b.finish();
+    let params = Params {
+        fields,
+        in_formulation: false,
+    };
+    let none = Available {
+        t: false,
+        yp: false,
+        z: false,
+    };
+    let stmts = body(&tape, Out::Dense, params, none).stmts;
+    let n = index(derived.len());
+    quote! {
+        fn derived_values(this: &#model) -> [f64; #n] {
+            let _ = this;
+            let mut out = [0.0f64; #n];
+            #stmts
+            out
         }
     }
 }

@@ -47,6 +47,15 @@ mod expand;
 /// `Pendulum::rcd1(&self)`, `Pendulum::ggl1(&self)`, and `Model` for
 /// `Pendulum`. A model that fails to check is one compile error per
 /// problem, each at the offending token.
+///
+/// `definitions { r2 = x^2 + y^2; }` leave no trace in the items: each use
+/// is the expression pasted in, computed once per call like any shared
+/// subexpression (one `let` per tape node). Derived parameters
+/// (`derived { l2 = l^2; }`) are not fields of the struct: each
+/// formulation's constructor computes them once from the fields and stores
+/// them (its fields are then private, so they cannot go stale);
+/// `Model::parameter` reads them and `Model::set_parameter` refuses them
+/// with `ParameterError::Derived`.
 #[proc_macro]
 pub fn dae(input: proc_macro::TokenStream) -> proc_macro::TokenStream {
     let timing = std::env::var_os("DAE_MACRO_TIMING").is_some_and(|v| v == "1");

@@ -1,0 +1,23 @@
+// der() has no place in a definition.
+dae::dae! {
+    pub Pendulum {
+        parameters { m = 1.0, l = 1.0, g = 9.81 }
+        
+        differential { x, y, v, w }
+        algebraic { lambda }
+        definitions { r2 = x^2 + y^2; vx = der(x); }
+        equations {
+            der(x) = v;
+            der(y) = w;
+            m * der(v) = -2 * x * lambda;
+            m * der(w) = -2 * y * lambda - m * g;
+            0 = r2 - l^2;
+        }
+    }
+}
+
+fn main() {
+    // The stub keeps these lines from adding errors of their own.
+    let p = Pendulum::default();
+    let _ = p.rcd1();
+}
