@@ -29,6 +29,34 @@ pub struct Report {
     pub invariants: Vec<Invariant>,
     /// Formulations.
     pub formulations: Vec<FormulationReport>,
+    /// The paper's formulations this model does not offer, each with why.
+    pub not_offered: Vec<NotOffered>,
+}
+
+/// A formulation the model does not offer.
+#[derive(Clone, Debug, Serialize)]
+pub struct NotOffered {
+    /// Its name.
+    pub name: String,
+    /// Why: the structural reason it does not apply, or that the model's
+    /// `formulations { … }` list leaves it out.
+    pub reason: String,
+}
+
+/// The formulations of [`FORMULATION_NAMES`](crate::system::FORMULATION_NAMES)
+/// that `d` does not provide, with the reason.
+pub fn not_offered(d: &Derived) -> Vec<NotOffered> {
+    crate::system::FORMULATION_NAMES
+        .iter()
+        .filter(|n| !d.formulations.iter().any(|f| f.name == **n))
+        .map(|n| NotOffered {
+            name: n.to_string(),
+            reason: match crate::formulation::applicable(&d.model, &d.analysis, n) {
+                Err(why) => why,
+                Ok(()) => "applies, but the model's `formulations { … }` list leaves it out".into(),
+            },
+        })
+        .collect()
 }
 
 /// An unknown.
@@ -133,6 +161,7 @@ impl Report {
                     }
                 })
                 .collect(),
+            not_offered: not_offered(d),
         }
     }
 
@@ -201,6 +230,9 @@ pub fn text(d: &Derived) -> String {
             f.c_level
         );
     }
+    for n in &r.not_offered {
+        let _ = writeln!(s, "  {:<5} not offered: {}", n.name, n.reason);
+    }
     for f in &r.formulations {
         let _ = writeln!(
             s,
@@ -247,4 +279,62 @@ pub fn latex(d: &Derived) -> String {
         let _ = writeln!(s, "\\end{{align*}}");
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PENDULUM: &str = "pub P {
+        parameters { m = 1.0, l = 1.0, g = 9.81 }
+        differential { x, y, v, w }
+        algebraic { lambda }
+        equations {
+            der(x) = v; der(y) = w;
+            m * der(v) = -2 * x * lambda;
+            m * der(w) = -2 * y * lambda - m * g;
+            0 = x^2 + y^2 - l^2;
+        }
+        FORMS
+    }";
+
+    #[test]
+    fn derive_says_why_a_formulation_is_not_offered() {
+        // All eight apply to the pendulum: nothing left out.
+        let d = Derived::from_str(&PENDULUM.replace("FORMS", "")).unwrap();
+        assert!(not_offered(&d).is_empty());
+        // A list leaves the others out, and says so.
+        let d =
+            Derived::from_str(&PENDULUM.replace("FORMS", "formulations { ggl1, rcd0 }")).unwrap();
+        let n = not_offered(&d);
+        let names: Vec<&str> = n.iter().map(|x| x.name.as_str()).collect();
+        assert_eq!(names, ["ori2", "rcd1", "ovd1", "ovd0", "psi1", "psi0"]);
+        assert!(
+            n.iter().all(|x| x.reason.contains("leaves it out")),
+            "{n:?}"
+        );
+        let text = text(&d);
+        assert!(text.contains("ori2  not offered: applies, but"), "{text}");
+        // An index-1 model (an algebraic equation that is not a position
+        // constraint): the structural reason.
+        let index1 = "pub Q {
+            parameters { k = 1.0 }
+            differential { x }
+            algebraic { z }
+            equations { der(x) = z; 0 = z + k * x; }
+        }";
+        let d = Derived::from_str(index1).unwrap();
+        let n = not_offered(&d);
+        let rcd1 = n
+            .iter()
+            .find(|x| x.name == "rcd1")
+            .expect("rcd1 not offered");
+        assert!(
+            rcd1.reason.contains("hidden velocity level"),
+            "{}",
+            rcd1.reason
+        );
+        let json = serde_json::to_value(Report::new(&d)).unwrap();
+        assert_eq!(json["not_offered"][0]["name"], n[0].name.as_str());
+    }
 }
