@@ -12,7 +12,7 @@ use common::*;
 use dae_core::system::DaeSystem;
 use dae_solvers::bdf::Bdf;
 use dae_solvers::options::Tol;
-use dae_solvers::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
+use dae_solvers::{NotApplicable, Options, Solution, SolveError, Solver};
 
 /// Integrate `sys` from `y0` at `t = 0` to `t_end`.
 fn run(
@@ -21,13 +21,7 @@ fn run(
     t_end: f64,
     options: &Options,
 ) -> Result<Solution, SolveError> {
-    let problem = Problem {
-        system: sys,
-        t0: 0.0,
-        y0,
-        t_end,
-    };
-    Bdf.solve(&problem, options)
+    solve_with(&Bdf, sys, y0, t_end, options)
 }
 
 /// Options for the pendulum: uniform tolerance, index-2 unknowns out of the
@@ -36,13 +30,6 @@ fn pendulum_options(form: Form, tol: f64) -> Options {
     let mut options = Options::with_tol(tol);
     options.index2_in_error_test = Some(!form.has_index2());
     options
-}
-
-fn s01_exact_at_20() -> [f64; 5] {
-    let exact = reference("pendulum_s01_exact.csv");
-    let (t, values) = *exact.last().expect("reference rows");
-    assert_eq!(t, 20.0);
-    values
 }
 
 #[test]

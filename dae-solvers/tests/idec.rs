@@ -25,13 +25,7 @@ fn run(
     t_end: f64,
     options: &Options,
 ) -> Result<Solution, SolveError> {
-    let problem = Problem {
-        system: sys,
-        t0: 0.0,
-        y0,
-        t_end,
-    };
-    idec.solve(&problem, options)
+    solve_with(&idec, sys, y0, t_end, options)
 }
 
 /// `|η^[l]_i(0.4) − y_i(0.4)|` on the seed's test problem for each h of
@@ -188,13 +182,6 @@ fn constant_steps_freeze_the_jacobian() {
     let err: Vec<f64> = u.iter().zip(&exact).map(|(a, b)| (a - b).abs()).collect();
     assert!(err[..4].iter().all(|&e| e < 5e-5), "{err:?}");
     assert!(err[4] < 1e-2 && err[5] < 3e-2, "{err:?}");
-}
-
-fn s01_exact_at_20() -> [f64; 5] {
-    let exact = reference("pendulum_s01_exact.csv");
-    let (t, values) = *exact.last().expect("reference rows");
-    assert_eq!(t, 20.0);
-    values
 }
 
 /// Scenario S01 (t = 20) with error control on the index-2 formulations

@@ -14,7 +14,7 @@ use common::*;
 use dae_core::system::DaeSystem;
 use dae_solvers::mebdf::Mebdf;
 use dae_solvers::options::Tol;
-use dae_solvers::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
+use dae_solvers::{NotApplicable, Options, Solution, SolveError, Solver};
 
 /// Integrate `sys` from `y0` at `t = 0` to `t_end`.
 fn run(
@@ -23,20 +23,7 @@ fn run(
     t_end: f64,
     options: &Options,
 ) -> Result<Solution, SolveError> {
-    let problem = Problem {
-        system: sys,
-        t0: 0.0,
-        y0,
-        t_end,
-    };
-    Mebdf.solve(&problem, options)
-}
-
-fn s01_exact_at_20() -> [f64; 5] {
-    let exact = reference("pendulum_s01_exact.csv");
-    let (t, values) = *exact.last().expect("reference rows");
-    assert_eq!(t, 20.0);
-    values
+    solve_with(&Mebdf, sys, y0, t_end, options)
 }
 
 /// The formulations the paper runs MEBDF on.

@@ -23,31 +23,12 @@ use dae_solvers::odbdf::{self, OdBdf};
 use dae_solvers::odradau::{self, OdRadau};
 use dae_solvers::options::{Tol, ORDER_BOUND};
 use dae_solvers::radau5::Radau5;
-use dae_solvers::{NotApplicable, Options, Problem, Solution, SolveError, Solver, Tolerances};
+use dae_solvers::{NotApplicable, Options, Solution, SolveError, Solver, Tolerances};
 use nalgebra::DMatrix;
 
 // ---------------------------------------------------------------------------
 // Helpers
 // ---------------------------------------------------------------------------
-
-/// Integrate `sys` from `y0` at `t = 0` to `t_end`.
-fn run(
-    solver: &dyn Solver,
-    sys: &dyn DaeSystem,
-    y0: &[f64],
-    t_end: f64,
-    options: &Options,
-) -> Result<Solution, SolveError> {
-    solver.solve(
-        &Problem {
-            system: sys,
-            t0: 0.0,
-            y0,
-            t_end,
-        },
-        options,
-    )
-}
 
 /// The hand-written pendulum in the formulation `name` (the paper's
 /// parameters), with its consistent start.
@@ -323,7 +304,7 @@ fn solve_on_a_refused_formulation_is_not_applicable() {
     ];
     for (solver, name, c_level, max) in cases {
         let (sys, y0) = pendulum(name);
-        let err = run(solver, &*sys, &y0, 1.0, &Options::default()).unwrap_err();
+        let err = solve_with(solver, &*sys, &y0, 1.0, &Options::default()).unwrap_err();
         assert_eq!(
             err,
             SolveError::NotApplicable(NotApplicable::ConstraintLevel { c_level, max }),
@@ -337,7 +318,7 @@ fn solve_on_a_refused_formulation_is_not_applicable() {
     // Underdetermined, at solve time too.
     let sys = Underdetermined::new();
     for solver in [&OdRadau as &dyn Solver, &OdBdf] {
-        let err = run(solver, &sys, &[1.0, 0.0], 1.0, &Options::default()).unwrap_err();
+        let err = solve_with(solver, &sys, &[1.0, 0.0], 1.0, &Options::default()).unwrap_err();
         assert_eq!(
             err,
             SolveError::NotApplicable(NotApplicable::Underdetermined {
@@ -537,7 +518,7 @@ fn fixed_step_errors(
             fixed_order: order,
             ..Options::with_tol(1e-13)
         };
-        let sol = run(solver, sys, &y0, t_end, &options)
+        let sol = solve_with(solver, sys, &y0, t_end, &options)
             .unwrap_or_else(|e| panic!("{} with {n} steps: {e}", solver.name()));
         assert_eq!(sol.t, vec![t_end]);
         if order.is_none() {
@@ -575,7 +556,7 @@ fn oscillator_errors(
                 fixed_order: order,
                 ..Options::with_tol(tol)
             };
-            let sol = run(solver, sys, &Oscillator::exact(0.0), t_end, &options)
+            let sol = solve_with(solver, sys, &Oscillator::exact(0.0), t_end, &options)
                 .unwrap_or_else(|e| panic!("{} with {n} steps: {e}", solver.name()));
             max_diff(sol.last().expect("output"), &exact, 2)
         })
@@ -742,7 +723,7 @@ fn adaptive_runs_on_the_oscillator() {
                 record_steps: true,
                 ..Options::with_tol(tol)
             };
-            let sol = run(
+            let sol = solve_with(
                 solver,
                 &Oscillator::new(false),
                 &Oscillator::exact(0.0),
@@ -780,7 +761,7 @@ fn drift(solver: &dyn Solver, name: &str, tol: f64) -> [[f64; 2]; 4] {
         record_steps: true,
         ..Options::with_tol(tol)
     };
-    let sol = run(solver, &*sys, &y0, 200.0, &options)
+    let sol = solve_with(solver, &*sys, &y0, 200.0, &options)
         .unwrap_or_else(|e| panic!("{} {name}: {e}", solver.name()));
     let mut windows = [[0.0f64; 2]; 4];
     let mut g = [0.0; 3];
@@ -919,8 +900,8 @@ fn square_formulations_fixed_step_match_the_square_solvers() {
             output_times: (1..=20).map(|k| 0.05 * f64::from(k)).collect(),
             ..Options::with_tol(1e-12)
         };
-        let a = run(od, &*sys, &y0, 1.0, &options).expect("least squares");
-        let b = run(square, &*sys, &y0, 1.0, &options).expect("square");
+        let a = solve_with(od, &*sys, &y0, 1.0, &options).expect("least squares");
+        let b = solve_with(square, &*sys, &y0, 1.0, &options).expect("square");
         let (diff, diff_lambda) = solution_diff(&a, &b);
         println!(
             "fixed step: {} vs {} on {name}: {diff:.2e}, λ {diff_lambda:.2e}",
@@ -955,8 +936,8 @@ fn square_formulations_adaptive_agree_with_the_square_solvers() {
             output_times: (1..=40).map(|k| 0.1 * f64::from(k)).collect(),
             ..Options::with_tol(tol)
         };
-        let a = run(od, &*sys, &y0, t_end, &options).expect("least squares");
-        let b = run(square, &*sys, &y0, t_end, &options).expect("square");
+        let a = solve_with(od, &*sys, &y0, t_end, &options).expect("least squares");
+        let b = solve_with(square, &*sys, &y0, t_end, &options).expect("square");
         let (diff, diff_lambda) = solution_diff(&a, &b);
         let global = |s: &Solution| {
             s.t.iter()
@@ -1011,7 +992,7 @@ fn invalid_input_is_rejected() {
     for (solver, name) in od_cases() {
         let (sys, y0) = pendulum(name);
         let what = format!("{} {name}", solver.name());
-        let invalid = |options: &Options, y0: &[f64], t_end: f64| match run(
+        let invalid = |options: &Options, y0: &[f64], t_end: f64| match solve_with(
             solver, &*sys, y0, t_end, options,
         ) {
             Err(e @ SolveError::InvalidInput { .. }) => {
@@ -1109,7 +1090,7 @@ fn invalid_input_is_rejected() {
             if solver.name() == "odbdf" {
                 invalid(&bad, &y0, 1.0);
             } else {
-                let r = run(solver, &*sys, &y0, 1.0, &bad);
+                let r = solve_with(solver, &*sys, &y0, 1.0, &bad);
                 assert!(r.is_ok(), "{what}: {r:?}");
             }
         }
@@ -1122,7 +1103,7 @@ fn non_finite_initial_values() {
         let (sys, mut y0) = pendulum(name);
         for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
             y0[3] = bad;
-            let err = run(solver, &*sys, &y0, 1.0, &Options::default()).unwrap_err();
+            let err = solve_with(solver, &*sys, &y0, 1.0, &Options::default()).unwrap_err();
             assert_eq!(
                 err,
                 SolveError::NonFinite {
@@ -1186,7 +1167,7 @@ impl<S: DaeSystem> DaeSystem for NanAfter<S> {
 fn non_finite_residuals_are_reported() {
     // NaN from the start (square, one equation).
     for solver in [&OdRadau as &dyn Solver, &OdBdf] {
-        let err = run(solver, &nan_rhs(), &[1.0], 1.0, &Options::default()).unwrap_err();
+        let err = solve_with(solver, &nan_rhs(), &[1.0], 1.0, &Options::default()).unwrap_err();
         assert!(
             matches!(err, SolveError::NonFinite { t, .. } if t == 0.0),
             "{}: {err:?}",
@@ -1220,7 +1201,7 @@ fn non_finite_residuals_are_reported() {
     ];
     for (solver, sys) in cases {
         let y0 = pendulum_exact(0.0);
-        let err = run(solver, &*sys, &y0, 2.0, &Options::with_tol(1e-6)).unwrap_err();
+        let err = solve_with(solver, &*sys, &y0, 2.0, &Options::with_tol(1e-6)).unwrap_err();
         let what = format!("{} {}", solver.name(), sys.info().name);
         println!("{what}: {err:?}");
         let t = err
@@ -1338,18 +1319,18 @@ fn singular_iteration_matrices_are_reported() {
             fixed_step,
             ..Options::default()
         };
-        let err = run(&OdRadau, &zero_equals_one(), &[0.0], 1.0, &options).unwrap_err();
+        let err = solve_with(&OdRadau, &zero_equals_one(), &[0.0], 1.0, &options).unwrap_err();
         assert!(
             matches!(err, SolveError::SingularMatrix { t, h } if t == 0.0 && h > 0.0),
             "odradau {fixed_step:?}: {err:?}"
         );
         assert_eq!(err.kind(), "singular_matrix");
     }
-    let err = run(&OdBdf, &zero_equals_one(), &[0.0], 1.0, &Options::default()).unwrap_err();
+    let err = solve_with(&OdBdf, &zero_equals_one(), &[0.0], 1.0, &Options::default()).unwrap_err();
     assert_eq!(err.kind(), "inconsistent_initial_values", "{err:?}");
     // An unknown that appears in no equation.
     for solver in [&OdRadau as &dyn Solver, &OdBdf] {
-        let err = run(
+        let err = solve_with(
             solver,
             &structurally_singular(),
             &[1.0, 0.0],
@@ -1381,7 +1362,7 @@ fn singular_iteration_matrices_are_reported() {
     for (solver, sys) in cases {
         assert_eq!(solver.accepts(sys.info()), Ok(()));
         let y0 = pendulum_exact(0.0);
-        let err = run(solver, &*sys, &y0, 1.0, &Options::with_tol(1e-6)).unwrap_err();
+        let err = solve_with(solver, &*sys, &y0, 1.0, &Options::with_tol(1e-6)).unwrap_err();
         assert!(
             matches!(err, SolveError::SingularMatrix { t, .. } if t == 0.0),
             "{} {}: {err:?}",
@@ -1399,7 +1380,7 @@ fn step_limit_is_reported() {
             max_steps: 20,
             ..Options::with_tol(1e-6)
         };
-        match run(solver, &*sys, &y0, 20.0, &options) {
+        match solve_with(solver, &*sys, &y0, 20.0, &options) {
             Err(e @ SolveError::StepLimit { .. }) => {
                 let SolveError::StepLimit { t, max_steps } = e else {
                     unreachable!()
@@ -1420,7 +1401,7 @@ fn step_limit_is_reported() {
             fixed_step: Some(1e-3),
             ..Options::with_tol(1e-6)
         };
-        let r = run(solver, &*sys, &y0, 20.0, &options);
+        let r = solve_with(solver, &*sys, &y0, 20.0, &options);
         assert!(
             matches!(r, Err(SolveError::StepLimit { max_steps: 100, .. })),
             "{} {name}: {r:?}",
@@ -1435,7 +1416,7 @@ fn blow_up_and_unsolvable_equations() {
         // y' = y², y(0) = 1 blows up at t = 1: the step size collapses
         // there (measured t − 1: 2.5e-10 odradau, −2.2e-5 odbdf, as radau5
         // and bdf).
-        match run(solver, &blow_up(), &[1.0], 2.0, &Options::with_tol(1e-6)) {
+        match solve_with(solver, &blow_up(), &[1.0], 2.0, &Options::with_tol(1e-6)) {
             Err(SolveError::StepSizeTooSmall { t, h }) => {
                 assert!((t - 1.0).abs() < 1e-4, "{}: t = {t}", solver.name());
                 assert!(h > 0.0 && h < 1e-12, "{}: h = {h}", solver.name());
@@ -1445,7 +1426,7 @@ fn blow_up_and_unsolvable_equations() {
     }
     // 0 = y² + 1 has no real solution: odradau's Newton iteration fails at
     // every step size; odbdf refuses the initial value, which violates it.
-    let err = run(
+    let err = solve_with(
         &OdRadau,
         &no_real_root(),
         &[1.0],
@@ -1461,9 +1442,9 @@ fn blow_up_and_unsolvable_equations() {
         fixed_step: Some(0.1),
         ..Options::with_tol(1e-6)
     };
-    let err = run(&OdRadau, &no_real_root(), &[1.0], 1.0, &options).unwrap_err();
+    let err = solve_with(&OdRadau, &no_real_root(), &[1.0], 1.0, &options).unwrap_err();
     assert_eq!(err.kind(), "newton_failure");
-    let err = run(
+    let err = solve_with(
         &OdBdf,
         &no_real_root(),
         &[1.0],
@@ -1481,7 +1462,7 @@ fn blow_up_and_unsolvable_equations() {
 fn odbdf_refuses_inconsistent_initial_values() {
     let sys = PendulumOvd0::new();
     // λ0 = 1 violates the acceleration constraint (residual 4).
-    match run(
+    match solve_with(
         &OdBdf,
         &sys,
         &[1.0, 0.0, 0.0, 0.0, 1.0],
@@ -1495,7 +1476,7 @@ fn odbdf_refuses_inconsistent_initial_values() {
         other => panic!("{other:?}"),
     }
     // Off the circle: the position constraint.
-    let err = run(
+    let err = solve_with(
         &OdBdf,
         &sys,
         &[1.1, 0.0, 0.0, 0.0, 0.0],
@@ -1509,7 +1490,7 @@ fn odbdf_refuses_inconsistent_initial_values() {
         "{err:?}"
     );
     // A velocity across the rod: the velocity constraint.
-    let err = run(
+    let err = solve_with(
         &OdBdf,
         &sys,
         &[1.0, 0.0, 0.1, 0.0, 0.0],
@@ -1522,7 +1503,7 @@ fn odbdf_refuses_inconsistent_initial_values() {
         "{err:?}"
     );
     // Within the tolerance: accepted.
-    assert!(run(
+    assert!(solve_with(
         &OdBdf,
         &sys,
         &[1.0, 0.0, 0.0, 0.0, 1e-9],
@@ -1553,9 +1534,9 @@ fn odradau_takes_tiny_initial_steps_like_radau5() {
                 ..Options::with_tol(1e-6)
             };
             if name != "ovd1" {
-                assert!(run(&Radau5, &*sys, &y0, 2.0, &options).is_ok());
+                assert!(solve_with(&Radau5, &*sys, &y0, 2.0, &options).is_ok());
             }
-            let r = run(&OdRadau, &*sys, &y0, 2.0, &options);
+            let r = solve_with(&OdRadau, &*sys, &y0, 2.0, &options);
             assert!(r.is_ok(), "odradau {name} h0 = {h0:e}: {r:?}");
         }
     }
@@ -1610,11 +1591,11 @@ fn extreme_options_do_not_panic() {
             },
         ] {
             // Success or a typed error, never a panic.
-            let _ = run(solver, &*sys, &y0, 2.0, &options);
+            let _ = solve_with(solver, &*sys, &y0, 2.0, &options);
         }
         // A start off every constraint: a typed refusal (odbdf) or a
         // solution that the exact constraint rows pull back (odradau).
-        let _ = run(
+        let _ = solve_with(
             solver,
             &*sys,
             &[1.3, 0.4, 2.0, -1.0, 7.0],
@@ -1644,7 +1625,7 @@ fn s01_accuracy_and_dense_output() {
                 output_times: (1..=400).map(|k| 0.05 * f64::from(k)).collect(),
                 ..Options::with_tol(tol)
             };
-            let sol = run(solver, &*sys, &y0, 20.0, &options)
+            let sol = solve_with(solver, &*sys, &y0, 20.0, &options)
                 .unwrap_or_else(|e| panic!("{} {name} {tol:e}: {e}", solver.name()));
             assert_eq!(sol.t.len(), 400);
             assert_eq!(sol.t.last(), Some(&20.0));
@@ -1682,7 +1663,7 @@ fn record_steps_h0_and_h_max_are_respected() {
             h_max: Some(0.02),
             ..Options::with_tol(1e-6)
         };
-        let sol = run(solver, &*sys, &y0, 2.0, &options).expect("run");
+        let sol = solve_with(solver, &*sys, &y0, 2.0, &options).expect("run");
         assert_eq!(sol.steps.len(), sol.stats.steps);
         assert!(sol.steps[0].0 <= 1e-3 * (1.0 + 1e-12));
         let mut t_prev = 0.0;
@@ -1725,7 +1706,7 @@ fn record_steps_h0_and_h_max_are_respected() {
 fn statistics_are_consistent() {
     for (solver, name) in od_cases() {
         let (sys, y0) = pendulum(name);
-        let sol = run(solver, &*sys, &y0, 20.0, &Options::with_tol(1e-6)).expect("run");
+        let sol = solve_with(solver, &*sys, &y0, 20.0, &Options::with_tol(1e-6)).expect("run");
         let s = sol.stats;
         println!("{} {name}: {s:?}", solver.name());
         assert!(s.steps > 100, "{s:?}");
@@ -1764,7 +1745,7 @@ fn the_step_loop_does_not_allocate() {
         let mut counts = [0usize; 2];
         for (i, t_end) in [2.0, 20.0].into_iter().enumerate() {
             let (count, sol) =
-                allocations_of(|| run(solver, &*sys, &y0, t_end, options).expect("run"));
+                allocations_of(|| solve_with(solver, &*sys, &y0, t_end, options).expect("run"));
             steps[i] = sol.stats.steps;
             counts[i] = count;
         }
@@ -1780,9 +1761,10 @@ fn the_step_loop_does_not_allocate() {
     for (solver, name) in od_cases() {
         let (sys, y0) = pendulum(name);
         let mut options = Options::with_tol(1e-8);
-        let (base, _) = allocations_of(|| run(solver, &*sys, &y0, 20.0, &options).unwrap());
+        let (base, _) = allocations_of(|| solve_with(solver, &*sys, &y0, 20.0, &options).unwrap());
         options.output_times = (1..=400).map(|k| 0.05 * f64::from(k)).collect();
-        let (with_output, _) = allocations_of(|| run(solver, &*sys, &y0, 20.0, &options).unwrap());
+        let (with_output, _) =
+            allocations_of(|| solve_with(solver, &*sys, &y0, 20.0, &options).unwrap());
         // One vector per output time but the last, which the base run
         // reports too.
         assert_eq!(

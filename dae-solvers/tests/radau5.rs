@@ -11,7 +11,7 @@ use alloc::allocations_of;
 use common::*;
 use dae_core::system::DaeSystem;
 use dae_solvers::radau5::Radau5;
-use dae_solvers::{NotApplicable, Options, Problem, Solution, SolveError, Solver, Tolerances};
+use dae_solvers::{NotApplicable, Options, Solution, SolveError, Solver, Tolerances};
 
 // ---------------------------------------------------------------------------
 // Helpers
@@ -23,15 +23,7 @@ fn solve(
     t_end: f64,
     options: &Options,
 ) -> Result<Solution, SolveError> {
-    Radau5.solve(
-        &Problem {
-            system: sys,
-            t0: 0.0,
-            y0,
-            t_end,
-        },
-        options,
-    )
+    solve_with(&Radau5, sys, y0, t_end, options)
 }
 
 /// `max_i |a_i − b_i|` over the first `k` components.

@@ -24,16 +24,7 @@ const NEWTON_TOL: f64 = 0.33;
 /// fewer steps than with 0.33.
 const NEWTON_TOL_LEAST_SQUARES: f64 = 0.033;
 
-/// Whether the iteration matrix is current.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum JacState {
-    /// Must be evaluated and factored before the next Newton iteration.
-    Needed,
-    /// Evaluated during the current step attempt.
-    Fresh,
-    /// Evaluated on an earlier step (DASSL's `JCALC = 1`).
-    Stale,
-}
+pub(super) use crate::core::matrix::JacState;
 
 impl<L: Corrector> Integrator<'_, L> {
     /// `δ = F(t, y, y')`.

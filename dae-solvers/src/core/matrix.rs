@@ -64,6 +64,19 @@ use crate::linalg::{ConstrainedLstsq, DenseLu, Pivoting, Singular};
 use dae_core::system::{FormulationInfo, RowKind};
 use nalgebra::{Complex, DMatrix};
 
+/// Whether a multistep method's Jacobian (and the iteration matrix formed
+/// from it) is current: the reuse policy DASSL and MEBDF share.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum JacState {
+    /// Must be evaluated (and factored) before the next Newton iteration.
+    Needed,
+    /// Evaluated during the current step attempt.
+    Fresh,
+    /// Evaluated on an earlier step (DASSL's `JCALC = 1`): a Newton failure
+    /// with it is retried with a fresh one before the step is reduced.
+    Stale,
+}
+
 /// Row classes and weights of a least-squares iteration matrix (see the
 /// [module documentation](self)).
 pub(crate) struct Rows {

@@ -38,16 +38,7 @@ const KAPPA: f64 = 0.01;
 /// accepted alone only when it is below `KAPPA/ETA_MIN`.
 const ETA_MIN: f64 = 0.05;
 
-/// Whether `J` is current.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum JacState {
-    /// Must be evaluated before the next iteration.
-    Needed,
-    /// Evaluated during this attempt.
-    Fresh,
-    /// Evaluated on an earlier step.
-    Stale,
-}
+pub(super) use crate::core::matrix::JacState;
 
 /// Which stage buffer a Newton iteration works on.
 #[derive(Clone, Copy)]

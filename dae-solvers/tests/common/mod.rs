@@ -20,8 +20,37 @@
 use dae_core::system::{
     ConstraintInfo, DaeSystem, FormulationInfo, RowInfo, RowKind, VarInfo, VarKind,
 };
+use dae_solvers::{Options, Problem, Solution, SolveError, Solver};
 use nalgebra::DMatrix;
 use std::f64::consts::PI;
+
+/// Integrate `sys` with `solver` from `y0` at `t = 0` to `t_end`.
+pub fn solve_with(
+    solver: &dyn Solver,
+    sys: &dyn DaeSystem,
+    y0: &[f64],
+    t_end: f64,
+    options: &Options,
+) -> Result<Solution, SolveError> {
+    solver.solve(
+        &Problem {
+            system: sys,
+            t0: 0.0,
+            y0,
+            t_end,
+        },
+        options,
+    )
+}
+
+/// The exact pendulum state at the end of S01, `t = 20` (the last row of
+/// `pendulum_s01_exact.csv`).
+pub fn s01_exact_at_20() -> [f64; 5] {
+    let exact = reference("pendulum_s01_exact.csv");
+    let (t, values) = *exact.last().expect("reference rows");
+    assert_eq!(t, 20.0);
+    values
+}
 
 fn var(name: &str, kind: VarKind, index: u8) -> VarInfo {
     VarInfo {
