@@ -105,23 +105,9 @@ pub enum InputError {
 
 /// Build the inputs of `scene`'s runs.
 pub fn inputs(scene: &Scene) -> Result<Inputs, InputError> {
-    let mut model = models::load_source(&scene.model)?;
+    let model = model(scene)?;
     let info = model.model_info().clone();
     let vars: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
-    let params: Vec<&str> = info.parameters.iter().map(|p| p.name.as_str()).collect();
-    scene.check_names(&vars, &params)?;
-    for p in &scene.parameters {
-        model
-            .set_parameter(&p.name, p.value)
-            .map_err(|source| InputError::Parameter {
-                at: Location {
-                    origin: scene.origin.clone(),
-                    line: p.line,
-                    column: p.column,
-                },
-                source,
-            })?;
-    }
     let initial = scene.initial_values();
     let reference = match &scene.reference {
         ReferenceSpec::None => None,
@@ -154,6 +140,30 @@ pub fn inputs(scene: &Scene) -> Result<Inputs, InputError> {
         initial,
         reference,
     })
+}
+
+/// The model of `scene`'s runs alone, its names checked and the scene's
+/// parameters set: what [`inputs`] builds first, for a caller that needs
+/// one more model instance (a sweep's worker thread).
+pub fn model(scene: &Scene) -> Result<Box<dyn Model + Send + Sync>, InputError> {
+    let mut model = models::load_source(&scene.model)?;
+    let info = model.model_info();
+    let vars: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
+    let params: Vec<&str> = info.parameters.iter().map(|p| p.name.as_str()).collect();
+    scene.check_names(&vars, &params)?;
+    for p in &scene.parameters {
+        model
+            .set_parameter(&p.name, p.value)
+            .map_err(|source| InputError::Parameter {
+                at: Location {
+                    origin: scene.origin.clone(),
+                    line: p.line,
+                    column: p.column,
+                },
+                source,
+            })?;
+    }
+    Ok(model)
 }
 
 /// The pendulum's closed form from the scene's start and the model's

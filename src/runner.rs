@@ -521,25 +521,8 @@ impl Components {
             index,
         }
     }
-}
 
-/// Errors against the reference at one time.
-struct Errors {
-    /// Largest error of the main components.
-    main: f64,
-    /// Sum over all components.
-    sum: f64,
-    /// Largest error of the other (algebraic) components.
-    other: Option<f64>,
-    /// Largest error over all components.
-    all: f64,
-    /// The accuracy verdict's measure: the main components' errors,
-    /// absolute ones divided by `max(1, |y*|)` over the absolute main
-    /// components.
-    verdict: f64,
-}
-
-impl Components {
+    /// The errors against `exact` (the reference's values) of `y`.
     fn errors(&self, y: &[f64], exact: &[f64]) -> Errors {
         let scale = self
             .index
@@ -556,28 +539,48 @@ impl Components {
         };
         for (c, &(j, i)) in self.index.iter().enumerate() {
             let d = self.scaling[c].error(y[i], exact[j]);
-            // NaN propagates through max below only via this test.
-            let nan = |m: f64| if d.is_nan() { f64::NAN } else { m.max(d) };
             e.sum += d;
-            e.all = nan(e.all);
+            e.all = max_or_nan(e.all, d);
             if self.main[c] {
-                e.main = nan(e.main);
+                e.main = max_or_nan(e.main, d);
                 let v = if self.scaling[c] == Scaling::Absolute {
                     d / scale
                 } else {
                     d
                 };
-                e.verdict = if v.is_nan() {
-                    f64::NAN
-                } else {
-                    e.verdict.max(v)
-                };
+                e.verdict = max_or_nan(e.verdict, v);
             } else {
-                e.other = Some(nan(e.other.unwrap_or(0.0)));
+                e.other = Some(max_or_nan(e.other.unwrap_or(0.0), d));
             }
         }
         e
     }
+}
+
+/// `max(m, d)`, but NaN when `d` is NaN (`f64::max` would drop it): a NaN
+/// error must not pass for a small one.
+fn max_or_nan(m: f64, d: f64) -> f64 {
+    if d.is_nan() {
+        d
+    } else {
+        m.max(d)
+    }
+}
+
+/// Errors against the reference at one time.
+struct Errors {
+    /// Largest error of the main components.
+    main: f64,
+    /// Sum over all components.
+    sum: f64,
+    /// Largest error of the other (algebraic) components.
+    other: Option<f64>,
+    /// Largest error over all components.
+    all: f64,
+    /// The accuracy verdict's measure: the main components' errors,
+    /// absolute ones divided by `max(1, |y*|)` over the absolute main
+    /// components.
+    verdict: f64,
 }
 
 /// Errors, residuals and drift from the solution at the output times.
@@ -636,20 +639,12 @@ fn measure(
                         err_scaled = e.verdict;
                         worst_t = *t;
                     }
-                    err = if e.main.is_nan() {
-                        f64::NAN
-                    } else {
-                        err.max(e.main)
-                    };
+                    err = max_or_nan(err, e.main);
                     err_sum += e.sum;
                     if let Some(o) = e.other {
                         err_alg = Some(err_alg.unwrap_or(0.0).max(o));
                     }
-                    worst = if e.all.is_nan() {
-                        f64::NAN
-                    } else {
-                        worst.max(e.all)
-                    };
+                    worst = max_or_nan(worst, e.all);
                 }
             }
         }

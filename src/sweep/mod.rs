@@ -640,7 +640,7 @@ fn parallel(
                 let (next, bar) = (&next, &bar);
                 s.spawn(move || -> Result<Vec<(usize, RunRecord)>, SweepError> {
                     // Each thread integrates with its own model instance.
-                    let model = inputs(ctx.scene)?.model;
+                    let model = crate::inputs::model(ctx.scene)?;
                     let mut done = Vec::new();
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
