@@ -31,6 +31,7 @@ pub mod prelude {
 /// Runtime support for macro-generated code. Not public API.
 #[doc(hidden)]
 pub mod __private {
+    pub use dae_core::accel;
     pub use dae_core::system::{
         check_parameter, BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo,
         Model, ModelInfo, ParamInfo, ParameterError, RowInfo, RowKind, StaticSize, VarInfo,

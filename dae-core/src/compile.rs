@@ -58,6 +58,27 @@ pub struct Compiled {
     pub invariants: Tape,
     /// Default parameter values.
     pub parameter_defaults: Vec<f64>,
+    /// For a model with a mass matrix, whose chain holds der(): the model's
+    /// dynamic rows, for eliminating the accelerations ([`crate::accel`]).
+    /// `constraints` and `constraints_jacobian` then read der() from `yp`.
+    pub accel: Option<AccelTapes>,
+}
+
+/// The tapes of [`crate::accel::AccelParts`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct AccelTapes {
+    /// Number of differential unknowns `n_d`.
+    pub n_diff: usize,
+    /// Entries of `E_d(y)` (n_d × n_d).
+    pub leading: Sparse,
+    /// `f_d(t, y)`, n_d outputs.
+    pub rhs: Tape,
+    /// Entries of `∂f_d/∂y` (n_d × N).
+    pub rhs_jacobian: Sparse,
+    /// Entries of `∂(E_d(y) z)/∂y` (n_d × N).
+    pub leading_jacobian: Sparse,
+    /// Entries of `∂g/∂y'` (K × n_d).
+    pub chain_der: Sparse,
 }
 
 /// Lower formulation `f` of `d`.
@@ -120,6 +141,7 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
             cj_cells.push((r, k, expr::diff(e, Sym::Var(k as u32))));
         }
     }
+    let accel = model.has_mass_matrix().then(|| accel_tapes(d, n));
     let mut inv = TapeBuilder::new();
     for i in &model.invariants {
         inv.output(&i.expr);
@@ -135,6 +157,55 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
         constraints_jacobian: Sparse::build(cj_cells),
         invariants: inv.finish(),
         parameter_defaults: model.params.iter().map(|p| p.default).collect(),
+        accel,
+    }
+}
+
+/// The model's dynamic rows and the chain's der() coefficients, for a model
+/// with a mass matrix (`n` unknowns in the formulation).
+fn accel_tapes(d: &Derived, n: usize) -> AccelTapes {
+    let model = &d.model;
+    let mut e_cells = Vec::new();
+    let mut rhs = TapeBuilder::new();
+    let mut fj_cells = Vec::new();
+    let mut ej_cells = Vec::new();
+    for (i, dy) in model.dynamics.iter().enumerate() {
+        let terms: Vec<(usize, Expr)> = std::iter::once((dy.var, dy.coef.clone()))
+            .chain(dy.coupled.iter().cloned())
+            .collect();
+        for (j, c) in &terms {
+            e_cells.push((i, *j, c.clone()));
+        }
+        rhs.output(&dy.rhs);
+        for k in unknowns(std::iter::once(&dy.rhs), n) {
+            fj_cells.push((i, k, expr::diff(&dy.rhs, Sym::Var(k as u32))));
+        }
+        for k in unknowns(terms.iter().map(|(_, c)| c), n) {
+            let s = Sym::Var(k as u32);
+            let ez = expr::add_all(
+                terms
+                    .iter()
+                    .map(|(j, c)| expr::mul(&expr::diff(c, s), &Expr::sym(Sym::Dir(*j as u32)))),
+            );
+            ej_cells.push((i, k, ez));
+        }
+    }
+    let mut cd_cells = Vec::new();
+    for (r, (_, _, e)) in d.analysis.flat().iter().enumerate() {
+        for j in 0..model.n_diff {
+            let s = Sym::Der(j as u32);
+            if e.contains(s) {
+                cd_cells.push((r, j, expr::diff(e, s)));
+            }
+        }
+    }
+    AccelTapes {
+        n_diff: model.n_diff,
+        leading: Sparse::build(e_cells),
+        rhs: rhs.finish(),
+        rhs_jacobian: Sparse::build(fj_cells),
+        leading_jacobian: Sparse::build(ej_cells),
+        chain_der: Sparse::build(cd_cells),
     }
 }
 

@@ -132,6 +132,9 @@ pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String
             "`{name}` needs position-level constraints of a mechanical system (each constraint determining its multiplier after two differentiations)"
         )),
         "ggl1" => Ok(()),
+        "psi0" if model.has_mass_matrix() => Err(
+            "`psi0` projects the multipliers out of the velocity rows and finds them in the acceleration-level constraint; with a mass matrix that constraint holds `v'`, not the multipliers (`M` is not inverted symbolically), so nothing would determine them: use `psi1`, `rcd0` or `ovd0`".into(),
+        ),
         "psi1" | "psi0" => selector_split(model, an).map(|_| ()),
         other => Err(format!("unknown formulation `{other}`")),
     }
@@ -202,7 +205,7 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
                 .iter()
                 .zip(&levels)
                 .filter_map(|(c, ls)| {
-                    let first = c.first_level(s)?;
+                    let first = c.first_level(model, s)?;
                     let h = *ls.iter().max()?;
                     Some(first.saturating_sub(h))
                 })
@@ -220,10 +223,15 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
     let mut dyn_rows: Vec<SymRow> = model
         .dynamics
         .iter()
-        .map(|d| SymRow {
-            kind: RowKind::Differential,
-            e: vec![(d.var, d.coef.clone())],
-            f: d.rhs.clone(),
+        .map(|d| {
+            let mut e = vec![(d.var, d.coef.clone())];
+            e.extend(d.coupled.iter().cloned());
+            e.sort_by_key(|(j, _)| *j);
+            SymRow {
+                kind: RowKind::Differential,
+                e,
+                f: d.rhs.clone(),
+            }
         })
         .collect();
 
@@ -245,11 +253,19 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
             }
             extra_names.push(base.clone());
             let eta = Expr::var(n + i);
+            // `E u' = f − E Gᵀ η` on the rows whose unknowns the constraint
+            // contains (the kinematic rows `q' = v`).
             for row in dyn_rows.iter_mut() {
-                let (j, coef) = (&row.e[0].0, &row.e[0].1);
-                let g = expr::diff(&c.levels[0], Sym::Var(*j as u32));
-                if !g.is_zero() {
-                    row.f = expr::sub(&row.f, &expr::mul_all([coef.clone(), eta.clone(), g]));
+                let terms: Vec<Expr> = row
+                    .e
+                    .iter()
+                    .filter_map(|(j, coef)| {
+                        let g = expr::diff(&c.levels[0], Sym::Var(*j as u32));
+                        (!g.is_zero()).then(|| expr::mul_all([coef.clone(), eta.clone(), g]))
+                    })
+                    .collect();
+                if !terms.is_empty() {
+                    row.f = expr::sub(&row.f, &expr::add_all(terms));
                 }
             }
             vars.push(VarInfo {
@@ -291,14 +307,7 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
     for level in 0..=max_level {
         for (c, ls) in an.chains.iter().zip(&levels) {
             if ls.contains(&level) {
-                rows.push(SymRow {
-                    kind: RowKind::Constraint {
-                        level: level as u8,
-                        source: c.source as u16,
-                    },
-                    e: Vec::new(),
-                    f: c.levels[level].clone(),
-                });
+                rows.push(constraint_row(&c.levels[level], level, c.source));
             }
         }
     }
@@ -325,6 +334,41 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         c_level,
         constant_leading,
     })
+}
+
+/// The row `0 = g` of a constraint level. A level that holds der() (the
+/// acceleration level of a model with a mass matrix, `G v' + … = 0`) is
+/// linear in them and becomes a row of `E`: `Σ ∂g/∂u_j' · u_j' = −g|_{u'=0}`.
+fn constraint_row(g: &Expr, level: usize, source: usize) -> SymRow {
+    let kind = RowKind::Constraint {
+        level: level as u8,
+        source: source as u16,
+    };
+    let ders: Vec<u32> = g
+        .symbols()
+        .into_iter()
+        .filter_map(|s| match s {
+            Sym::Der(j) => Some(j),
+            _ => None,
+        })
+        .collect();
+    if ders.is_empty() {
+        return SymRow {
+            kind,
+            e: Vec::new(),
+            f: g.clone(),
+        };
+    }
+    let e = ders
+        .iter()
+        .map(|&j| (j as usize, expr::diff(g, Sym::Der(j))))
+        .collect();
+    let rest = expr::subs(g, &|s| matches!(s, Sym::Der(_)).then(Expr::zero));
+    SymRow {
+        kind,
+        e,
+        f: expr::neg(&rest),
+    }
 }
 
 /// Positions, velocities and their selectors.
@@ -367,7 +411,25 @@ fn selector_split(model: &Model, an: &Analysis) -> Result<SelectorSplit, String>
             .collect()
     };
     let sq = selector(&jac(0, &q))?;
-    let sv = selector(&jac(1, &v))?;
+    // The velocity rows are projected so that the multipliers drop out:
+    // `S_v Λ = 0` with `Λ = ∂f/∂λ` of those rows. With one der() per row
+    // (`m v' = f − Gᵀλ`) `Λ` is `−Gᵀ` up to row scaling and `∂ġ/∂v = G`
+    // serves; the rows of a mass matrix are assigned to velocities by a
+    // matching, so there `Λ` is read off the rows themselves.
+    let sv = if v.iter().any(|&j| model.is_coupled(j)) {
+        let lam: Vec<Vec<Expr>> = an
+            .matching
+            .iter()
+            .map(|&a| {
+                v.iter()
+                    .map(|&j| expr::diff(&model.dynamics[j].rhs, Sym::Var(a as u32)))
+                    .collect()
+            })
+            .collect();
+        selector(&lam)?
+    } else {
+        selector(&jac(1, &v))?
+    };
     Ok(SelectorSplit { q, v, sq, sv })
 }
 

@@ -35,9 +35,10 @@ impl Chain {
         self.levels.len() - 1
     }
 
-    /// First level at which symbol `s` appears, if any.
-    pub fn first_level(&self, s: Sym) -> Option<usize> {
-        self.levels.iter().position(|e| e.contains(s))
+    /// First level at which symbol `s` appears, if any (directly or,
+    /// through a mass matrix, behind a der(); see [`Model::involves`]).
+    pub fn first_level(&self, model: &Model, s: Sym) -> Option<usize> {
+        self.levels.iter().position(|e| model.involves(e, s))
     }
 }
 
@@ -80,12 +81,16 @@ impl Analysis {
 /// check the matching.
 pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
     let mut errors = Errors::default();
-    let is_alg = |s: Sym| matches!(s, Sym::Var(i) if i as usize >= model.n_diff);
+    // A level determines multipliers when it contains one, directly or
+    // through the der() of a mass-matrix unknown (`M v' = f − Gᵀλ`: the
+    // acceleration-level constraint `G v' + … = 0` fixes λ).
+    let alg =
+        |e: &Expr| (model.n_diff..model.vars.len()).any(|a| model.involves(e, Sym::Var(a as u32)));
     let mut chains = Vec::new();
     for (i, c) in model.constraints.iter().enumerate() {
         let mut levels = vec![c.expr.clone()];
         let mut ok = true;
-        while !levels.last().is_some_and(|e| e.any_sym(&is_alg)) {
+        while !levels.last().is_some_and(alg) {
             if levels.len() > MAX_LEVEL {
                 errors.push(
                     c.span,
@@ -136,7 +141,7 @@ pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
         .map(|c| {
             let top = &c.levels[c.top()];
             (0..n_alg)
-                .filter(|&a| top.contains(Sym::Var((model.n_diff + a) as u32)))
+                .filter(|&a| model.involves(top, Sym::Var((model.n_diff + a) as u32)))
                 .collect()
         })
         .collect();

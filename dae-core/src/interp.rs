@@ -172,6 +172,16 @@ impl InterpretedSystem {
         ]
         .iter()
         .map(|t| t.nodes.len())
+        .chain(c.accel.iter().flat_map(|a| {
+            [
+                &a.leading.tape,
+                &a.rhs,
+                &a.rhs_jacobian.tape,
+                &a.leading_jacobian.tape,
+                &a.chain_der.tape,
+            ]
+            .map(|t| t.nodes.len())
+        }))
         .max()
         .unwrap_or(0);
         InterpretedSystem {
@@ -232,12 +242,74 @@ impl DaeSystem for InterpretedSystem {
         self.sparse(&self.c.leading_jacobian, self.inputs(0.0, y, &[], z), j)
     }
     fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
-        self.dense(&self.c.constraints, self.inputs(t, y, &[], &[]), g)
+        match self.c.accel {
+            Some(_) => crate::accel::constraints(self, t, y, g),
+            None => self.dense(&self.c.constraints, self.inputs(t, y, &[], &[]), g),
+        }
     }
     fn constraints_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
-        self.sparse(&self.c.constraints_jacobian, self.inputs(t, y, &[], &[]), j)
+        match self.c.accel {
+            Some(_) => crate::accel::constraints_jacobian(self, t, y, j),
+            None => self.sparse(&self.c.constraints_jacobian, self.inputs(t, y, &[], &[]), j),
+        }
     }
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.dense(&self.c.invariants, self.inputs(t, y, &[], &[]), out)
+    }
+}
+
+impl InterpretedSystem {
+    fn accel_tapes(&self) -> &crate::compile::AccelTapes {
+        self.c
+            .accel
+            .as_ref()
+            .expect("the acceleration tapes exist for a model with a mass matrix")
+    }
+}
+
+impl crate::accel::AccelParts for InterpretedSystem {
+    fn accel_dim(&self) -> usize {
+        self.c.accel.as_ref().map_or(0, |a| a.n_diff)
+    }
+    fn accel_leading(&self, y: &[f64], out: &mut DMatrix<f64>) {
+        self.sparse(
+            &self.accel_tapes().leading,
+            self.inputs(0.0, y, &[], &[]),
+            out,
+        )
+    }
+    fn accel_rhs(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        self.dense(&self.accel_tapes().rhs, self.inputs(t, y, &[], &[]), out)
+    }
+    fn accel_rhs_jacobian(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>) {
+        self.sparse(
+            &self.accel_tapes().rhs_jacobian,
+            self.inputs(t, y, &[], &[]),
+            out,
+        )
+    }
+    fn accel_leading_jacobian(&self, y: &[f64], z: &[f64], out: &mut DMatrix<f64>) {
+        self.sparse(
+            &self.accel_tapes().leading_jacobian,
+            self.inputs(0.0, y, &[], z),
+            out,
+        )
+    }
+    fn chain_at(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        self.dense(&self.c.constraints, self.inputs(t, y, yp, &[]), out)
+    }
+    fn chain_jacobian_at(&self, t: f64, y: &[f64], yp: &[f64], out: &mut DMatrix<f64>) {
+        self.sparse(
+            &self.c.constraints_jacobian,
+            self.inputs(t, y, yp, &[]),
+            out,
+        )
+    }
+    fn chain_der(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>) {
+        self.sparse(
+            &self.accel_tapes().chain_der,
+            self.inputs(t, y, &[], &[]),
+            out,
+        )
     }
 }

@@ -8,6 +8,7 @@
 //! Jacobians) → [`interp`] or the `dae!` macro → [`system::DaeSystem`].
 #![warn(missing_docs)]
 
+pub mod accel;
 pub mod check;
 pub mod compile;
 pub mod derive;

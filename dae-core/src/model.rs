@@ -58,13 +58,22 @@ pub struct VarDef {
     pub span: Span,
 }
 
-/// `coef · der(var) = rhs`.
+/// `coef · der(var) + Σ c_k · der(u_k) = rhs`.
+///
+/// Most dynamic equations give the derivative of one unknown. A row of a
+/// mass matrix `M(q) v' = f` holds several; it is then assigned to one of
+/// them (`var`, by a matching of equations to derivatives) and the others are
+/// in `coupled`.
 #[derive(Clone, Debug)]
 pub struct Dynamic {
-    /// The differential unknown this equation gives the derivative of.
+    /// The differential unknown this equation is assigned to.
     pub var: usize,
-    /// Scalar coefficient (free of derivatives).
+    /// Coefficient of `der(var)` (free of derivatives, of `t` and of
+    /// algebraic unknowns).
     pub coef: Expr,
+    /// The other der() terms `(unknown, coefficient)`, ascending; empty
+    /// unless the equation is a row of a mass matrix.
+    pub coupled: Vec<(usize, Expr)>,
     /// Right-hand side.
     pub rhs: Expr,
     /// Span of the equation.
@@ -315,8 +324,10 @@ impl Model {
         }
         scope.mode = Mode::Model;
         let scope = scope;
-        let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
         let mut constraints = Vec::new();
+        // Dynamic equations as written: every der() term with its
+        // coefficient, assigned to unknowns below.
+        let mut written: Vec<(Vec<(usize, Expr)>, Expr, Span)> = Vec::new();
         // An equation that failed to lower already has its error; counting
         // equations afterwards would only add a cascade of "too few".
         let mut lowered_all = true;
@@ -339,64 +350,131 @@ impl Model {
                     _ => None,
                 })
                 .collect();
-            match ders.as_slice() {
-                [] => {
-                    let g = if lhs.is_zero() { rhs } else { expr::sub(&lhs, &rhs) };
-                    if g.any_sym(&|s| matches!(s, Sym::Var(_))) {
-                        constraints.push(ConstraintDef { expr: g, span: eq_span });
-                    } else {
-                        errors.push(eq_span, "this equation involves no unknown");
-                    }
-                }
-                [j] => {
-                    let coef = expr::diff(&r, Sym::Der(*j as u32));
-                    if coef.any_sym(&|s| matches!(s, Sym::Der(_))) {
-                        errors.push(
-                            eq.lhs.span(),
-                            format!(
-                                "`der({})` must appear linearly: write `coef * der({}) = rhs` with a coefficient free of der()",
-                                vars[*j].name, vars[*j].name
-                            ),
-                        );
-                        lowered_all = false;
-                        continue;
-                    }
-                    let f = expr::neg(&expr::subs(&r, &|s| matches!(s, Sym::Der(_)).then(Expr::zero)));
-                    if coef.contains(Sym::Time) {
-                        errors.push(
-                            eq_span,
-                            format!("the coefficient of `der({})` may not depend on time `t`", vars[*j].name),
-                        );
-                        lowered_all = false;
-                        continue;
-                    }
-                    if coef.is_zero() {
-                        errors.push(eq_span, format!("the coefficient of `der({})` vanishes", vars[*j].name));
-                        lowered_all = false;
-                        continue;
-                    }
-                    if dynamics[*j].is_some() {
-                        errors.push(
-                            eq_span,
-                            format!("a second equation for `der({})`: each differential unknown has exactly one", vars[*j].name),
-                        );
-                        lowered_all = false;
-                        continue;
-                    }
-                    dynamics[*j] = Some(Dynamic {
-                        var: *j,
-                        coef,
-                        rhs: f,
+            if ders.is_empty() {
+                let g = if lhs.is_zero() {
+                    rhs
+                } else {
+                    expr::sub(&lhs, &rhs)
+                };
+                if g.any_sym(&|s| matches!(s, Sym::Var(_))) {
+                    constraints.push(ConstraintDef {
+                        expr: g,
                         span: eq_span,
                     });
+                } else {
+                    errors.push(eq_span, "this equation involves no unknown");
                 }
-                _ => errors.push(
-                    eq.lhs.span(),
+                continue;
+            }
+            let mut terms = Vec::new();
+            let mut ok = true;
+            for &j in &ders {
+                let coef = expr::diff(&r, Sym::Der(j as u32));
+                let name = &vars[j].name;
+                let problem = if coef.any_sym(&|s| matches!(s, Sym::Der(_))) {
+                    Some(if ders.len() == 1 {
+                        format!("`der({name})` must appear linearly: write `coef * der({name}) = rhs` with a coefficient free of der()")
+                    } else {
+                        format!("`der({name})` must appear linearly: write `a*der({name}) + b*der(…) = rhs` with coefficients free of der()")
+                    })
+                } else if coef.contains(Sym::Time) {
+                    Some(format!(
+                        "the coefficient of `der({name})` may not depend on time `t`"
+                    ))
+                } else if coef.is_zero() {
+                    Some(format!("the coefficient of `der({name})` vanishes"))
+                } else if let Some(a) =
+                    (n_diff..vars.len()).find(|&a| coef.contains(Sym::Var(a as u32)))
+                {
+                    Some(format!(
+                        "the coefficient of `der({name})` depends on the algebraic unknown `{}`: a coefficient of der() may depend on parameters and positions only",
+                        vars[a].name
+                    ))
+                } else {
+                    None
+                };
+                if let Some(msg) = problem {
+                    errors.push(eq_span, msg);
+                    ok = false;
+                    break;
+                }
+                terms.push((j, coef));
+            }
+            if !ok {
+                lowered_all = false;
+                continue;
+            }
+            let f = expr::neg(&expr::subs(&r, &|s| {
+                matches!(s, Sym::Der(_)).then(Expr::zero)
+            }));
+            written.push((terms, f, eq_span));
+        }
+        // Coupled unknowns: those whose der() shares an equation with
+        // another der() (a mass matrix). A coefficient in such an equation
+        // may not depend on a coupled unknown (a velocity).
+        let mut coupled = vec![false; n_diff];
+        for (terms, _, _) in written.iter().filter(|(t, _, _)| t.len() > 1) {
+            for &(j, _) in terms {
+                coupled[j] = true;
+            }
+        }
+        for (terms, _, span) in written.iter().filter(|(t, _, _)| t.len() > 1) {
+            for (j, c) in terms {
+                if let Some(k) = (0..n_diff).find(|&k| coupled[k] && c.contains(Sym::Var(k as u32)))
+                {
+                    errors.push(
+                        *span,
+                        format!(
+                            "the coefficient of `der({})` depends on `{}`, whose der() appears with others (a velocity): a mass matrix may depend on parameters and positions only",
+                            vars[*j].name, vars[k].name
+                        ),
+                    );
+                    lowered_all = false;
+                }
+            }
+        }
+        // Assign equations to unknowns: a perfect matching between the
+        // dynamic equations and the derivatives they contain (a structurally
+        // nonsingular mass matrix has one).
+        let adj: Vec<Vec<usize>> = written
+            .iter()
+            .map(|(terms, _, _)| terms.iter().map(|(j, _)| *j).collect())
+            .collect();
+        let assign = crate::index::max_matching(&adj, n_diff);
+        let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
+        let mut placed = vec![false; written.len()];
+        for (j, owner) in assign.iter().enumerate() {
+            if let Some(e) = owner {
+                let (terms, rhs, span) = &written[*e];
+                placed[*e] = true;
+                let coef = terms.iter().find(|(k, _)| *k == j).map(|(_, c)| c.clone());
+                dynamics[j] = Some(Dynamic {
+                    var: j,
+                    coef: coef.unwrap_or_else(Expr::one),
+                    coupled: terms.iter().filter(|(k, _)| *k != j).cloned().collect(),
+                    rhs: rhs.clone(),
+                    span: *span,
+                });
+            }
+        }
+        for (e, (terms, _, span)) in written.iter().enumerate() {
+            if placed[e] {
+                continue;
+            }
+            lowered_all = false;
+            if let [(j, _)] = terms.as_slice() {
+                errors.push(
+                    *span,
+                    format!("a second equation for `der({})`: each differential unknown has exactly one", vars[*j].name),
+                );
+            } else {
+                errors.push(
+                    *span,
                     format!(
-                        "a dynamic equation gives the derivative of one unknown; this one has der() of {}",
-                        ders.iter().map(|&j| format!("`{}`", vars[j].name)).collect::<Vec<_>>().join(", ")
+                        "structurally singular mass matrix: the equations with der() of {} give fewer independent derivatives than equations",
+                        terms.iter().map(|(j, _)| format!("`{}`", vars[*j].name)).collect::<Vec<_>>().join(", ")
                     ),
-                ),
+                );
             }
         }
         let mut dyns = Vec::new();
@@ -549,10 +627,13 @@ impl Model {
         crate::print::text(e, &|s| self.sym_name(s, &[]))
     }
 
-    /// The unknowns' rates `der(u) = f/c` for the total time derivative.
-    /// `Err(s)` when `s` has no rate (an algebraic unknown).
+    /// The unknowns' rates `der(u) = f/c` for the total time derivative;
+    /// an unknown of a mass matrix keeps its `der(u)` (its rate is
+    /// `M⁻¹ f`, never formed symbolically). `Err(s)` when `s` has no rate
+    /// (an algebraic unknown, or a der() itself).
     pub fn rate(&self, s: Sym) -> Result<Option<Expr>, Sym> {
         match s {
+            Sym::Var(i) if self.is_coupled(i as usize) => Ok(Some(Expr::der(i as usize))),
             Sym::Var(i) if (i as usize) < self.n_diff => {
                 let d = &self.dynamics[i as usize];
                 Ok(Some(expr::div(&d.rhs, &d.coef)))
@@ -561,6 +642,69 @@ impl Model {
             Sym::Time => Ok(Some(Expr::one())),
             _ => Err(s),
         }
+    }
+
+    /// `true` when differential unknown `j` is an unknown of a mass matrix:
+    /// its der() shares an equation with another der().
+    pub fn is_coupled(&self, j: usize) -> bool {
+        j < self.n_diff
+            && self.dynamics.iter().any(|d| {
+                !d.coupled.is_empty() && (d.var == j || d.coupled.iter().any(|(k, _)| *k == j))
+            })
+    }
+
+    /// `true` when any dynamic equation holds a mass-matrix row.
+    pub fn has_mass_matrix(&self) -> bool {
+        self.dynamics.iter().any(|d| !d.coupled.is_empty())
+    }
+
+    /// The mass-matrix block of coupled unknown `j`: the unknowns linked to
+    /// it through shared equations, ascending (empty if `j` is not coupled).
+    pub fn block(&self, j: usize) -> Vec<usize> {
+        if !self.is_coupled(j) {
+            return Vec::new();
+        }
+        let mut block = vec![j];
+        let mut grew = true;
+        while grew {
+            grew = false;
+            for d in &self.dynamics {
+                let row: Vec<usize> = std::iter::once(d.var)
+                    .chain(d.coupled.iter().map(|(k, _)| *k))
+                    .collect();
+                if row.iter().any(|k| block.contains(k)) {
+                    for k in row {
+                        if !block.contains(&k) {
+                            block.push(k);
+                            grew = true;
+                        }
+                    }
+                }
+            }
+        }
+        block.sort_unstable();
+        block
+    }
+
+    /// `true` when `e` depends on `s`: directly, or through the der() of a
+    /// mass-matrix unknown, whose value `M⁻¹ f` depends on everything the
+    /// equations of its block contain.
+    pub fn involves(&self, e: &Expr, s: Sym) -> bool {
+        if e.contains(s) {
+            return true;
+        }
+        e.symbols().into_iter().any(|d| match d {
+            Sym::Der(j) if self.is_coupled(j as usize) => {
+                let block = self.block(j as usize);
+                block.iter().any(|&k| {
+                    let dy = &self.dynamics[k];
+                    dy.rhs.contains(s)
+                        || dy.coef.contains(s)
+                        || dy.coupled.iter().any(|(_, c)| c.contains(s))
+                })
+            }
+            _ => false,
+        })
     }
 
     /// Number of algebraic unknowns.

@@ -6,7 +6,7 @@
 //! Output depends on nothing but its input (no hash-map iteration), so the
 //! same model always expands to the same tokens.
 
-use dae_core::compile::{Compiled, Sparse};
+use dae_core::compile::{AccelTapes, Compiled, Sparse};
 use dae_core::derive::Derived;
 use dae_core::dsl::Errors;
 use dae_core::expr::Sym;
@@ -990,11 +990,27 @@ fn system_impl(
     };
 
     let rhs = t_y_slice("rhs", dense(&c.rhs, all));
-    let constraints = t_y_slice("constraints", dense(&c.constraints, all));
+    let (constraints, constraints_jacobian, accel) = match &c.accel {
+        None => (
+            t_y_slice("constraints", dense(&c.constraints, all)),
+            t_y_matrix("constraints_jacobian", sparse(&c.constraints_jacobian, all)),
+            TokenStream::new(),
+        ),
+        Some(a) => accel_impl(
+            c,
+            a,
+            ty,
+            &allow,
+            Emit {
+                dense: &dense,
+                sparse: &sparse,
+                t_y_slice: &t_y_slice,
+                t_y_matrix: &t_y_matrix,
+            },
+        ),
+    };
     let invariants = t_y_slice("invariants", dense(&c.invariants, all));
     let rhs_jacobian = t_y_matrix("rhs_jacobian", sparse(&c.rhs_jacobian, all));
-    let constraints_jacobian =
-        t_y_matrix("constraints_jacobian", sparse(&c.constraints_jacobian, all));
 
     let residual = {
         let b = dense(&c.residual, Available { yp: true, ..all });
@@ -1058,6 +1074,8 @@ fn system_impl(
             #invariants
         }
 
+        #accel
+
         #[automatically_derived]
         #allow
         impl ::dae::__private::StaticSize for #ty {
@@ -1066,6 +1084,103 @@ fn system_impl(
             const CONSTRAINTS: usize = #chain;
         }
     }
+}
+
+/// The printers [`accel_impl`] shares with [`system_impl`].
+struct Emit<'a> {
+    dense: &'a dyn Fn(&Tape, Available) -> Body,
+    sparse: &'a dyn Fn(&Sparse, Available) -> Body,
+    t_y_slice: &'a dyn Fn(&str, Body) -> TokenStream,
+    t_y_matrix: &'a dyn Fn(&str, Body) -> TokenStream,
+}
+
+/// For a model with a mass matrix: `constraints` and
+/// `constraints_jacobian` eliminate the accelerations through
+/// `dae_core::accel`, and the formulation implements its `AccelParts`.
+fn accel_impl(
+    c: &Compiled,
+    a: &AccelTapes,
+    ty: &Ident,
+    allow: &TokenStream,
+    emit: Emit<'_>,
+) -> (TokenStream, TokenStream, TokenStream) {
+    let all = Available {
+        t: true,
+        yp: false,
+        z: false,
+    };
+    let with_yp = Available { yp: true, ..all };
+    let no_t = Available { t: false, ..all };
+    let constraints = quote! {
+        fn constraints(&self, t: f64, y: &[f64], out: &mut [f64]) {
+            ::dae::__private::accel::constraints(self, t, y, out)
+        }
+    };
+    let constraints_jacobian = quote! {
+        fn constraints_jacobian(&self, t: f64, y: &[f64], out: &mut ::dae::__private::DMatrix<f64>) {
+            ::dae::__private::accel::constraints_jacobian(self, t, y, out)
+        }
+    };
+    let n_diff = index(a.n_diff);
+    let rhs = (emit.t_y_slice)("accel_rhs", (emit.dense)(&a.rhs, all));
+    let rhs_jacobian = (emit.t_y_matrix)("accel_rhs_jacobian", (emit.sparse)(&a.rhs_jacobian, all));
+    let chain_der = (emit.t_y_matrix)("chain_der", (emit.sparse)(&a.chain_der, all));
+    let leading = {
+        let b = (emit.sparse)(&a.leading, no_t);
+        let (y, stmts) = (param("y", b.uses.y), b.stmts);
+        quote! {
+            fn accel_leading(&self, #y: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
+        }
+    };
+    let leading_jacobian = {
+        let b = (emit.sparse)(&a.leading_jacobian, Available { z: true, ..no_t });
+        let (y, z, stmts) = (param("y", b.uses.y), param("z", b.uses.z), b.stmts);
+        quote! {
+            fn accel_leading_jacobian(&self, #y: &[f64], #z: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
+        }
+    };
+    let chain_at = {
+        let b = (emit.dense)(&c.constraints, with_yp);
+        let (t, y, yp, out, stmts) = (
+            param("t", b.uses.t),
+            param("y", b.uses.y),
+            param("yp", b.uses.yp),
+            param("out", b.uses.out),
+            b.stmts,
+        );
+        quote! {
+            fn chain_at(&self, #t: f64, #y: &[f64], #yp: &[f64], #out: &mut [f64]) { #stmts }
+        }
+    };
+    let chain_jacobian_at = {
+        let b = (emit.sparse)(&c.constraints_jacobian, with_yp);
+        let (t, y, yp, stmts) = (
+            param("t", b.uses.t),
+            param("y", b.uses.y),
+            param("yp", b.uses.yp),
+            b.stmts,
+        );
+        quote! {
+            fn chain_jacobian_at(&self, #t: f64, #y: &[f64], #yp: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
+        }
+    };
+    let parts = quote! {
+        #[automatically_derived]
+        #allow
+        impl ::dae::__private::accel::AccelParts for #ty {
+            fn accel_dim(&self) -> usize {
+                #n_diff
+            }
+            #leading
+            #rhs
+            #rhs_jacobian
+            #leading_jacobian
+            #chain_at
+            #chain_jacobian_at
+            #chain_der
+        }
+    };
+    (constraints, constraints_jacobian, parts)
 }
 
 /// `fn derived_values(this: &Model) -> [f64; K]`: the derived parameters

@@ -84,6 +84,11 @@ pub(crate) struct Rows {
     pub(crate) exact: Vec<bool>,
     /// Weights of the differential rows.
     pub(crate) weight: Vec<f64>,
+    /// `true` for the formulation's constraint rows. Those with a non-zero
+    /// row of `E` (the acceleration level `G(q) v' + … = 0` of a model with
+    /// a mass matrix) are conditions on `y'`, not on `y`: they are weighted
+    /// like differential rows, not held exactly.
+    constraint: Vec<bool>,
 }
 
 impl Rows {
@@ -95,13 +100,29 @@ impl Rows {
             .map(|r| matches!(r.kind, RowKind::Constraint { .. }))
             .collect();
         let weight = vec![1.0; exact.len()];
-        Rows { exact, weight }
+        Rows {
+            constraint: exact.clone(),
+            exact,
+            weight,
+        }
+    }
+
+    /// No rows: what a square LU reads (nothing).
+    pub(crate) fn square() -> Self {
+        Rows {
+            exact: Vec::new(),
+            weight: Vec::new(),
+            constraint: Vec::new(),
+        }
     }
 
     /// Weights from the leading matrix `e` (M×N) and the unknowns' error
     /// weights `w` (length N): `w_j* / |E_ij*|`, `j*` the largest entry of
     /// row `i` (`1/|E_ij*|` when `w_j*` is zero, one for a zero row).
     pub(crate) fn update(&mut self, e: &DMatrix<f64>, w: &[f64]) {
+        for (i, &constraint) in self.constraint.iter().enumerate() {
+            self.exact[i] = constraint && (0..e.ncols()).all(|j| e[(i, j)] == 0.0);
+        }
         for (i, (weight, &exact)) in self.weight.iter_mut().zip(&self.exact).enumerate() {
             if exact {
                 *weight = 1.0;

@@ -170,11 +170,9 @@ impl Integrator<'_> {
         self.stats.factorizations += 1;
         self.eta = 100.0;
         self.hb_factored = 0.0;
-        let rows = Rows {
-            exact: Vec::new(),
-            weight: Vec::new(),
-        };
-        self.lu.factor(&rows).map_err(|_| Failure::Singular)?;
+        self.lu
+            .factor(&Rows::square())
+            .map_err(|_| Failure::Singular)?;
         self.hb_factored = hb;
         Ok(())
     }
