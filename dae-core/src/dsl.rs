@@ -29,6 +29,10 @@
 //!   equations, invariants and later definitions
 //!   ([`ModelAst::definitions`]).
 //!
+//! A dynamic equation may hold several `der()`, linearly, with
+//! coefficients of parameters and positions: the rows of a mass matrix,
+//! `(mc + m) * der(vs) + m * der(vu) = 0;` (see [`crate::model::Dynamic`]).
+//!
 //! Sections may come in any order; the parser keeps each as written and
 //! [`crate::model::Model::check`] resolves the names.
 //!

@@ -80,6 +80,10 @@ pub struct Dynamic {
     pub span: Span,
 }
 
+/// A dynamic equation as written, before it is assigned to an unknown: its
+/// der() terms `(unknown, coefficient)`, right-hand side and span.
+type Written = (Vec<(usize, Expr)>, Expr, Span);
+
 /// `0 = expr`.
 #[derive(Clone, Debug)]
 pub struct ConstraintDef {
@@ -327,7 +331,7 @@ impl Model {
         let mut constraints = Vec::new();
         // Dynamic equations as written: every der() term with its
         // coefficient, assigned to unknowns below.
-        let mut written: Vec<(Vec<(usize, Expr)>, Expr, Span)> = Vec::new();
+        let mut written: Vec<Written> = Vec::new();
         // An equation that failed to lower already has its error; counting
         // equations afterwards would only add a cascade of "too few".
         let mut lowered_all = true;
@@ -383,15 +387,13 @@ impl Model {
                     ))
                 } else if coef.is_zero() {
                     Some(format!("the coefficient of `der({name})` vanishes"))
-                } else if let Some(a) =
-                    (n_diff..vars.len()).find(|&a| coef.contains(Sym::Var(a as u32)))
-                {
-                    Some(format!(
-                        "the coefficient of `der({name})` depends on the algebraic unknown `{}`: a coefficient of der() may depend on parameters and positions only",
-                        vars[a].name
-                    ))
                 } else {
-                    None
+                    (n_diff..vars.len())
+                        .find(|&a| coef.contains(Sym::Var(a as u32)))
+                        .map(|a| format!(
+                            "the coefficient of `der({name})` depends on the algebraic unknown `{}`: a coefficient of der() may depend on parameters and positions only",
+                            vars[a].name
+                        ))
                 };
                 if let Some(msg) = problem {
                     errors.push(eq_span, msg);

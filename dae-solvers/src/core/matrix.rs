@@ -486,6 +486,7 @@ mod tests {
         Rows {
             exact: exact.to_vec(),
             weight: exact.iter().map(|_| 0.5 + next().abs()).collect(),
+            constraint: exact.to_vec(),
         }
     }
 
