@@ -344,6 +344,13 @@ fn constraint_row(g: &Expr, level: usize, source: usize) -> SymRow {
         level: level as u8,
         source: source as u16,
     };
+    if !g.any_sym(&|s| matches!(s, Sym::Der(_))) {
+        return SymRow {
+            kind,
+            e: Vec::new(),
+            f: g.clone(),
+        };
+    }
     let ders: Vec<u32> = g
         .symbols()
         .into_iter()

@@ -84,8 +84,9 @@ pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
     // A level determines multipliers when it contains one, directly or
     // through the der() of a mass-matrix unknown (`M v' = f − Gᵀλ`: the
     // acceleration-level constraint `G v' + … = 0` fixes λ).
+    let n_diff = model.n_diff;
     let alg =
-        |e: &Expr| (model.n_diff..model.vars.len()).any(|a| model.involves(e, Sym::Var(a as u32)));
+        |e: &Expr| model.involves_any(e, &|s| matches!(s, Sym::Var(i) if i as usize >= n_diff));
     let mut chains = Vec::new();
     for (i, c) in model.constraints.iter().enumerate() {
         let mut levels = vec![c.expr.clone()];

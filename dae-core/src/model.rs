@@ -129,6 +129,10 @@ pub struct Model {
     pub n_diff: usize,
     /// Dynamic equations, one per differential unknown, in unknown order.
     pub dynamics: Vec<Dynamic>,
+    /// `coupled[j]`: differential unknown `j` is an unknown of a mass
+    /// matrix (its der() shares an equation with another der()). Empty when
+    /// the model has no mass matrix.
+    pub coupled: Vec<bool>,
     /// Constraints in order.
     pub constraints: Vec<ConstraintDef>,
     /// Invariants in order.
@@ -594,6 +598,11 @@ impl Model {
             vars,
             n_diff,
             dynamics: dyns,
+            coupled: if coupled.iter().any(|&c| c) {
+                coupled
+            } else {
+                Vec::new()
+            },
             constraints,
             invariants,
             requested: ast.formulations.clone(),
@@ -649,15 +658,39 @@ impl Model {
     /// `true` when differential unknown `j` is an unknown of a mass matrix:
     /// its der() shares an equation with another der().
     pub fn is_coupled(&self, j: usize) -> bool {
-        j < self.n_diff
-            && self.dynamics.iter().any(|d| {
-                !d.coupled.is_empty() && (d.var == j || d.coupled.iter().any(|(k, _)| *k == j))
-            })
+        self.coupled.get(j).copied().unwrap_or(false)
     }
 
     /// `true` when any dynamic equation holds a mass-matrix row.
     pub fn has_mass_matrix(&self) -> bool {
-        self.dynamics.iter().any(|d| !d.coupled.is_empty())
+        !self.coupled.is_empty()
+    }
+
+    /// `true` when `e` depends on any symbol `pred` selects, directly or
+    /// through a mass matrix (see [`Model::involves`]).
+    pub fn involves_any(&self, e: &Expr, pred: &dyn Fn(Sym) -> bool) -> bool {
+        e.any_sym(pred) || self.involves_through_mass(e, pred)
+    }
+
+    /// Whether `e` holds the der() of a mass-matrix unknown whose block's
+    /// equations contain a symbol of `pred`.
+    fn involves_through_mass(&self, e: &Expr, pred: &dyn Fn(Sym) -> bool) -> bool {
+        self.has_mass_matrix()
+            && e.symbols().into_iter().any(|d| match d {
+                Sym::Der(j) if self.is_coupled(j as usize) => self
+                    .block(j as usize)
+                    .iter()
+                    .any(|&k| self.row_involves(k, pred)),
+                _ => false,
+            })
+    }
+
+    /// Whether the dynamic row of unknown `k` contains a symbol of `pred`.
+    fn row_involves(&self, k: usize, pred: &dyn Fn(Sym) -> bool) -> bool {
+        let d = &self.dynamics[k];
+        d.rhs.any_sym(pred)
+            || d.coef.any_sym(pred)
+            || d.coupled.iter().any(|(_, c)| c.any_sym(pred))
     }
 
     /// The mass-matrix block of coupled unknown `j`: the unknowns linked to
@@ -692,21 +725,7 @@ impl Model {
     /// mass-matrix unknown, whose value `M⁻¹ f` depends on everything the
     /// equations of its block contain.
     pub fn involves(&self, e: &Expr, s: Sym) -> bool {
-        if e.contains(s) {
-            return true;
-        }
-        e.symbols().into_iter().any(|d| match d {
-            Sym::Der(j) if self.is_coupled(j as usize) => {
-                let block = self.block(j as usize);
-                block.iter().any(|&k| {
-                    let dy = &self.dynamics[k];
-                    dy.rhs.contains(s)
-                        || dy.coef.contains(s)
-                        || dy.coupled.iter().any(|(_, c)| c.contains(s))
-                })
-            }
-            _ => false,
-        })
+        e.contains(s) || self.involves_through_mass(e, &|x| x == s)
     }
 
     /// Number of algebraic unknowns.
