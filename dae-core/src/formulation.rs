@@ -135,7 +135,17 @@ pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String
         "psi0" if model.has_mass_matrix() => Err(
             "`psi0` projects the multipliers out of the velocity rows and finds them in the acceleration-level constraint; with a mass matrix that constraint holds `v'`, not the multipliers (`M` is not inverted symbolically), so nothing would determine them: use `psi1`, `rcd0` or `ovd0`".into(),
         ),
-        "psi1" | "psi0" => selector_split(model, an).map(|_| ()),
+        "psi1" | "psi0" => {
+            let split = selector_split(model, an)?;
+            let timed = |s: &[Vec<Expr>]| s.iter().flatten().any(|e| e.contains(Sym::Time));
+            if timed(&split.sq) || (name == "psi0" && timed(&split.sv)) {
+                return Err(format!(
+                    "the symbolic selector depends on `t` (a time-dependent constraint) and `E(y)` may not; `dae run` and `dae sweep` run `{name}` with a numerical selector (from `ovd{}`)",
+                    &name[3..]
+                ));
+            }
+            Ok(())
+        }
         other => Err(format!("unknown formulation `{other}`")),
     }
 }
