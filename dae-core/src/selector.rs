@@ -160,7 +160,11 @@ pub enum SelectorError {
         /// What was given.
         given: String,
     },
-    /// No positions with more unknowns than constraints.
+    /// A model with a mass matrix has no `psi0`.
+    #[error("`psi0` does not apply to a model with a mass matrix: its acceleration level holds `v'`, not the multipliers")]
+    MassMatrix,
+    /// Not a mechanical system (position constraints differentiated twice),
+    /// or no positions with more unknowns than constraints.
     #[error("`{name}` needs positions and velocities with more unknowns than constraints ({positions} positions, {velocities} velocities, {constraints} constraints)")]
     NotMechanical {
         /// The projected formulation.
@@ -191,6 +195,26 @@ impl<S: DaeSystem> NumericSelector<S> {
         let level_rows =
             |l: u8| -> Vec<usize> { (0..k).filter(|&r| src.constraints[r].level == l).collect() };
         let (rows0, rows1) = (level_rows(0), level_rows(1));
+        // A mechanical system: every constraint's chain ends at level 2.
+        let sources: std::collections::BTreeSet<u16> =
+            src.constraints.iter().map(|c| c.source).collect();
+        let mechanical = !sources.is_empty()
+            && sources.iter().all(|&s| {
+                src.constraints
+                    .iter()
+                    .filter(|c| c.source == s)
+                    .map(|c| c.level)
+                    .max()
+                    == Some(2)
+            });
+        if !mechanical {
+            return Err(SelectorError::NotMechanical {
+                name: which.name(),
+                positions: 0,
+                velocities: 0,
+                constraints: rows0.len(),
+            });
+        }
         // Structure: non-zero columns at y0 and two perturbed points.
         let mut seen = DMatrix::<bool>::from_element(k, n, false);
         let mut jac = DMatrix::zeros(k, n);
@@ -216,6 +240,18 @@ impl<S: DaeSystem> NumericSelector<S> {
         let v: Vec<usize> = (0..n)
             .filter(|&j| differential(j) && !q.contains(&j) && in_rows(&rows1, j))
             .collect();
+        // psi0 finds the multipliers in the acceleration level; with a mass
+        // matrix (a velocity row of E with several entries) that level holds
+        // v', not λ (see `formulation::applicable`).
+        if which == Projected::Psi0 {
+            let mut e = DMatrix::zeros(src.equations(), n);
+            inner.leading(y0, &mut e);
+            if v.iter()
+                .any(|&r| v.iter().filter(|&&c| e[(r, c)] != 0.0).count() > 1)
+            {
+                return Err(SelectorError::MassMatrix);
+            }
+        }
         let m = rows0.len();
         if q.len() <= m
             || v.len() < rows1.len()
