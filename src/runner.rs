@@ -4,6 +4,7 @@
 //! `dae run` and `dae sweep`.
 
 use crate::reference::data::{Reference, Scaling, UseError};
+use dae_core::selector::SelectorKind;
 use dae_core::system::{DaeSystem, Model, VarKind};
 use dae_solvers::init::{self, InitMode, InitOptions};
 use dae_solvers::{Options, Problem, SolveError, Stats};
@@ -167,6 +168,10 @@ pub struct RunRecord {
     /// Solution at the sample times (for figures; not serialised).
     #[serde(skip)]
     pub trajectory: Trajectory,
+    /// For `psi1`/`psi0`: `"symbolic"` or `"numerical"`, the selector the
+    /// run used (see [`run`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub selector: Option<&'static str>,
 }
 
 /// The accuracy verdict of a run that reached the end of its horizon.
@@ -307,7 +312,27 @@ pub enum RunError {
 
 /// Run one integration. `Err` only for bad input; solver failures are an
 /// `Ok` record with `status = "error"`.
+///
+/// `psi1` and `psi0` run with the model's symbolic selector where it has
+/// one; where it has none (a time-dependent constraint), or where a run with
+/// the symbolic selector stops with a singular iteration matrix or a Newton
+/// failure (the selector loses rank at the start, or where the motion takes
+/// it), the run is made again with a
+/// selector computed numerically ([`dae_core::selector`]). The record's
+/// `selector` says which.
 pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
+    let first = run_with(spec, false)?;
+    let singular = first
+        .error
+        .as_ref()
+        .is_some_and(|e| matches!(e.kind.as_str(), "singular_matrix" | "newton_failure"));
+    if singular && first.selector == Some(SelectorKind::Symbolic.as_str()) {
+        return run_with(spec, true);
+    }
+    Ok(first)
+}
+
+fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> {
     let solver = dae_solvers::solver_by_name(spec.solver)
         .ok_or_else(|| RunError::UnknownSolver(spec.solver.into()))?;
     dae_solvers::options::check_uniform(spec.tol).map_err(|issue| RunError::Tolerance {
@@ -319,7 +344,8 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
         let unknowns: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
         r.check_use(&unknowns, spec.t0, spec.t_end, spec.check)?;
     }
-    let sys = spec.model.formulation(spec.formulation)?;
+    let (sys, selector) =
+        dae_core::selector::formulation(spec.model, spec.formulation, numerical, spec.t0, &[])?;
     let info = sys.info().clone();
     solver
         .accepts(&info)
@@ -357,6 +383,7 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
         invariant_drift: Named::default(),
         init: None,
         trajectory: Trajectory::default(),
+        selector: selector.map(SelectorKind::as_str),
     };
     let fail = |mut record: RunRecord, e: SolveError| {
         record.status = "error";

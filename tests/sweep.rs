@@ -49,6 +49,7 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
         invariant_drift: Named(vec![("energy".into(), 1e-7)]),
         init: None,
         trajectory: Trajectory::default(),
+        selector: None,
     }
 }
 

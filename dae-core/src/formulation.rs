@@ -29,7 +29,10 @@
 //! general it can lose rank where `det(G_P) = 0` — the spherical pendulum's
 //! `[[z, 0, −x], [0, z, −y]]` at `z = 0`, the double pendulum's at `y1 = 0` or
 //! `y2 = y1` — and a solver meeting such a configuration reports a singular
-//! iteration matrix.
+//! iteration matrix. A selector that would depend on `t` (a time-dependent
+//! constraint) is refused: `E(y)` may not depend on `t`. In both cases the
+//! runner (`dae run`, `dae sweep`) runs the projected formulation with a
+//! selector computed numerically instead ([`crate::selector`]).
 
 use crate::expr::{self, Expr, Sym};
 use crate::index::{max_matching, Analysis};
@@ -117,8 +120,9 @@ const SELECTOR_BUDGET: usize = 20_000;
 /// rows of coupled systems are products over the whole coupling chain (for
 /// a chain of `n` pendulums a row touches every link), and their Jacobians
 /// grow with the square of that: at 16 links deriving `psi1` alone takes
-/// seconds and hundreds of MB. Beyond this bound the projected formulations
-/// do not apply (a run-time numeric selector is future work).
+/// seconds and hundreds of MB. Beyond this bound the model offers no
+/// symbolic projected formulations; [`crate::selector`] computes a selector
+/// numerically instead.
 pub const SELECTOR_MAX_CONSTRAINTS: usize = 8;
 
 /// Why a formulation does not apply to a model, or `Ok`.
@@ -135,7 +139,17 @@ pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String
         "psi0" if model.has_mass_matrix() => Err(
             "`psi0` projects the multipliers out of the velocity rows and finds them in the acceleration-level constraint; with a mass matrix that constraint holds `v'`, not the multipliers (`M` is not inverted symbolically), so nothing would determine them: use `psi1`, `rcd0` or `ovd0`".into(),
         ),
-        "psi1" | "psi0" => selector_split(model, an).map(|_| ()),
+        "psi1" | "psi0" => {
+            let split = selector_split(model, an)?;
+            let timed = |s: &[Vec<Expr>]| s.iter().flatten().any(|e| e.contains(Sym::Time));
+            if timed(&split.sq) || (name == "psi0" && timed(&split.sv)) {
+                return Err(format!(
+                    "the symbolic selector depends on `t` (a time-dependent constraint) and `E(y)` may not; `dae run` and `dae sweep` run `{name}` with a numerical selector (from `ovd{}`)",
+                    &name[3..]
+                ));
+            }
+            Ok(())
+        }
         other => Err(format!("unknown formulation `{other}`")),
     }
 }

@@ -21,6 +21,7 @@ pub mod lex;
 pub mod model;
 pub mod print;
 pub mod report;
+pub mod selector;
 pub mod system;
 pub mod tape;
 

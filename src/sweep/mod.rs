@@ -418,8 +418,8 @@ pub fn pairs(
         let solver = dae_solvers::solver_by_name(s)
             .ok_or_else(|| SweepError::UnknownSolver { name: s.clone() })?;
         for f in formulations {
-            let not_applicable = match model.formulation(f) {
-                Ok(sys) => solver.accepts(sys.info()).err().map(|why| why.to_string()),
+            let not_applicable = match dae_core::selector::formulation(model, f, false, 0.0, &[]) {
+                Ok((sys, _)) => solver.accepts(sys.info()).err().map(|why| why.to_string()),
                 Err(FormulationError::NotProvided { .. }) => {
                     Some("not provided by the model".to_string())
                 }
