@@ -27,6 +27,11 @@ pub(super) struct Integrator<'a> {
     budget: Budget,
     /// Constant Euler step, if any.
     fixed: Option<f64>,
+    /// Intervals of the constant step accepted so far: their end is
+    /// `t₀ + count · m h`, not a running sum (which drifts by round-off
+    /// over the 10⁵ intervals of a long run and then makes the last
+    /// interval look shorter than `m h`, a restart).
+    fixed_count: u64,
     /// Largest Euler step.
     h_max: f64,
     /// End of the last accepted interval and the best value there.
@@ -134,6 +139,7 @@ impl<'a> Integrator<'a> {
             stats: Stats::default(),
             budget: Budget::new(options.max_steps),
             fixed: options.fixed_step,
+            fixed_count: 0,
             h_max,
             t: problem.t0,
             y: problem.y0.to_vec(),
@@ -216,6 +222,9 @@ impl<'a> Integrator<'a> {
         self.y.copy_from_slice(self.sweep.node(best, self.m));
         self.t = if self.last {
             self.t_end
+        } else if self.fixed == Some(h) {
+            self.fixed_count += 1;
+            self.t0 + self.fixed_count as f64 * self.m as f64 * h
         } else {
             t + self.m as f64 * h
         };
