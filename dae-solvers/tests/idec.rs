@@ -65,7 +65,7 @@ fn test_problem_errors(idec: Idec, hs: &[f64]) -> Vec<Vec<Vec<f64>>> {
 /// the same for y5 (2.608 after two corrections on that pair). The
 /// sequence is therefore extended by two halvings (0.003125, 0.0015625),
 /// and the two finest pairs are 0.00625 → 0.003125 → 0.0015625 (measured:
-/// lowest 2.923, y5 after two corrections; highest 3.946, y1 after three).
+/// lowest 2.923, y5 after two corrections; after three 3.880 … 3.973).
 #[test]
 fn seed_orders_on_the_index2_test_problem() {
     let e = test_problem_errors(Idec { j: 3, m: 4 }, &HS_FINE);
