@@ -13,10 +13,11 @@
 //! sets how small `h` must be before every level is in its asymptotic
 //! regime: at t = 1, h = 2e-3 … 1.25e-4 suffice; over S01's 20 s the
 //! uncorrected solution's phase error is O(1) at those steps, and `--s01`
-//! runs h = 2.5e-5 … 3.90625e-7 instead (51 million Euler steps per level
-//! at the finest; about 5 minutes in release on a shared 2-core machine).
-//! At t = 20 the third correction meets the round-off floor (about 1e-8,
-//! growing like 1/h) before it is asymptotic; see docs/bench_idec.md §5.
+//! runs h = 2.5e-5 … 1.953125e-7 instead (102 million Euler steps per
+//! level at the finest; about 12 minutes in release on a shared 2-core
+//! machine). The constant-step scheme sums compensated; with plain sums
+//! the third correction met a round-off floor of 1e-8 … 5e-8 at t = 20
+//! before it was asymptotic (docs/bench_idec.md §5).
 //! The errors are against the exact solution of S01 (`PendulumExact`, the
 //! reference the harness uses).
 //!
@@ -25,6 +26,7 @@
 //! cargo run --release --example idec_pendulum -- 2.0          # another t_end
 //! cargo run --release --example idec_pendulum -- --s01        # S01, t_end = 20
 //! cargo run --release --example idec_pendulum -- --s01 --hs 1e-4,5e-5
+//! cargo run --release --example idec_pendulum -- --s01 --components  # 3.DC per component
 //! ```
 use dae::dae_solvers::idec::{Idec, Jacobian};
 use dae::models::builtin::Pendulum;
@@ -34,17 +36,27 @@ use dae::reference::PendulumExact;
 /// Euler steps at t_end = 1 (m h divides t_end for each).
 const HS: [f64; 5] = [2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4];
 /// Euler steps for `--s01` (t_end = 20; m h divides 20 for each).
-const HS_S01: [f64; 7] = [
-    2.5e-5, 1.25e-5, 6.25e-6, 3.125e-6, 1.5625e-6, 7.8125e-7, 3.90625e-7,
+const HS_S01: [f64; 8] = [
+    2.5e-5,
+    1.25e-5,
+    6.25e-6,
+    3.125e-6,
+    1.5625e-6,
+    7.8125e-7,
+    3.90625e-7,
+    1.953125e-7,
 ];
 const LEVELS: [&str; 4] = ["LIE", "1.DC", "2.DC", "3.DC"];
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let s01 = args.iter().any(|a| a == "--s01");
+    let components = args.iter().any(|a| a == "--components");
     let mut hs: Vec<f64> = if s01 { HS_S01.to_vec() } else { HS.to_vec() };
     let mut t_end = if s01 { 20.0 } else { 1.0 };
-    let mut rest = args.iter().filter(|a| *a != "--s01");
+    let mut rest = args
+        .iter()
+        .filter(|a| *a != "--s01" && *a != "--components");
     while let Some(arg) = rest.next() {
         if arg == "--hs" {
             let list = rest.next().ok_or("--hs needs a comma-separated list")?;
@@ -71,9 +83,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         // errors[h][level] = (max error of x, y, v, w; error of λ)
         let mut errors = Vec::new();
+        // last[h][i] = error of component i (x, y, v, w, λ) after the last
+        // correction.
+        let mut last = Vec::new();
         for &h in &hs {
             let started = std::time::Instant::now();
             let levels = idec.levels_with(&problem, h, Jacobian::EveryStep)?;
+            if let Some(best) = levels.last() {
+                last.push((0..5).map(|i| (best[i] - end[i]).abs()).collect::<Vec<_>>());
+            }
             errors.push(
                 levels
                     .iter()
@@ -107,6 +125,30 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 print!("{:>9}", "");
                 for (coarse, fine) in errors[k].iter().zip(&errors[k + 1]) {
                     print!(" {:>9.2}", (coarse[c] / fine[c]).log2());
+                }
+                println!();
+            }
+        }
+        if components {
+            let best = LEVELS[LEVELS.len() - 1];
+            println!("\n{name}, {best} error per component at t = {t_end}");
+            print!("{:>9}", "h");
+            for c in ["x", "y", "v", "w", "λ"] {
+                print!(" {c:>9}");
+            }
+            println!();
+            for (h, e) in hs.iter().zip(&last) {
+                print!("{h:>9.2e}");
+                for v in e {
+                    print!(" {v:>9.2e}");
+                }
+                println!();
+            }
+            println!("observed orders");
+            for pair in last.windows(2) {
+                print!("{:>9}", "");
+                for (coarse, fine) in pair[0].iter().zip(&pair[1]) {
+                    print!(" {:>9.2}", (coarse / fine).log2());
                 }
                 println!();
             }

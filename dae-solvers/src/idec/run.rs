@@ -110,6 +110,9 @@ impl<'a> Integrator<'a> {
             });
         }
         sweep.restart_at(problem.y0);
+        // Constant steps carry every level over the whole horizon: its
+        // running sums are compensated (`Sweep::compensated`).
+        sweep.compensated = options.fixed_step.is_some();
         // Index-k unknowns are measured with h^(k−1) (see the module
         // documentation, "Error estimate").
         let index_power = info
@@ -160,14 +163,18 @@ impl<'a> Integrator<'a> {
 
     /// Shorten the next interval to end exactly at `t_end` when it would
     /// pass it or leave a remainder below round-off (constant steps: below
-    /// `10⁻⁸ h`); with error control, split a remainder of less than two
-    /// intervals evenly.
+    /// `10⁻⁸ h` or the round-off of `t` itself, whichever is larger); with
+    /// error control, split a remainder of less than two intervals evenly.
     fn clip_to_end(&mut self) {
         let (t, m) = (self.t, self.m as f64);
         let rest = self.t_end - self.t;
+        let round_off = 100.0 * f64::EPSILON * t.abs().max(self.t_end.abs());
         let slack = match self.fixed {
-            Some(_) => 1e-8 * self.h,
-            None => 100.0 * f64::EPSILON * t.abs().max(self.t_end.abs()),
+            // `t₀ + n m h` is rounded at `ulp(t)`: 3.6e-15 at t = 20, more
+            // than `10⁻⁸ h` for h = 2e-7 (the last interval then looked
+            // shorter than `m h` and restarted every level).
+            Some(_) => (1e-8 * self.h).max(round_off),
+            None => round_off,
         };
         if t + m * self.h >= self.t_end - slack {
             // Keep a step that reaches `t_end` up to the slack (constant
