@@ -8,29 +8,63 @@
 //! The scheme is the seed's constant-step scheme with the global
 //! connection, but with the Jacobian evaluated at every Euler step at the
 //! step's own point (`Jacobian::EveryStep`; the seed's frozen Jacobian
-//! goes non-finite on the pendulum at t ≈ 0.5). The horizon is t = 1, not
-//! S01's t = 20: the basic solution is integrated over the whole horizon
-//! without correction, and over 20 s its phase error is O(1), outside the
-//! regime the corrections need.
+//! goes non-finite on the pendulum at t ≈ 0.5). The basic solution is
+//! integrated over the whole horizon without correction, so the horizon
+//! sets how small `h` must be before every level is in its asymptotic
+//! regime: at t = 1, h = 2e-3 … 1.25e-4 suffice; over S01's 20 s the
+//! uncorrected solution's phase error is O(1) at those steps, and `--s01`
+//! runs h = 2.5e-5 … 1.953125e-7 instead (102 million Euler steps per
+//! level at the finest; about 12 minutes in release on a shared 2-core
+//! machine). The constant-step scheme sums compensated; with plain sums
+//! the third correction met a round-off floor of 1e-8 … 5e-8 at t = 20
+//! before it was asymptotic (docs/bench_idec.md §5).
+//! The errors are against the exact solution of S01 (`PendulumExact`, the
+//! reference the harness uses).
 //!
 //! ```text
-//! cargo run --release --example idec_pendulum          # t_end = 1
-//! cargo run --release --example idec_pendulum -- 2.0   # another t_end
+//! cargo run --release --example idec_pendulum                 # t_end = 1
+//! cargo run --release --example idec_pendulum -- 2.0          # another t_end
+//! cargo run --release --example idec_pendulum -- --s01        # S01, t_end = 20
+//! cargo run --release --example idec_pendulum -- --s01 --hs 1e-4,5e-5
+//! cargo run --release --example idec_pendulum -- --s01 --components  # 3.DC per component
 //! ```
 use dae::dae_solvers::idec::{Idec, Jacobian};
 use dae::models::builtin::Pendulum;
 use dae::prelude::*;
 use dae::reference::PendulumExact;
 
-/// Euler steps (m h divides t_end = 1 for each).
+/// Euler steps at t_end = 1 (m h divides t_end for each).
 const HS: [f64; 5] = [2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4];
+/// Euler steps for `--s01` (t_end = 20; m h divides 20 for each).
+const HS_S01: [f64; 8] = [
+    2.5e-5,
+    1.25e-5,
+    6.25e-6,
+    3.125e-6,
+    1.5625e-6,
+    7.8125e-7,
+    3.90625e-7,
+    1.953125e-7,
+];
 const LEVELS: [&str; 4] = ["LIE", "1.DC", "2.DC", "3.DC"];
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let t_end: f64 = match std::env::args().nth(1) {
-        Some(s) => s.parse()?,
-        None => 1.0,
-    };
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let s01 = args.iter().any(|a| a == "--s01");
+    let components = args.iter().any(|a| a == "--components");
+    let mut hs: Vec<f64> = if s01 { HS_S01.to_vec() } else { HS.to_vec() };
+    let mut t_end = if s01 { 20.0 } else { 1.0 };
+    let mut rest = args
+        .iter()
+        .filter(|a| *a != "--s01" && *a != "--components");
+    while let Some(arg) = rest.next() {
+        if arg == "--hs" {
+            let list = rest.next().ok_or("--hs needs a comma-separated list")?;
+            hs = list.split(',').map(str::parse).collect::<Result<_, _>>()?;
+        } else {
+            t_end = arg.parse()?;
+        }
+    }
     let exact = PendulumExact::from_start(1.0, 0.0, 1.0, 13.750371637329454, 1.0)?;
     let end = exact.state(t_end);
     let p = Pendulum::default();
@@ -49,8 +83,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         // errors[h][level] = (max error of x, y, v, w; error of λ)
         let mut errors = Vec::new();
-        for h in HS {
+        // last[h][i] = error of component i (x, y, v, w, λ) after the last
+        // correction.
+        let mut last = Vec::new();
+        for &h in &hs {
+            let started = std::time::Instant::now();
             let levels = idec.levels_with(&problem, h, Jacobian::EveryStep)?;
+            if let Some(best) = levels.last() {
+                last.push((0..5).map(|i| (best[i] - end[i]).abs()).collect::<Vec<_>>());
+            }
             errors.push(
                 levels
                     .iter()
@@ -60,6 +101,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     })
                     .collect::<Vec<_>>(),
             );
+            eprintln!(
+                "{name}, h = {h:.3e}: {:.1} s",
+                started.elapsed().as_secs_f64()
+            );
         }
         for (c, what) in ["x,y,v,w", "λ"].iter().enumerate() {
             println!("\n{name}, error in {what} at t = {t_end} (m = 4, J every step)");
@@ -68,7 +113,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 print!(" {l:>9}");
             }
             println!();
-            for (k, h) in HS.iter().enumerate() {
+            for (k, h) in hs.iter().enumerate() {
                 print!("{h:>9.2e}");
                 for e in &errors[k] {
                     print!(" {:>9.2e}", e[c]);
@@ -76,10 +121,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 println!();
             }
             println!("observed orders");
-            for k in 0..HS.len() - 1 {
+            for k in 0..hs.len() - 1 {
                 print!("{:>9}", "");
                 for (coarse, fine) in errors[k].iter().zip(&errors[k + 1]) {
                     print!(" {:>9.2}", (coarse[c] / fine[c]).log2());
+                }
+                println!();
+            }
+        }
+        if components {
+            let best = LEVELS[LEVELS.len() - 1];
+            println!("\n{name}, {best} error per component at t = {t_end}");
+            print!("{:>9}", "h");
+            for c in ["x", "y", "v", "w", "λ"] {
+                print!(" {c:>9}");
+            }
+            println!();
+            for (h, e) in hs.iter().zip(&last) {
+                print!("{h:>9.2e}");
+                for v in e {
+                    print!(" {v:>9.2e}");
+                }
+                println!();
+            }
+            println!("observed orders");
+            for pair in last.windows(2) {
+                print!("{:>9}", "");
+                for (coarse, fine) in pair[0].iter().zip(&pair[1]) {
+                    print!(" {:>9.2}", (coarse / fine).log2());
                 }
                 println!();
             }

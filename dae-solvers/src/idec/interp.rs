@@ -74,6 +74,42 @@ impl Nodes {
             }
         }
     }
+
+    /// As [`Nodes::derivative`], for values given as unevaluated sums
+    /// `hi(l) + lo(l)` (the compensated sums of the constant-step scheme),
+    /// from the differences to node `k`: `out = Σ_{l ≠ k} D_kl ((hi(l) −
+    /// hi(k)) + (lo(l) − lo(k)))`, which is the same polynomial derivative
+    /// since every row of `D` sums to zero. The sum of `D_kl hi(l)` cancels
+    /// values of size 1 to an `h p'` of size `h`, an absolute round-off of
+    /// `|D| · ulp(hi)` per step; the differences of neighbouring nodes are
+    /// exact (Sterbenz) and of size `h`, so that round-off goes.
+    pub(super) fn derivative_compensated<'v>(
+        &self,
+        k: usize,
+        hi: impl Fn(usize) -> &'v [f64],
+        lo: impl Fn(usize) -> &'v [f64],
+        out: &mut [f64],
+    ) {
+        let n = self.m + 1;
+        out.fill(0.0);
+        let (hi_k, lo_k) = (hi(k), lo(k));
+        for l in (0..n).filter(|&l| l != k) {
+            let (c, hi_l, lo_l) = (self.d[k * n + l], hi(l), lo(l));
+            for (i, o) in out.iter_mut().enumerate() {
+                *o += c * ((hi_l[i] - hi_k[i]) + (lo_l[i] - lo_k[i]));
+            }
+        }
+    }
+}
+
+/// `a + b` as `(s, e)` with `s = fl(a + b)` and `s + e = a + b` exactly
+/// (Knuth's two-sum; no condition on the sizes of `a` and `b`, so a
+/// component passing through zero is summed exactly too).
+#[inline]
+pub(super) fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
 }
 
 /// The Lagrange weights `l_0(θ) … l_m(θ)` on the nodes `0 … m` into the
@@ -122,6 +158,17 @@ mod tests {
                 // node 0, so round-off is relative to the values.
                 let scale = values.iter().map(|v| v[0].abs()).fold(1.0, f64::max);
                 assert!((out[0] - want).abs() <= 1e-12 * scale, "m {m} k {k}");
+                // The same from differences, the values split into a high
+                // and a low part.
+                let hi: Vec<[f64; 1]> = values.iter().map(|v| [f64::from(v[0] as f32)]).collect();
+                let lo: Vec<[f64; 1]> =
+                    values.iter().zip(&hi).map(|(v, h)| [v[0] - h[0]]).collect();
+                let mut split = [0.0];
+                nodes.derivative_compensated(k, |l| &hi[l][..], |l| &lo[l][..], &mut split);
+                assert!(
+                    (split[0] - want).abs() <= 1e-12 * scale,
+                    "m {m} k {k}, hi + lo"
+                );
             }
             for theta in [0.0, 0.3, 1.7, m as f64 - 0.2, m as f64] {
                 let w = weights(m, theta);
@@ -133,5 +180,33 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// `two_sum` returns the rounding error of the sum exactly, whichever
+    /// operand is larger.
+    #[test]
+    fn two_sum_is_exact() {
+        let half_ulp = f64::EPSILON / 2.0;
+        let cases = [
+            ((1.0, 1e-17), (1.0, 1e-17)),
+            ((1e-17, 1.0), (1.0, 1e-17)),
+            ((-1e-17, -1.0), (-1.0, -1e-17)),
+            // Ties round to even, up or down.
+            ((1.0, half_ulp), (1.0, half_ulp)),
+            (
+                (1.0 + f64::EPSILON, half_ulp),
+                (1.0 + 2.0 * f64::EPSILON, -half_ulp),
+            ),
+            ((-2.5, 2.5), (0.0, 0.0)),
+        ];
+        for ((a, b), want) in cases {
+            assert_eq!(two_sum(a, b), want, "{a} + {b}");
+        }
+        // An Euler update of size 4e-7 on a value of size 3: the error is
+        // b − (s − a), both differences exact here.
+        let (a, b) = (3.0_f64.sqrt(), 4e-7 / 3.0);
+        let (s, e) = two_sum(a, b);
+        assert_eq!(e, b - (s - a));
+        assert!(e != 0.0 && e.abs() <= 2.0 * half_ulp);
     }
 }

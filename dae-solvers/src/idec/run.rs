@@ -27,6 +27,11 @@ pub(super) struct Integrator<'a> {
     budget: Budget,
     /// Constant Euler step, if any.
     fixed: Option<f64>,
+    /// Intervals of the constant step accepted so far: their end is
+    /// `t₀ + count · m h`, not a running sum (which drifts by round-off
+    /// over the 10⁵ intervals of a long run and then makes the last
+    /// interval look shorter than `m h`, a restart).
+    fixed_count: u64,
     /// Largest Euler step.
     h_max: f64,
     /// End of the last accepted interval and the best value there.
@@ -105,6 +110,9 @@ impl<'a> Integrator<'a> {
             });
         }
         sweep.restart_at(problem.y0);
+        // Constant steps carry every level over the whole horizon: its
+        // running sums are compensated (`Sweep::compensated`).
+        sweep.compensated = options.fixed_step.is_some();
         // Index-k unknowns are measured with h^(k−1) (see the module
         // documentation, "Error estimate").
         let index_power = info
@@ -134,6 +142,7 @@ impl<'a> Integrator<'a> {
             stats: Stats::default(),
             budget: Budget::new(options.max_steps),
             fixed: options.fixed_step,
+            fixed_count: 0,
             h_max,
             t: problem.t0,
             y: problem.y0.to_vec(),
@@ -154,14 +163,18 @@ impl<'a> Integrator<'a> {
 
     /// Shorten the next interval to end exactly at `t_end` when it would
     /// pass it or leave a remainder below round-off (constant steps: below
-    /// `10⁻⁸ h`); with error control, split a remainder of less than two
-    /// intervals evenly.
+    /// `10⁻⁸ h` or the round-off of `t` itself, whichever is larger); with
+    /// error control, split a remainder of less than two intervals evenly.
     fn clip_to_end(&mut self) {
         let (t, m) = (self.t, self.m as f64);
         let rest = self.t_end - self.t;
+        let round_off = 100.0 * f64::EPSILON * t.abs().max(self.t_end.abs());
         let slack = match self.fixed {
-            Some(_) => 1e-8 * self.h,
-            None => 100.0 * f64::EPSILON * t.abs().max(self.t_end.abs()),
+            // `t₀ + n m h` is rounded at `ulp(t)`: 3.6e-15 at t = 20, more
+            // than `10⁻⁸ h` for h = 2e-7 (the last interval then looked
+            // shorter than `m h` and restarted every level).
+            Some(_) => (1e-8 * self.h).max(round_off),
+            None => round_off,
         };
         if t + m * self.h >= self.t_end - slack {
             // Keep a step that reaches `t_end` up to the slack (constant
@@ -216,6 +229,9 @@ impl<'a> Integrator<'a> {
         self.y.copy_from_slice(self.sweep.node(best, self.m));
         self.t = if self.last {
             self.t_end
+        } else if self.fixed == Some(h) {
+            self.fixed_count += 1;
+            self.t0 + self.fixed_count as f64 * self.m as f64 * h
         } else {
             t + self.m as f64 * h
         };

@@ -2,8 +2,21 @@
 //! original problem and, for each correction, the neighbouring problem
 //! solved by the same scheme and the corrected values (seed 002, (2.1)–
 //! (2.5)); every buffer allocated once.
+//!
+//! With constant steps ([`Sweep::compensated`]) the running sums are
+//! compensated: every value the scheme carries from step to step — the
+//! basic solution `η^[0]`, each `π^[j]`, and the corrected levels at the
+//! nodes — is held as an unevaluated sum `hi + lo` (`lo` at most a few
+//! units in the last place of `hi`). `f`, its Jacobian and the linear
+//! solves see `hi` only; the updates `y_{k+1} = y_k + Δ`, the corrections
+//! `η^[0] − (π^[j] − η^[j])` and the interpolant's derivative are formed
+//! from both parts with exact two-sums. Without it the update rounds at
+//! `ulp(y)` (1e-16 for values of size 1) every step, and since `Δ` changes
+//! slowly the rounding errors of consecutive steps are alike and add up:
+//! over the 5·10⁷ steps per level of S01 at h = 3.9e-7 they reach 5e-8,
+//! the floor of the third correction (docs/bench_idec.md §5).
 
-use super::interp::Nodes;
+use super::interp::{two_sum, Nodes};
 use crate::core::control::Failure;
 use crate::core::matrix::{Corrector, Rows, SquareLu};
 use crate::linalg::mat_vec;
@@ -28,6 +41,13 @@ pub(super) struct Sweep {
     pub(super) np_start: Vec<f64>,
     /// `π^[j]` at the end of the interval, after [`Sweep::run`].
     pub(super) np_end: Vec<f64>,
+    /// The low parts of `eta`, `start`, `np_start`, `np_end` and `pi`
+    /// (same layouts; zero unless [`Sweep::compensated`]).
+    eta_lo: Vec<f64>,
+    start_lo: Vec<f64>,
+    np_start_lo: Vec<f64>,
+    np_end_lo: Vec<f64>,
+    pi_lo: Vec<f64>,
     /// `f(t_k, η^[j]_k)`, `k = 0 … m − 1`, for the correction in progress.
     f_eta: Vec<f64>,
     /// Scratch: the current `π`, `f`, `h p'`, `E h p'`, the right-hand side.
@@ -47,6 +67,11 @@ pub(super) struct Sweep {
     /// step, at that step's own point (each level and each neighbouring
     /// problem at its own values), instead of once per interval.
     pub(super) every_step: bool,
+    /// Carry every running sum as `hi + lo` (module documentation): the
+    /// constant-step scheme, whose levels run over the whole horizon. Off
+    /// with error control, where every interval restarts from the accepted
+    /// value after `m` steps (its results are those of plain sums).
+    pub(super) compensated: bool,
 }
 
 impl Sweep {
@@ -61,6 +86,11 @@ impl Sweep {
             start: vec![0.0; (corrections + 1) * n],
             np_start: vec![0.0; corrections * n],
             np_end: vec![0.0; corrections * n],
+            eta_lo: vec![0.0; (corrections + 1) * (m + 1) * n],
+            start_lo: vec![0.0; (corrections + 1) * n],
+            np_start_lo: vec![0.0; corrections * n],
+            np_end_lo: vec![0.0; corrections * n],
+            pi_lo: vec![0.0; n],
             f_eta: vec![0.0; m * n],
             pi: vec![0.0; n],
             f: vec![0.0; n],
@@ -72,6 +102,7 @@ impl Sweep {
             lu: SquareLu::new(n, n),
             rows: Rows::new(info),
             every_step: false,
+            compensated: false,
         }
     }
 
@@ -92,6 +123,8 @@ impl Sweep {
         {
             chunk.copy_from_slice(y);
         }
+        self.start_lo.fill(0.0);
+        self.np_start_lo.fill(0.0);
     }
 
     /// After an accepted interval with constant steps: each level and each
@@ -102,8 +135,10 @@ impl Sweep {
         for l in 0..=self.corrections {
             let at = (l * (m + 1) + m) * n;
             self.start[l * n..(l + 1) * n].copy_from_slice(&self.eta[at..at + n]);
+            self.start_lo[l * n..(l + 1) * n].copy_from_slice(&self.eta_lo[at..at + n]);
         }
         self.np_start.copy_from_slice(&self.np_end);
+        self.np_start_lo.copy_from_slice(&self.np_end_lo);
     }
 
     /// Factorise `E − h J`.
@@ -179,9 +214,11 @@ impl Sweep {
     ) -> Result<(), Failure> {
         let (n, m) = (self.n, self.nodes.degree());
         let block = (m + 1) * n;
+        let compensated = self.compensated;
         // The linearly implicit Euler solution of the original problem,
         // (E − hJ)(η_{k+1} − η_k) = h f(t_k, η_k).
         self.eta[..n].copy_from_slice(&self.start[..n]);
+        self.eta_lo[..n].copy_from_slice(&self.start_lo[..n]);
         for k in 0..m {
             let tk = t + k as f64 * h;
             let (done, next) = self.eta.split_at_mut((k + 1) * n);
@@ -196,8 +233,16 @@ impl Sweep {
                 *r = h * f;
             }
             self.lu.solve(&mut self.rhs);
-            for ((y1, y0), d) in next[..n].iter_mut().zip(eta_k).zip(&self.rhs) {
-                *y1 = y0 + d;
+            if compensated {
+                let (lo_done, lo_next) = self.eta_lo.split_at_mut((k + 1) * n);
+                let lo_k = &lo_done[k * n..];
+                for i in 0..n {
+                    (next[i], lo_next[i]) = two_sum(eta_k[i], self.rhs[i] + lo_k[i]);
+                }
+            } else {
+                for ((y1, y0), d) in next[..n].iter_mut().zip(eta_k).zip(&self.rhs) {
+                    *y1 = y0 + d;
+                }
             }
         }
         // The corrections: the neighbouring problem E y' = f(t, y) + d(t),
@@ -209,6 +254,10 @@ impl Sweep {
             let eta0 = &lower[..block];
             let eta_j = &lower[j * block..];
             let eta_next = &mut upper[..block];
+            let (lower_lo, upper_lo) = self.eta_lo.split_at_mut((j + 1) * block);
+            let eta0_lo = &lower_lo[..block];
+            let eta_j_lo = &lower_lo[j * block..];
+            let eta_next_lo = &mut upper_lo[..block];
             if j > 0 {
                 for k in 0..m {
                     let tk = t + k as f64 * h;
@@ -217,11 +266,23 @@ impl Sweep {
                 }
             }
             self.pi.copy_from_slice(&self.np_start[j * n..(j + 1) * n]);
+            self.pi_lo
+                .copy_from_slice(&self.np_start_lo[j * n..(j + 1) * n]);
             eta_next[..n].copy_from_slice(&self.start[(j + 1) * n..(j + 2) * n]);
+            eta_next_lo[..n].copy_from_slice(&self.start_lo[(j + 1) * n..(j + 2) * n]);
             for k in 0..m {
                 let tk = t + k as f64 * h;
-                self.nodes
-                    .derivative(k, |l| &eta_j[l * n..(l + 1) * n], &mut self.dp);
+                if compensated {
+                    self.nodes.derivative_compensated(
+                        k,
+                        |l| &eta_j[l * n..(l + 1) * n],
+                        |l| &eta_j_lo[l * n..(l + 1) * n],
+                        &mut self.dp,
+                    );
+                } else {
+                    self.nodes
+                        .derivative(k, |l| &eta_j[l * n..(l + 1) * n], &mut self.dp);
+                }
                 mat_vec(&self.e, &self.dp, &mut self.edp);
                 Self::rhs(sys, stats, tk, &self.pi, &mut self.f)?;
                 if self.every_step {
@@ -234,12 +295,27 @@ impl Sweep {
                 }
                 self.lu.solve(&mut self.rhs);
                 let at = (k + 1) * n;
-                for i in 0..n {
-                    self.pi[i] += self.rhs[i];
-                    eta_next[at + i] = eta0[at + i] - (self.pi[i] - eta_j[at + i]);
+                if compensated {
+                    for i in 0..n {
+                        let (pi, pi_lo) = two_sum(self.pi[i], self.rhs[i] + self.pi_lo[i]);
+                        (self.pi[i], self.pi_lo[i]) = (pi, pi_lo);
+                        // η^[0] − (π − η^[j]) = q + (e_q − e_r), exactly,
+                        // with r + e_r = π − η^[j] and q + e_q = η^[0] − r;
+                        // the low parts of the three operands added.
+                        let (r, e_r) = two_sum(pi, -eta_j[at + i]);
+                        let (q, e_q) = two_sum(eta0[at + i], -r);
+                        let lo = (e_q - e_r) + (eta0_lo[at + i] - (pi_lo - eta_j_lo[at + i]));
+                        (eta_next[at + i], eta_next_lo[at + i]) = two_sum(q, lo);
+                    }
+                } else {
+                    for i in 0..n {
+                        self.pi[i] += self.rhs[i];
+                        eta_next[at + i] = eta0[at + i] - (self.pi[i] - eta_j[at + i]);
+                    }
                 }
             }
             self.np_end[j * n..(j + 1) * n].copy_from_slice(&self.pi);
+            self.np_end_lo[j * n..(j + 1) * n].copy_from_slice(&self.pi_lo);
         }
         let last = self.node(self.corrections, m);
         if last.iter().all(|v| v.is_finite()) {
