@@ -315,17 +315,19 @@ pub enum RunError {
 ///
 /// `psi1` and `psi0` run with the model's symbolic selector where it has
 /// one; where it has none (a time-dependent constraint), or where a run with
-/// the symbolic selector stops with a singular iteration matrix or a Newton
-/// failure (the selector loses rank at the start, or where the motion takes
-/// it), the run is made again with a
+/// the symbolic selector stops with a singular iteration matrix, a Newton
+/// failure or a collapsed step (how a selector that loses rank, at the
+/// start or where the motion takes it, shows), the run is made again with a
 /// selector computed numerically ([`dae_core::selector`]). The record's
 /// `selector` says which.
 pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
     let first = run_with(spec, false)?;
-    let singular = first
-        .error
-        .as_ref()
-        .is_some_and(|e| matches!(e.kind.as_str(), "singular_matrix" | "newton_failure"));
+    let singular = first.error.as_ref().is_some_and(|e| {
+        matches!(
+            e.kind.as_str(),
+            "singular_matrix" | "newton_failure" | "step_size_too_small"
+        )
+    });
     if singular && first.selector == Some(SelectorKind::Symbolic.as_str()) {
         return run_with(spec, true);
     }
