@@ -1012,19 +1012,10 @@ fn system_impl(
     let invariants = t_y_slice("invariants", dense(&c.invariants, all));
     let rhs_jacobian = t_y_matrix("rhs_jacobian", sparse(&c.rhs_jacobian, all));
 
-    let residual = {
-        let b = dense(&c.residual, Available { yp: true, ..all });
-        let (t, y, yp, out, stmts) = (
-            param("t", b.uses.t),
-            param("y", b.uses.y),
-            param("yp", b.uses.yp),
-            param("out", b.uses.out),
-            b.stmts,
-        );
-        quote! {
-            fn residual(&self, #t: f64, #y: &[f64], #yp: &[f64], #out: &mut [f64]) { #stmts }
-        }
-    };
+    let residual = t_y_yp_slice(
+        "residual",
+        dense(&c.residual, Available { yp: true, ..all }),
+    );
     let leading = {
         let b = sparse(&c.leading, no_t);
         let (y, stmts) = (param("y", b.uses.y), b.stmts);
@@ -1086,6 +1077,21 @@ fn system_impl(
     }
 }
 
+/// `fn name(&self, t, y, yp, out: &mut [f64])` around a tape's body.
+fn t_y_yp_slice(name: &str, b: Body) -> TokenStream {
+    let name = format_ident!("{}", name);
+    let (t, y, yp, out, stmts) = (
+        param("t", b.uses.t),
+        param("y", b.uses.y),
+        param("yp", b.uses.yp),
+        param("out", b.uses.out),
+        b.stmts,
+    );
+    quote! {
+        fn #name(&self, #t: f64, #y: &[f64], #yp: &[f64], #out: &mut [f64]) { #stmts }
+    }
+}
+
 /// The printers [`accel_impl`] shares with [`system_impl`].
 struct Emit<'a> {
     dense: &'a dyn Fn(&Tape, Available) -> Body,
@@ -1139,19 +1145,7 @@ fn accel_impl(
             fn accel_leading_jacobian(&self, #y: &[f64], #z: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
         }
     };
-    let chain_at = {
-        let b = (emit.dense)(&c.constraints, with_yp);
-        let (t, y, yp, out, stmts) = (
-            param("t", b.uses.t),
-            param("y", b.uses.y),
-            param("yp", b.uses.yp),
-            param("out", b.uses.out),
-            b.stmts,
-        );
-        quote! {
-            fn chain_at(&self, #t: f64, #y: &[f64], #yp: &[f64], #out: &mut [f64]) { #stmts }
-        }
-    };
+    let chain_at = t_y_yp_slice("chain_at", (emit.dense)(&c.constraints, with_yp));
     let chain_jacobian_at = {
         let b = (emit.sparse)(&c.constraints_jacobian, with_yp);
         let (t, y, yp, stmts) = (
