@@ -116,20 +116,9 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
         for (j, c) in &row.e {
             e_cells.push((i, *j, c.clone()));
         }
-        // Only the unknowns an expression contains have non-zero
-        // derivatives: a row costs its own size, not the model's.
-        for k in unknowns(std::iter::once(&row.f), n) {
-            fj_cells.push((i, k, expr::diff(&row.f, Sym::Var(k as u32))));
-        }
+        gradient_cells(i, &row.f, n, &mut fj_cells);
         if !f.constant_leading {
-            for k in unknowns(row.e.iter().map(|(_, c)| c), n) {
-                let s = Sym::Var(k as u32);
-                let ez =
-                    expr::add_all(row.e.iter().map(|(j, c)| {
-                        expr::mul(&expr::diff(c, s), &Expr::sym(Sym::Dir(*j as u32)))
-                    }));
-                ej_cells.push((i, k, ez));
-            }
+            leading_jacobian_cells(i, &row.e, n, &mut ej_cells);
         }
     }
     let chain = d.analysis.flat();
@@ -137,9 +126,7 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
     let mut cj_cells = Vec::new();
     for (r, (_, _, e)) in chain.iter().enumerate() {
         cons.output(e);
-        for k in unknowns(std::iter::once(*e), n) {
-            cj_cells.push((r, k, expr::diff(e, Sym::Var(k as u32))));
-        }
+        gradient_cells(r, e, n, &mut cj_cells);
     }
     let accel = model.has_mass_matrix().then(|| accel_tapes(d, n));
     let mut inv = TapeBuilder::new();
@@ -170,25 +157,13 @@ fn accel_tapes(d: &Derived, n: usize) -> AccelTapes {
     let mut fj_cells = Vec::new();
     let mut ej_cells = Vec::new();
     for (i, dy) in model.dynamics.iter().enumerate() {
-        let terms: Vec<(usize, Expr)> = std::iter::once((dy.var, dy.coef.clone()))
-            .chain(dy.coupled.iter().cloned())
-            .collect();
+        let terms: Vec<(usize, Expr)> = dy.terms().map(|(j, c)| (j, c.clone())).collect();
         for (j, c) in &terms {
             e_cells.push((i, *j, c.clone()));
         }
         rhs.output(&dy.rhs);
-        for k in unknowns(std::iter::once(&dy.rhs), n) {
-            fj_cells.push((i, k, expr::diff(&dy.rhs, Sym::Var(k as u32))));
-        }
-        for k in unknowns(terms.iter().map(|(_, c)| c), n) {
-            let s = Sym::Var(k as u32);
-            let ez = expr::add_all(
-                terms
-                    .iter()
-                    .map(|(j, c)| expr::mul(&expr::diff(c, s), &Expr::sym(Sym::Dir(*j as u32)))),
-            );
-            ej_cells.push((i, k, ez));
-        }
+        gradient_cells(i, &dy.rhs, n, &mut fj_cells);
+        leading_jacobian_cells(i, &terms, n, &mut ej_cells);
     }
     let mut cd_cells = Vec::new();
     for (r, (_, _, e)) in d.analysis.flat().iter().enumerate() {
@@ -206,6 +181,34 @@ fn accel_tapes(d: &Derived, n: usize) -> AccelTapes {
         rhs_jacobian: Sparse::build(fj_cells),
         leading_jacobian: Sparse::build(ej_cells),
         chain_der: Sparse::build(cd_cells),
+    }
+}
+
+/// Row `i` of `∂f/∂y`: `(i, k, ∂f/∂y_k)` for the unknowns `f` contains
+/// (only those have non-zero derivatives: a row costs its own size, not the
+/// model's).
+fn gradient_cells(i: usize, f: &Expr, n: usize, out: &mut Vec<(usize, usize, Expr)>) {
+    for k in unknowns(std::iter::once(f), n) {
+        out.push((i, k, expr::diff(f, Sym::Var(k as u32))));
+    }
+}
+
+/// Row `i` of `∂(E(y) z)/∂y` for the row `terms` of `E`: `(i, k, Σ_j
+/// ∂E_ij/∂y_k z_j)` for the unknowns the coefficients contain.
+fn leading_jacobian_cells(
+    i: usize,
+    terms: &[(usize, Expr)],
+    n: usize,
+    out: &mut Vec<(usize, usize, Expr)>,
+) {
+    for k in unknowns(terms.iter().map(|(_, c)| c), n) {
+        let s = Sym::Var(k as u32);
+        let ez = expr::add_all(
+            terms
+                .iter()
+                .map(|(j, c)| expr::mul(&expr::diff(c, s), &Expr::sym(Sym::Dir(*j as u32)))),
+        );
+        out.push((i, k, ez));
     }
 }
 

@@ -1070,6 +1070,26 @@ fn outer_derivative(c: &Call, e: &Expr) -> Expr {
     }
 }
 
+/// An expression linear in der() split into its der() terms and the rest:
+/// `e = Σ_j c_j der(y_j) + r` gives `([(j, c_j)], r)`, `j` ascending, with
+/// `c_j = ∂e/∂der(y_j)` and `r = e` at every der() zero. (Linearity is the
+/// caller's to check: a `c_j` that still holds der() means `e` is not.)
+pub fn split_ders(e: &Expr) -> (Vec<(usize, Expr)>, Expr) {
+    let is_der = |s: Sym| matches!(s, Sym::Der(_));
+    if !e.any_sym(&is_der) {
+        return (Vec::new(), e.clone());
+    }
+    let terms = e
+        .symbols()
+        .into_iter()
+        .filter_map(|s| match s {
+            Sym::Der(j) => Some((j as usize, diff(e, s))),
+            _ => None,
+        })
+        .collect();
+    (terms, subs(e, &|s| is_der(s).then(Expr::zero)))
+}
+
 /// Replace symbols: `map(s)` returns the replacement or `None` to keep `s`.
 pub fn subs(e: &Expr, map: &dyn Fn(Sym) -> Option<Expr>) -> Expr {
     match e {

@@ -238,8 +238,7 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         .dynamics
         .iter()
         .map(|d| {
-            let mut e = vec![(d.var, d.coef.clone())];
-            e.extend(d.coupled.iter().cloned());
+            let mut e: Vec<(usize, Expr)> = d.terms().map(|(j, c)| (j, c.clone())).collect();
             e.sort_by_key(|(j, _)| *j);
             SymRow {
                 kind: RowKind::Differential,
@@ -354,41 +353,14 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
 /// acceleration level of a model with a mass matrix, `G v' + … = 0`) is
 /// linear in them and becomes a row of `E`: `Σ ∂g/∂u_j' · u_j' = −g|_{u'=0}`.
 fn constraint_row(g: &Expr, level: usize, source: usize) -> SymRow {
-    let kind = RowKind::Constraint {
-        level: level as u8,
-        source: source as u16,
-    };
-    if !g.any_sym(&|s| matches!(s, Sym::Der(_))) {
-        return SymRow {
-            kind,
-            e: Vec::new(),
-            f: g.clone(),
-        };
-    }
-    let ders: Vec<u32> = g
-        .symbols()
-        .into_iter()
-        .filter_map(|s| match s {
-            Sym::Der(j) => Some(j),
-            _ => None,
-        })
-        .collect();
-    if ders.is_empty() {
-        return SymRow {
-            kind,
-            e: Vec::new(),
-            f: g.clone(),
-        };
-    }
-    let e = ders
-        .iter()
-        .map(|&j| (j as usize, expr::diff(g, Sym::Der(j))))
-        .collect();
-    let rest = expr::subs(g, &|s| matches!(s, Sym::Der(_)).then(Expr::zero));
+    let (e, rest) = expr::split_ders(g);
     SymRow {
-        kind,
+        kind: RowKind::Constraint {
+            level: level as u8,
+            source: source as u16,
+        },
+        f: if e.is_empty() { rest } else { expr::neg(&rest) },
         e,
-        f: expr::neg(&rest),
     }
 }
 

@@ -80,6 +80,14 @@ pub struct Dynamic {
     pub span: Span,
 }
 
+impl Dynamic {
+    /// Every der() term `(unknown, coefficient)`: `var`'s first, then the
+    /// coupled ones.
+    pub fn terms(&self) -> impl Iterator<Item = (usize, &Expr)> {
+        std::iter::once((self.var, &self.coef)).chain(self.coupled.iter().map(|(j, c)| (*j, c)))
+    }
+}
+
 /// A dynamic equation as written, before it is assigned to an unknown: its
 /// der() terms `(unknown, coefficient)`, right-hand side and span.
 type Written = (Vec<(usize, Expr)>, Expr, Span);
@@ -350,14 +358,7 @@ impl Model {
             // Equation-level errors point at the equation's first token.
             let eq_span = eq.lhs.span();
             let r = expr::sub(&lhs, &rhs);
-            let ders: Vec<usize> = r
-                .symbols()
-                .into_iter()
-                .filter_map(|s| match s {
-                    Sym::Der(i) => Some(i as usize),
-                    _ => None,
-                })
-                .collect();
+            let (ders, rest) = expr::split_ders(&r);
             if ders.is_empty() {
                 let g = if lhs.is_zero() {
                     rhs
@@ -374,11 +375,9 @@ impl Model {
                 }
                 continue;
             }
-            let mut terms = Vec::new();
             let mut ok = true;
-            for &j in &ders {
-                let coef = expr::diff(&r, Sym::Der(j as u32));
-                let name = &vars[j].name;
+            for (j, coef) in &ders {
+                let name = &vars[*j].name;
                 let problem = if coef.any_sym(&|s| matches!(s, Sym::Der(_))) {
                     Some(if ders.len() == 1 {
                         format!("`der({name})` must appear linearly: write `coef * der({name}) = rhs` with a coefficient free of der()")
@@ -404,16 +403,12 @@ impl Model {
                     ok = false;
                     break;
                 }
-                terms.push((j, coef));
             }
             if !ok {
                 lowered_all = false;
                 continue;
             }
-            let f = expr::neg(&expr::subs(&r, &|s| {
-                matches!(s, Sym::Der(_)).then(Expr::zero)
-            }));
-            written.push((terms, f, eq_span));
+            written.push((ders, expr::neg(&rest), eq_span));
         }
         // Coupled unknowns: those whose der() shares an equation with
         // another der() (a mass matrix). A coefficient in such an equation
@@ -688,9 +683,7 @@ impl Model {
     /// Whether the dynamic row of unknown `k` contains a symbol of `pred`.
     fn row_involves(&self, k: usize, pred: &dyn Fn(Sym) -> bool) -> bool {
         let d = &self.dynamics[k];
-        d.rhs.any_sym(pred)
-            || d.coef.any_sym(pred)
-            || d.coupled.iter().any(|(_, c)| c.any_sym(pred))
+        d.rhs.any_sym(pred) || d.terms().any(|(_, c)| c.any_sym(pred))
     }
 
     /// The mass-matrix block of coupled unknown `j`: the unknowns linked to
@@ -704,9 +697,7 @@ impl Model {
         while grew {
             grew = false;
             for d in &self.dynamics {
-                let row: Vec<usize> = std::iter::once(d.var)
-                    .chain(d.coupled.iter().map(|(k, _)| *k))
-                    .collect();
+                let row: Vec<usize> = d.terms().map(|(k, _)| k).collect();
                 if row.iter().any(|k| block.contains(k)) {
                     for k in row {
                         if !block.contains(&k) {
