@@ -24,11 +24,12 @@
 //! velocity constraint) is `q' = v` for any `σ` with `[σ; G]` nonsingular.
 //!
 //! The positions `q` and velocities `v` are read off the constraint chain's
-//! structure: the differential unknowns whose column of the level-0 (level-1)
-//! Jacobian is non-zero at any of three points (the given one and two
-//! perturbed ones, so that an accidental zero is not taken for a structural
-//! one). `leading` allocates (the test of `σ` is an SVD of size `|q|`), as
-//! does construction; the other evaluations do not.
+//! structure ([`crate::system::chain_pattern`], which consistent
+//! initialisation uses too): the differential unknowns whose column of the
+//! level-0 (level-1) Jacobian is non-zero at the given point or at perturbed
+//! ones, so that an accidental zero is not taken for a structural one.
+//! `leading` allocates (the test of `σ` is an SVD of size `|q|`), as does
+//! construction; the other evaluations do not.
 
 use crate::system::{DaeSystem, FormulationInfo, RowInfo, RowKind, VarKind};
 use nalgebra::DMatrix;
@@ -160,6 +161,12 @@ pub enum SelectorError {
         /// What was given.
         given: String,
     },
+    /// The constraint chain is not finite where its structure is probed.
+    #[error("the numerical `{name}` cannot read the constraints' structure: the chain or its Jacobian is not finite at the probe point")]
+    NotFinite {
+        /// The projected formulation.
+        name: &'static str,
+    },
     /// A model with a mass matrix has no `psi0`.
     #[error("`psi0` does not apply to a model with a mass matrix: its acceleration level holds `v'`, not the multipliers")]
     MassMatrix,
@@ -215,25 +222,11 @@ impl<S: DaeSystem> NumericSelector<S> {
                 constraints: rows0.len(),
             });
         }
-        // Structure: non-zero columns at y0 and two perturbed points.
-        let mut seen = DMatrix::<bool>::from_element(k, n, false);
-        let mut jac = DMatrix::zeros(k, n);
-        for probe in 0..3 {
-            let y: Vec<f64> = y0
-                .iter()
-                .enumerate()
-                .map(|(i, &v)| {
-                    let shift = (0.37 + 0.11 * i as f64) * probe as f64;
-                    v + shift * (1.0 + v.abs()) * 0.1
-                })
-                .collect();
-            inner.constraints_jacobian(t0, &y, &mut jac);
-            for (s, &v) in seen.iter_mut().zip(jac.iter()) {
-                *s |= v != 0.0;
-            }
-        }
+        // Structure: non-zero columns at y0 and perturbed points.
+        let seen = crate::system::chain_pattern(&inner, t0, y0)
+            .ok_or(SelectorError::NotFinite { name: which.name() })?;
         let differential = |j: usize| src.variables[j].kind == VarKind::Differential;
-        let in_rows = |rows: &[usize], j: usize| rows.iter().any(|&r| seen[(r, j)]);
+        let in_rows = |rows: &[usize], j: usize| rows.iter().any(|&r| seen[r][j]);
         let q: Vec<usize> = (0..n)
             .filter(|&j| differential(j) && in_rows(&rows0, j))
             .collect();

@@ -105,7 +105,7 @@
 use crate::error::SolveError;
 use crate::options::Tolerances;
 use crate::stats::Stats;
-use dae_core::system::{DaeSystem, VarKind};
+use dae_core::system::{chain_pattern, DaeSystem, VarKind};
 use nalgebra::{linalg::SVD, DMatrix, Dyn};
 use serde::Serialize;
 
@@ -117,8 +117,6 @@ const RCOND: f64 = 1e-12;
 const SVD_MAX_ITER: usize = 10_000;
 /// The same for [`Rank::RoundOff`] (DASSL's start in the BDF solver).
 const SVD_MAX_ITER_ROUND_OFF: usize = 1000;
-/// Number of perturbed points used to detect the chain's structure.
-const STRUCTURE_PROBES: usize = 2;
 /// Step halvings tried when a correction leads to non-finite values.
 const MAX_HALVINGS: usize = 40;
 
@@ -362,33 +360,16 @@ impl<'a> Chain<'a> {
     }
 }
 
-/// Which unknowns each member of the chain contains: `pattern[k][j]` when
-/// `∂g_k/∂y_j ≠ 0` at `y` or at one of a few perturbed points (perturbed
-/// points where the model is not finite are skipped). Leaves `chain`
-/// evaluated at `y`.
+/// Which unknowns each member of the chain contains
+/// ([`dae_core::system::chain_pattern`]). Leaves `chain` evaluated at `y`.
 fn structure(chain: &mut Chain<'_>, y: &[f64]) -> Result<Vec<Vec<bool>>, SolveError> {
-    chain.eval_or_err(y, "constraint chain at the initial values")?;
-    let (k, n) = chain.jac.shape();
-    let mut pattern: Vec<Vec<bool>> = (0..k)
-        .map(|r| (0..n).map(|c| chain.jac[(r, c)] != 0.0).collect())
-        .collect();
-    let mut probe = y.to_vec();
-    for p in 0..STRUCTURE_PROBES {
-        for (j, (pj, &yj)) in probe.iter_mut().zip(y).enumerate() {
-            // Deterministic, irregular factors in ±[0.5, 1.5) · 1e-3.
-            let h = ((j * 7919 + p * 104_729 + 17) % 1000) as f64 / 1000.0 + 0.5;
-            let sign = if (j + p) % 2 == 0 { 1.0 } else { -1.0 };
-            *pj = yj + sign * h * 1e-3 * (1.0 + yj.abs());
-        }
-        if chain.eval(&probe) {
-            for (r, row) in pattern.iter_mut().enumerate() {
-                for (c, e) in row.iter_mut().enumerate() {
-                    *e |= chain.jac[(r, c)] != 0.0;
-                }
-            }
-        }
-    }
-    chain.eval_or_err(y, "constraint chain at the initial values")?;
+    const WHAT: &str = "constraint chain at the initial values";
+    chain.eval_or_err(y, WHAT)?;
+    let pattern = chain_pattern(chain.sys, chain.t, y).ok_or(SolveError::NonFinite {
+        t: chain.t,
+        what: WHAT,
+    })?;
+    chain.eval_or_err(y, WHAT)?;
     Ok(pattern)
 }
 
