@@ -60,7 +60,7 @@
 //! projection is the exact solve.
 
 use crate::linalg::lstsq::{null_space, split_rows};
-use crate::linalg::{ConstrainedLstsq, DenseLu, Pivoting, Singular};
+use crate::linalg::{ComplexLu, ConstrainedLstsq, DenseLu, Pivoting, Singular};
 use dae_core::system::{FormulationInfo, RowKind};
 use nalgebra::{Complex, DMatrix};
 
@@ -165,7 +165,7 @@ pub(crate) trait Corrector {
 }
 
 /// DASSL's LU (LINPACK conventions) for square systems.
-pub(crate) struct SquareLu(DenseLu<f64>);
+pub(crate) struct SquareLu(DenseLu);
 
 impl Corrector for SquareLu {
     const LEAST_SQUARES: bool = false;
@@ -227,9 +227,8 @@ pub(crate) trait StageSystems {
 
 /// RADAU5's two LU factorisations (non-finite pivots count as singular).
 pub(crate) struct SquareStages {
-    real: DenseLu<f64>,
-    complex: DenseLu<Complex<f64>>,
-    buf: Vec<Complex<f64>>,
+    real: DenseLu,
+    complex: ComplexLu,
 }
 
 impl StageSystems for SquareStages {
@@ -238,8 +237,7 @@ impl StageSystems for SquareStages {
         debug_assert_eq!(m, n);
         SquareStages {
             real: DenseLu::new(n, Pivoting::Checked),
-            complex: DenseLu::new(n, Pivoting::Checked),
-            buf: vec![Complex::new(0.0, 0.0); n],
+            complex: ComplexLu::new(n),
         }
     }
     fn factor(
@@ -251,22 +249,24 @@ impl StageSystems for SquareStages {
         b: f64,
         _rows: &Rows,
     ) -> Result<(), Singular> {
-        self.real.factor_from(|r, c| g * e[(r, c)] - j[(r, c)])?;
-        self.complex
-            .factor_from(|r, c| Complex::new(a * e[(r, c)] - j[(r, c)], b * e[(r, c)]))
+        // E and J are column-major N × N, like the factors.
+        let (e, j) = (e.as_slice(), j.as_slice());
+        for (x, (&ev, &jv)) in self.real.matrix_mut().iter_mut().zip(e.iter().zip(j)) {
+            *x = g * ev - jv;
+        }
+        self.real.factor()?;
+        let (re, im) = self.complex.parts_mut();
+        for ((xr, xi), (&ev, &jv)) in re.iter_mut().zip(im.iter_mut()).zip(e.iter().zip(j)) {
+            *xr = a * ev - jv;
+            *xi = b * ev;
+        }
+        self.complex.factor()
     }
     fn solve_real(&mut self, x: &mut [f64]) {
         self.real.solve(x)
     }
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]) {
-        for (z, (r, i)) in self.buf.iter_mut().zip(re.iter().zip(im.iter())) {
-            *z = Complex::new(*r, *i);
-        }
-        self.complex.solve(&mut self.buf);
-        for (z, (r, i)) in self.buf.iter().zip(re.iter_mut().zip(im.iter_mut())) {
-            *r = z.re;
-            *i = z.im;
-        }
+        self.complex.solve(re, im);
     }
 }
 
@@ -296,10 +296,13 @@ pub(crate) struct ProjectedStages {
     /// `Wᵀ E_D` and `Wᵀ J_D` (`k × N`, row-major).
     we: Vec<f64>,
     wj: Vec<f64>,
-    real: DenseLu<f64>,
-    complex: DenseLu<Complex<f64>>,
+    real: DenseLu,
+    complex: ComplexLu,
     buf: Vec<f64>,
     cbuf: Vec<Complex<f64>>,
+    /// The projected complex right-hand side, split (real, imaginary).
+    cre: Vec<f64>,
+    cim: Vec<f64>,
 }
 
 impl ProjectedStages {
@@ -345,9 +348,11 @@ impl StageSystems for ProjectedStages {
             we: vec![0.0; n * n],
             wj: vec![0.0; n * n],
             real: DenseLu::new(n, Pivoting::Checked),
-            complex: DenseLu::new(n, Pivoting::Checked),
+            complex: ComplexLu::new(n),
             buf: vec![0.0; n],
             cbuf: vec![Complex::new(0.0, 0.0); n],
+            cre: vec![0.0; n],
+            cim: vec![0.0; n],
         }
     }
     fn factor(
@@ -439,15 +444,19 @@ impl StageSystems for ProjectedStages {
                 g * we[o] - wj[o]
             }
         })?;
-        self.complex.factor_from(|r, c| {
-            if r < p {
-                let i = exact_rows[r];
-                Complex::new(a * e[(i, c)] - j[(i, c)], b * e[(i, c)])
-            } else {
-                let o = (r - p) * n + c;
-                Complex::new(a * we[o] - wj[o], b * we[o])
+        let (cre, cim) = self.complex.parts_mut();
+        for c in 0..n {
+            for r in 0..n {
+                (cre[c * n + r], cim[c * n + r]) = if r < p {
+                    let i = exact_rows[r];
+                    (a * e[(i, c)] - j[(i, c)], b * e[(i, c)])
+                } else {
+                    let o = (r - p) * n + c;
+                    (a * we[o] - wj[o], b * we[o])
+                };
             }
-        })
+        }
+        self.complex.factor()
     }
     fn solve_real(&mut self, x: &mut [f64]) {
         let mut buf = std::mem::take(&mut self.buf);
@@ -459,11 +468,13 @@ impl StageSystems for ProjectedStages {
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]) {
         let mut buf = std::mem::take(&mut self.cbuf);
         self.project(|i| Complex::new(re[i], im[i]), &mut buf);
-        self.complex.solve(&mut buf);
-        for (z, (r, i)) in buf.iter().zip(re.iter_mut().zip(im.iter_mut())) {
+        for (z, (r, i)) in buf.iter().zip(self.cre.iter_mut().zip(self.cim.iter_mut())) {
             *r = z.re;
             *i = z.im;
         }
+        self.complex.solve(&mut self.cre, &mut self.cim);
+        re[..self.n].copy_from_slice(&self.cre);
+        im[..self.n].copy_from_slice(&self.cim);
         self.cbuf = buf;
     }
 }

@@ -16,6 +16,7 @@
 //! anywhere gives NaN. Every error test and every Newton iteration of every
 //! method uses this norm.
 
+use crate::linalg::with_size;
 use crate::options::Tolerances;
 
 /// Error weights of the `N` unknowns, updated from the solution as the
@@ -109,28 +110,57 @@ impl Weights {
     /// a Runge–Kutta method), as one vector of `blocks · N` entries.
     pub(crate) fn norm_blocks(&self, v: &[f64], stride: usize, blocks: usize) -> f64 {
         let n = self.w.len().min(stride);
-        let mut vmax = 0.0_f64;
-        for b in 0..blocks {
-            for (a, w) in v[b * stride..b * stride + n].iter().zip(&self.w) {
-                let x = (a * w).abs();
-                if x.is_nan() {
-                    return f64::NAN;
-                }
-                vmax = vmax.max(x);
-            }
-        }
-        if vmax == 0.0 || !vmax.is_finite() {
-            return vmax;
-        }
-        let mut sum = 0.0;
-        for b in 0..blocks {
-            for (a, w) in v[b * stride..b * stride + n].iter().zip(&self.w) {
-                let x = a * w / vmax;
-                sum += x * x;
-            }
-        }
-        vmax * (sum * self.inv_count / blocks as f64).sqrt()
+        with_size!(n, |N| norm_kernel(
+            &self.w[..N],
+            v,
+            stride,
+            blocks,
+            N,
+            self.inv_count
+        ))
     }
+}
+
+/// [`Weights::norm_blocks`] for `n` weights (a constant where the caller
+/// can make it one).
+#[inline(always)]
+fn norm_kernel(
+    w: &[f64],
+    v: &[f64],
+    stride: usize,
+    blocks: usize,
+    n: usize,
+    inv_count: f64,
+) -> f64 {
+    // One pass for the largest term — a NaN is remembered rather than
+    // branched on, so the loop stays straight — and one for the scaled sum.
+    let mut vmax = 0.0_f64;
+    let mut nan = false;
+    for b in 0..blocks {
+        let vb = &v[b * stride..][..n];
+        for i in 0..n {
+            let x = (vb[i] * w[i]).abs();
+            nan |= x.is_nan();
+            if x > vmax {
+                vmax = x;
+            }
+        }
+    }
+    if nan {
+        return f64::NAN;
+    }
+    if vmax == 0.0 || !vmax.is_finite() {
+        return vmax;
+    }
+    let mut sum = 0.0;
+    for b in 0..blocks {
+        let vb = &v[b * stride..][..n];
+        for i in 0..n {
+            let x = vb[i] * w[i] / vmax;
+            sum += x * x;
+        }
+    }
+    vmax * (sum * inv_count / blocks as f64).sqrt()
 }
 
 #[cfg(test)]

@@ -127,9 +127,9 @@ impl<S: StageSystems> Integrator<'_, S> {
                 *j -= l;
             }
         }
-        w.e_jac.copy_from(&w.e_n);
+        w.e_jac.as_mut_slice().copy_from_slice(w.e_n.as_slice());
         self.stats.jacobian_evals += 1;
-        if w.jac.iter().any(|v| !v.is_finite()) {
+        if w.jac.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(SolveError::NonFinite {
                 t,
                 what: "jacobian",
@@ -158,11 +158,17 @@ impl<S: StageSystems> Integrator<'_, S> {
             w.z.fill(0.0);
             return;
         }
+        // Slices of exactly `n` entries, indexed by `k < n`: no bounds checks.
+        let (d1, d2, d3) = (
+            &w.cont[n..2 * n],
+            &w.cont[2 * n..3 * n],
+            &w.cont[3 * n..4 * n],
+        );
         for (i, &ci) in C.iter().enumerate() {
             let s = ci * ratio;
+            let zi = &mut w.z[i * n..(i + 1) * n];
             for k in 0..n {
-                let d = [w.cont[n + k], w.cont[2 * n + k], w.cont[3 * n + k]];
-                w.z[i * n + k] = polynomial_increment(&d, s);
+                zi[k] = polynomial_increment(&[d1[k], d2[k], d3[k]], s);
             }
         }
     }
@@ -171,14 +177,17 @@ impl<S: StageSystems> Integrator<'_, S> {
     fn stage_residuals(&mut self, t: f64, h: f64) {
         let (n, m) = (self.n, self.m);
         let w = &mut self.w;
+        let (z1, z2, z3) = (&w.z[..n], &w.z[n..2 * n], &w.z[2 * n..3 * n]);
+        let (y, ys, yd) = (&w.y[..n], &mut w.ys[..n], &mut w.yd[..n]);
         for (i, &ci) in C.iter().enumerate() {
+            let zi = &w.z[i * n..(i + 1) * n];
+            let a = AINV[i];
             for k in 0..n {
-                let (z1, z2, z3) = (w.z[k], w.z[n + k], w.z[2 * n + k]);
-                w.ys[k] = w.y[k] + w.z[i * n + k];
-                w.yd[k] = (AINV[i][0] * z1 + AINV[i][1] * z2 + AINV[i][2] * z3) / h;
+                ys[k] = y[k] + zi[k];
+                yd[k] = (a[0] * z1[k] + a[1] * z2[k] + a[2] * z3[k]) / h;
             }
             self.sys
-                .residual(t + ci * h, &w.ys, &w.yd, &mut w.res[i * m..(i + 1) * m]);
+                .residual(t + ci * h, ys, yd, &mut w.res[i * m..(i + 1) * m]);
         }
         self.stats.residual_evals += 3;
     }
@@ -199,10 +208,16 @@ impl<S: StageSystems> Integrator<'_, S> {
                 return Newton::NonFinite(self.newton.iterations());
             }
             // R = −(T⁻¹ ⊗ I) G.
-            for k in 0..m {
-                let (g1, g2, g3) = (w.res[k], w.res[m + k], w.res[2 * m + k]);
-                for (r, ti) in TI.iter().enumerate() {
-                    w.dw[r * m + k] = -(ti[0] * g1 + ti[1] * g2 + ti[2] * g3);
+            {
+                let (g1, g2, g3) = (&w.res[..m], &w.res[m..2 * m], &w.res[2 * m..3 * m]);
+                let (r1, r) = w.dw.split_at_mut(m);
+                let (r2, r3) = r.split_at_mut(m);
+                let (r2, r3) = (&mut r2[..m], &mut r3[..m]);
+                for k in 0..m {
+                    let (g1, g2, g3) = (g1[k], g2[k], g3[k]);
+                    r1[k] = -(TI[0][0] * g1 + TI[0][1] * g2 + TI[0][2] * g3);
+                    r2[k] = -(TI[1][0] * g1 + TI[1][1] * g2 + TI[1][2] * g3);
+                    r3[k] = -(TI[2][0] * g1 + TI[2][1] * g2 + TI[2][2] * g3);
                 }
             }
             w.stages.solve_real(&mut w.dw[..m]);
@@ -225,11 +240,15 @@ impl<S: StageSystems> Integrator<'_, S> {
 
             // Z += (T ⊗ I) ΔW   (T₃₂ = 1, T₃₃ = 0).
             let w = &mut self.w;
+            let (a1, a2, a3) = (&w.dw[..n], &w.dw[m..m + n], &w.dw[2 * m..2 * m + n]);
+            let (z1, z) = w.z.split_at_mut(n);
+            let (z2, z3) = z.split_at_mut(n);
+            let (z2, z3) = (&mut z2[..n], &mut z3[..n]);
             for k in 0..n {
-                let (a1, a2, a3) = (w.dw[k], w.dw[m + k], w.dw[2 * m + k]);
-                w.z[k] += T[0][0] * a1 + T[0][1] * a2 + T[0][2] * a3;
-                w.z[n + k] += T[1][0] * a1 + T[1][1] * a2 + T[1][2] * a3;
-                w.z[2 * n + k] += T[2][0] * a1 + a2;
+                let (a1, a2, a3) = (a1[k], a2[k], a3[k]);
+                z1[k] += T[0][0] * a1 + T[0][1] * a2 + T[0][2] * a3;
+                z2[k] += T[1][0] * a1 + T[1][1] * a2 + T[1][2] * a3;
+                z3[k] += T[2][0] * a1 + a2;
             }
             if verdict == Verdict::Converged {
                 return Newton::Converged(iterations);
@@ -242,8 +261,12 @@ impl<S: StageSystems> Integrator<'_, S> {
         let (n, m) = (self.n, self.m);
         let w = &mut self.w;
         // tmp = (1/h) Σ d_i Z_i,  ez = E(y_n) tmp.
-        for k in 0..n {
-            w.tmp[k] = (DD[0] * w.z[k] + DD[1] * w.z[n + k] + DD[2] * w.z[2 * n + k]) / h;
+        {
+            let (z1, z2, z3) = (&w.z[..n], &w.z[n..2 * n], &w.z[2 * n..3 * n]);
+            let tmp = &mut w.tmp[..n];
+            for k in 0..n {
+                tmp[k] = (DD[0] * z1[k] + DD[1] * z2[k] + DD[2] * z3[k]) / h;
+            }
         }
         mat_vec(&w.e_n, &w.tmp, &mut w.ez);
         for k in 0..m {
@@ -276,15 +299,21 @@ impl<S: StageSystems> Integrator<'_, S> {
     pub(super) fn advance(&mut self, h: f64) {
         let n = self.n;
         let w = &mut self.w;
+        let (z1, z2, z3) = (&w.z[..n], &w.z[n..2 * n], &w.z[2 * n..3 * n]);
+        let (y, yp) = (&mut w.y[..n], &mut w.yp[..n]);
+        let (c0, c) = w.cont.split_at_mut(n);
+        let (c1, c) = c.split_at_mut(n);
+        let (c2, c3) = c.split_at_mut(n);
+        let (c0, c1, c2, c3) = (&mut c0[..n], &mut c1[..n], &mut c2[..n], &mut c3[..n]);
         for k in 0..n {
-            let (z1, z2, z3) = (w.z[k], w.z[n + k], w.z[2 * n + k]);
-            w.y[k] += z3;
+            let (z1, z2, z3) = (z1[k], z2[k], z3[k]);
+            y[k] += z3;
             let d = divided_differences(z1, z2, z3);
-            w.cont[k] = w.y[k];
-            w.cont[n + k] = d[0];
-            w.cont[2 * n + k] = d[1];
-            w.cont[3 * n + k] = d[2];
-            w.yp[k] = (AINV[2][0] * z1 + AINV[2][1] * z2 + AINV[2][2] * z3) / h;
+            c0[k] = y[k];
+            c1[k] = d[0];
+            c2[k] = d[1];
+            c3[k] = d[2];
+            yp[k] = (AINV[2][0] * z1 + AINV[2][1] * z2 + AINV[2][2] * z3) / h;
         }
     }
 }
