@@ -172,7 +172,7 @@ struct Available {
 enum Out<'a> {
     /// `out[k] = …` (a slice of the tape's length).
     Dense,
-    /// `out.fill(0.0); out[(i, j)] = …` (a matrix).
+    /// `out.fill(0.0); out[i + j·rows] = …` (a column-major matrix).
     Sparse(&'a [(u32, u32)]),
 }
 
@@ -386,11 +386,18 @@ fn body(tape: &Tape, out: Out<'_>, fields: Params<'_>, avail: Available) -> Body
             uses.out = !tape.outputs.is_empty();
         }
         Out::Sparse(entries) => {
-            stmts.extend(quote!(out.fill(0.0);));
+            // Column-major storage written directly: nalgebra's `fill` and
+            // `(i, j)` indexing go through generic iterators and two bounds
+            // checks, which cost more than a small Jacobian's arithmetic.
+            stmts.extend(quote!(
+                let rows = out.nrows();
+                let out = out.as_mut_slice();
+                out.fill(0.0);
+            ));
             for (&(i, j), &o) in entries.iter().zip(&tape.outputs) {
                 let (i, j) = (index(i as usize), index(j as usize));
                 let v = value(o);
-                stmts.extend(quote!(out[(#i, #j)] = #v;));
+                stmts.extend(quote!(out[#i + #j * rows] = #v;));
             }
             uses.out = true;
         }

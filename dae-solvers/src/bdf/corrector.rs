@@ -7,6 +7,7 @@ use super::EPS;
 use crate::core::control::Failure as Fail;
 use crate::core::matrix::Corrector;
 use crate::core::newton::{Contraction, Rule, Verdict};
+use crate::linalg::small;
 
 /// Newton iterations per attempt (DASSL's `MAXIT`).
 const MAX_NEWTON_ITERATIONS: usize = 4;
@@ -132,18 +133,7 @@ impl<L: Corrector> Integrator<'_, L> {
             self.lu.solve(&mut self.delta);
             self.stats.newton_iterations += 1;
             self.last_iterations += 1;
-            let cj = self.cj;
-            for (((y, yp), e), d) in self
-                .y
-                .iter_mut()
-                .zip(self.yp.iter_mut())
-                .zip(self.e.iter_mut())
-                .zip(&self.delta)
-            {
-                *y -= d;
-                *e -= d;
-                *yp -= cj * d;
-            }
+            small::correct(&mut self.y, &mut self.yp, &mut self.e, &self.delta, self.cj);
             // An overflowing update is a diverging iteration, not a fault of
             // the problem: the step is retried smaller.
             let delnrm = self.norm(&self.delta);

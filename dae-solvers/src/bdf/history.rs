@@ -7,6 +7,7 @@
 use super::corrector::JacState;
 use super::step::Integrator;
 use crate::core::matrix::Corrector;
+use crate::linalg::small;
 
 /// Re-evaluate the iteration matrix when `c_J/c_J^old` leaves
 /// `[(1−XRATE)/(1+XRATE), (1+XRATE)/(1−XRATE)]`.
@@ -134,10 +135,7 @@ impl<L: Corrector> Integrator<'_, L> {
         let n = self.n;
         if self.ns <= k {
             for j in self.ns..=k {
-                let b = self.beta[j];
-                for p in &mut self.phi[j * n..(j + 1) * n] {
-                    *p *= b;
-                }
+                small::scale(&mut self.phi[j * n..(j + 1) * n], self.beta[j]);
             }
         }
     }
@@ -149,10 +147,7 @@ impl<L: Corrector> Integrator<'_, L> {
         self.t = t_old;
         if self.ns <= k {
             for j in self.ns..=k {
-                let b = 1.0 / self.beta[j];
-                for p in &mut self.phi[j * n..(j + 1) * n] {
-                    *p *= b;
-                }
+                small::scale(&mut self.phi[j * n..(j + 1) * n], 1.0 / self.beta[j]);
             }
         }
         for i in 0..k {
@@ -162,17 +157,7 @@ impl<L: Corrector> Integrator<'_, L> {
 
     /// Block 2: predictor `y⁽⁰⁾ = Σ φ*_i`, `y'⁽⁰⁾ = Σ γ_i φ*_i`.
     pub(super) fn predict(&mut self) {
-        let n = self.n;
-        self.y.copy_from_slice(&self.phi[..n]);
-        self.yp.fill(0.0);
-        for j in 1..=self.k {
-            let g = self.gamma[j];
-            let col = &self.phi[j * n..(j + 1) * n];
-            for ((y, yp), p) in self.y.iter_mut().zip(self.yp.iter_mut()).zip(col) {
-                *y += p;
-                *yp += g * p;
-            }
-        }
+        small::predict(&self.phi, &self.gamma, self.k, &mut self.y, &mut self.yp);
     }
 
     /// After a step of order `k` accepted with corrections `e`: the
@@ -184,14 +169,10 @@ impl<L: Corrector> Integrator<'_, L> {
         if k < self.cfg.max_order {
             self.phi[(k + 1) * n..(k + 2) * n].copy_from_slice(&self.e);
         }
-        for (p, e) in self.phi[k * n..(k + 1) * n].iter_mut().zip(&self.e) {
-            *p += e;
-        }
+        small::add_assign(&mut self.phi[k * n..(k + 1) * n], &self.e);
         for j in (0..k).rev() {
             let (lo, hi) = self.phi.split_at_mut((j + 1) * n);
-            for (a, b) in lo[j * n..].iter_mut().zip(&hi[..n]) {
-                *a += b;
-            }
+            small::add_assign(&mut lo[j * n..], &hi[..n]);
         }
     }
 

@@ -4,6 +4,7 @@
 
 use super::step::Integrator;
 use crate::core::matrix::Corrector;
+use crate::linalg::small;
 
 /// Result of DASSL's error test (block 4), kept for order selection.
 #[derive(Clone, Copy, Debug)]
@@ -40,20 +41,11 @@ impl<L: Corrector> Integrator<'_, L> {
             erkm1: 0.0,
         };
         if k > 1 {
-            for ((d, p), e) in self
-                .delta
-                .iter_mut()
-                .zip(&self.phi[k * n..(k + 1) * n])
-                .zip(&self.e)
-            {
-                *d = p + e;
-            }
+            small::sum(&mut self.delta[..n], &self.phi[k * n..(k + 1) * n], &self.e);
             let erkm1 = self.sigma[k - 1] * self.norm(&self.delta);
             let terkm1 = k as f64 * erkm1;
             let lower = if k > 2 {
-                for (d, p) in self.delta.iter_mut().zip(&self.phi[(k - 1) * n..k * n]) {
-                    *d += p;
-                }
+                small::add_assign(&mut self.delta[..n], &self.phi[(k - 1) * n..k * n]);
                 let erkm2 = self.sigma[k - 2] * self.norm(&self.delta);
                 let terkm2 = (k - 1) as f64 * erkm2;
                 terkm1.max(terkm2) <= terk
@@ -101,14 +93,11 @@ impl<L: Corrector> Integrator<'_, L> {
                     newk = k - 1;
                     est = test.erkm1;
                 } else if k < max_order && k + 1 < self.ns && kdiff != 1 {
-                    for ((d, e), p) in self
-                        .delta
-                        .iter_mut()
-                        .zip(&self.e)
-                        .zip(&self.phi[(k + 1) * n..(k + 2) * n])
-                    {
-                        *d = e - p;
-                    }
+                    small::difference(
+                        &mut self.delta[..n],
+                        &self.e,
+                        &self.phi[(k + 1) * n..(k + 2) * n],
+                    );
                     let erkp1 = self.norm(&self.delta) / (k + 2) as f64;
                     let terkp1 = (k + 2) as f64 * erkp1;
                     if k == 1 {

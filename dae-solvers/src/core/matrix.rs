@@ -251,20 +251,26 @@ impl StageSystems for SquareStages {
     ) -> Result<(), Singular> {
         // E and J are column-major N × N, like the factors.
         let (e, j) = (e.as_slice(), j.as_slice());
-        for (x, (&ev, &jv)) in self.real.matrix_mut().iter_mut().zip(e.iter().zip(j)) {
-            *x = g * ev - jv;
+        let len = e.len();
+        let (e, j) = (&e[..len], &j[..len]);
+        let x = &mut self.real.matrix_mut().as_mut_slice()[..len];
+        for i in 0..len {
+            x[i] = g * e[i] - j[i];
         }
         self.real.factor()?;
         let (re, im) = self.complex.parts_mut();
-        for ((xr, xi), (&ev, &jv)) in re.iter_mut().zip(im.iter_mut()).zip(e.iter().zip(j)) {
-            *xr = a * ev - jv;
-            *xi = b * ev;
+        let (re, im) = (&mut re[..len], &mut im[..len]);
+        for i in 0..len {
+            re[i] = a * e[i] - j[i];
+            im[i] = b * e[i];
         }
         self.complex.factor()
     }
+    #[inline]
     fn solve_real(&mut self, x: &mut [f64]) {
         self.real.solve(x)
     }
+    #[inline]
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]) {
         self.complex.solve(re, im);
     }

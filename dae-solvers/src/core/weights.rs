@@ -85,19 +85,23 @@ impl Weights {
     /// counts as that number).
     pub(crate) fn update_scaled(&mut self, y: &[f64], h: f64) {
         let hinv = 1.0 / h;
-        for (i, (w, yi)) in self.w.iter_mut().zip(y).enumerate() {
-            if !self.in_test[i] {
-                *w = 0.0;
+        let n = self.w.len();
+        let (w, y) = (&mut self.w[..], &y[..n]);
+        let (atol, rtol) = (&self.atol[..n], &self.rtol[..n]);
+        let (in_test, power) = (&self.in_test[..n], &self.index_power[..n]);
+        for i in 0..n {
+            if !in_test[i] {
+                w[i] = 0.0;
                 continue;
             }
-            let base = self.atol[i] + self.rtol[i] * yi.abs();
-            let factor = match self.index_power[i] {
+            let base = atol[i] + rtol[i] * y[i].abs();
+            let factor = match power[i] {
                 0 => 1.0,
                 1 => hinv,
                 2 => hinv * hinv,
                 p => hinv.powi(p),
             };
-            *w = 1.0 / (base * factor).max(f64::MIN_POSITIVE);
+            w[i] = 1.0 / (base * factor).max(f64::MIN_POSITIVE);
         }
     }
 
@@ -110,14 +114,13 @@ impl Weights {
     /// a Runge–Kutta method), as one vector of `blocks · N` entries.
     pub(crate) fn norm_blocks(&self, v: &[f64], stride: usize, blocks: usize) -> f64 {
         let n = self.w.len().min(stride);
-        with_size!(n, |N| norm_kernel(
-            &self.w[..N],
-            v,
-            stride,
-            blocks,
-            N,
-            self.inv_count
-        ))
+        // One block (an error estimate) and three (Radau's stages) are the
+        // calls of every step: constant block counts for them too.
+        with_size!(n, |N| match blocks {
+            1 => norm_kernel(&self.w[..N], v, stride, 1, N, self.inv_count),
+            3 => norm_kernel(&self.w[..N], v, stride, 3, N, self.inv_count),
+            _ => norm_kernel(&self.w[..N], v, stride, blocks, N, self.inv_count),
+        })
     }
 }
 
@@ -132,25 +135,25 @@ fn norm_kernel(
     n: usize,
     inv_count: f64,
 ) -> f64 {
-    // One pass for the largest term — a NaN is remembered rather than
-    // branched on, so the loop stays straight — and one for the scaled sum.
+    // One pass for the largest term, one for the scaled sum. A NaN entry is
+    // passed over by the first (`x > vmax` is false) and makes the sum NaN
+    // in the second; only where the second pass is skipped is it looked for.
     let mut vmax = 0.0_f64;
-    let mut nan = false;
     for b in 0..blocks {
         let vb = &v[b * stride..][..n];
         for i in 0..n {
             let x = (vb[i] * w[i]).abs();
-            nan |= x.is_nan();
             if x > vmax {
                 vmax = x;
             }
         }
     }
-    if nan {
-        return f64::NAN;
-    }
     if vmax == 0.0 || !vmax.is_finite() {
-        return vmax;
+        let nan = (0..blocks).any(|b| {
+            let vb = &v[b * stride..][..n];
+            (0..n).any(|i| (vb[i] * w[i]).is_nan())
+        });
+        return if nan { f64::NAN } else { vmax };
     }
     let mut sum = 0.0;
     for b in 0..blocks {
@@ -177,6 +180,17 @@ mod tests {
         let n = w.norm(&[3.0, 4.0, 1e300]);
         assert!((n - (13.0f64 / 2.0).sqrt()).abs() < 1e-15);
         assert!(w.norm(&[f64::NAN, 0.0, 0.0]).is_nan());
+        // A NaN among finite, among infinite entries, and one made of
+        // `∞ · 0` (an infinite entry with weight zero is out of the test).
+        assert!(w.norm(&[2.0, f64::NAN, 0.0]).is_nan());
+        assert!(w.norm(&[f64::INFINITY, f64::NAN, 0.0]).is_nan());
+        assert_eq!(w.norm(&[f64::INFINITY, 1.0, 0.0]), f64::INFINITY);
+        assert!(w.norm(&[1.0, 1.0, f64::INFINITY]).is_nan());
+        for blocks in [1, 2, 3, 4] {
+            let mut v = vec![1.0; 3 * blocks];
+            v[3 * blocks - 2] = f64::NAN;
+            assert!(w.norm_blocks(&v, 3, blocks).is_nan(), "{blocks} blocks");
+        }
         assert_eq!(w.norm(&[1e308, 1e308, 0.0]), 1e308 * (1.25f64 / 2.0).sqrt());
         // Two blocks of the same vector have the same norm as one.
         let b = w.norm_blocks(&[3.0, 4.0, 0.0, 3.0, 4.0, 0.0], 3, 2);

@@ -73,6 +73,7 @@ pub(crate) use with_size;
 
 pub(crate) mod lstsq;
 pub(crate) mod lu;
+pub(crate) mod small;
 
 pub(crate) use lstsq::ConstrainedLstsq;
 pub(crate) use lu::{ComplexLu, DenseLu, Pivoting, Singular};
@@ -84,13 +85,23 @@ use nalgebra::DMatrix;
 pub(crate) fn mat_vec(m: &DMatrix<f64>, v: &[f64], out: &mut [f64]) {
     let rows = out.len();
     let a = m.as_slice();
-    out.fill(0.0);
-    for (j, &vj) in v.iter().enumerate() {
-        let col = &a[j * rows..(j + 1) * rows];
-        for (o, &aij) in out.iter_mut().zip(col) {
-            *o += aij * vj;
+    with_size!(rows, |R| {
+        let out = &mut out[..R];
+        out.fill(0.0);
+        for (j, &vj) in v.iter().enumerate() {
+            let col = &a[j * R..(j + 1) * R];
+            for i in 0..R {
+                out[i] += col[i] * vj;
+            }
         }
-    }
+    })
+}
+
+/// Whether every entry of `v` is finite: `x · 0` is zero for a finite `x`
+/// and NaN otherwise, so one multiplication and one addition per entry decide
+/// it, without a branch per entry.
+pub(crate) fn all_finite(v: &[f64]) -> bool {
+    v.iter().fold(0.0, |acc, &x| acc + x * 0.0) == 0.0
 }
 
 #[cfg(test)]
@@ -103,5 +114,15 @@ mod tests {
         let mut out = [7.0; 3];
         mat_vec(&m, &[1.0, -1.0], &mut out);
         assert_eq!(out, [-1.0, -1.0, -1.0]);
+    }
+
+    #[test]
+    fn all_finite_sees_every_kind_of_non_finite_entry() {
+        assert!(all_finite(&[]));
+        assert!(all_finite(&[0.0, -1e308, 1e308, f64::MIN_POSITIVE]));
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert!(!all_finite(&[1.0, bad, 2.0]));
+            assert!(!all_finite(&[f64::INFINITY, bad]));
+        }
     }
 }

@@ -145,6 +145,7 @@
 //! weights `h^(k_i−1)/sc_i`.
 
 mod control;
+mod kernels;
 mod stages;
 mod step;
 mod tableau;

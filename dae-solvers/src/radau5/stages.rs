@@ -4,15 +4,14 @@
 //! embedded error estimate, and the new collocation polynomial of an
 //! accepted step.
 
+use super::kernels;
 use super::step::Integrator;
-use super::tableau::{
-    divided_differences, polynomial_increment, AINV, ALPHA, BETA, C, DD, GAMMA, T, TI,
-};
+use super::tableau::{ALPHA, BETA, C, GAMMA};
 use super::{tolerance_factor, NIT, NIT_FIXED, THET, UROUND};
 use crate::core::matrix::{Rows, StageSystems};
 use crate::core::newton::Verdict;
 use crate::core::weights::Weights;
-use crate::linalg::{mat_vec, Singular};
+use crate::linalg::{all_finite, mat_vec, Singular};
 use crate::options::Options;
 use crate::SolveError;
 use dae_core::system::FormulationInfo;
@@ -30,9 +29,9 @@ pub(super) struct Work<S> {
     pub(super) dw: Vec<f64>,
     /// Stage residuals `G_i(Z)` (stride `M`).
     pub(super) res: Vec<f64>,
-    /// A stage value `Y_i`.
+    /// Stage values `Y_i` (stage-major, `3N`).
     pub(super) ys: Vec<f64>,
-    /// A stage derivative `Y'_i`.
+    /// Stage derivatives `Y'_i` (stage-major, `3N`).
     pub(super) yd: Vec<f64>,
     /// `f(t_n, y_n)` (`M`).
     pub(super) f0: Vec<f64>,
@@ -56,7 +55,8 @@ pub(super) struct Work<S> {
     pub(super) jac: DMatrix<f64>,
     /// `∂(E z)/∂y`.
     pub(super) ljac: DMatrix<f64>,
-    /// `E` at the Jacobian point (`E₀` of the iteration matrices).
+    /// `E` at the Jacobian point (`E₀` of the iteration matrices); unused
+    /// when `E` is constant (then `E₀ = E(y_n)`).
     pub(super) e_jac: DMatrix<f64>,
     /// `E(y_n)`.
     pub(super) e_n: DMatrix<f64>,
@@ -76,8 +76,8 @@ impl<S: StageSystems> Work<S> {
             z: v(3 * n),
             dw: v(3 * m),
             res: v(3 * m),
-            ys: v(n),
-            yd: v(n),
+            ys: v(3 * n),
+            yd: v(3 * n),
             f0: v(m),
             yp: v(n),
             weights: Weights::new(
@@ -127,9 +127,11 @@ impl<S: StageSystems> Integrator<'_, S> {
                 *j -= l;
             }
         }
-        w.e_jac.as_mut_slice().copy_from_slice(w.e_n.as_slice());
+        if !self.constant_leading {
+            w.e_jac.as_mut_slice().copy_from_slice(w.e_n.as_slice());
+        }
         self.stats.jacobian_evals += 1;
-        if w.jac.as_slice().iter().any(|v| !v.is_finite()) {
+        if !all_finite(w.jac.as_slice()) {
             return Err(SolveError::NonFinite {
                 t,
                 what: "jacobian",
@@ -141,12 +143,18 @@ impl<S: StageSystems> Integrator<'_, S> {
     /// Factorise `γ/h E₀ − J` and `(α + iβ)/h E₀ − J`.
     pub(super) fn factor(&mut self, h: f64) -> Result<(), Singular> {
         let w = &mut self.w;
+        // A constant `E` is `E(y_n)` at every point; it is not copied.
+        let e0 = if self.constant_leading {
+            &w.e_n
+        } else {
+            &w.e_jac
+        };
         if S::LEAST_SQUARES {
             w.weights.update_scaled(&w.y, h);
-            w.rows.update(&w.e_jac, w.weights.get());
+            w.rows.update(e0, w.weights.get());
         }
         w.stages
-            .factor(&w.e_jac, &w.jac, GAMMA / h, ALPHA / h, BETA / h, &w.rows)
+            .factor(e0, &w.jac, GAMMA / h, ALPHA / h, BETA / h, &w.rows)
     }
 
     /// Zero on the first step, otherwise the last collocation polynomial
@@ -158,36 +166,22 @@ impl<S: StageSystems> Integrator<'_, S> {
             w.z.fill(0.0);
             return;
         }
-        // Slices of exactly `n` entries, indexed by `k < n`: no bounds checks.
-        let (d1, d2, d3) = (
-            &w.cont[n..2 * n],
-            &w.cont[2 * n..3 * n],
-            &w.cont[3 * n..4 * n],
-        );
-        for (i, &ci) in C.iter().enumerate() {
-            let s = ci * ratio;
-            let zi = &mut w.z[i * n..(i + 1) * n];
-            for k in 0..n {
-                zi[k] = polynomial_increment(&[d1[k], d2[k], d3[k]], s);
-            }
-        }
+        kernels::extrapolate(&w.cont, ratio, &mut w.z, n);
     }
 
     /// Stage residuals `G_i(Z) = E(Y_i) Y'_i − f(t + c_i h, Y_i)` into `res`.
     fn stage_residuals(&mut self, t: f64, h: f64) {
-        let (n, m) = (self.n, self.m);
+        let m = self.m;
         let w = &mut self.w;
-        let (z1, z2, z3) = (&w.z[..n], &w.z[n..2 * n], &w.z[2 * n..3 * n]);
-        let (y, ys, yd) = (&w.y[..n], &mut w.ys[..n], &mut w.yd[..n]);
+        let n = self.n;
+        kernels::stage_points(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
         for (i, &ci) in C.iter().enumerate() {
-            let zi = &w.z[i * n..(i + 1) * n];
-            let a = AINV[i];
-            for k in 0..n {
-                ys[k] = y[k] + zi[k];
-                yd[k] = (a[0] * z1[k] + a[1] * z2[k] + a[2] * z3[k]) / h;
-            }
-            self.sys
-                .residual(t + ci * h, ys, yd, &mut w.res[i * m..(i + 1) * m]);
+            self.sys.residual(
+                t + ci * h,
+                &w.ys[i * n..(i + 1) * n],
+                &w.yd[i * n..(i + 1) * n],
+                &mut w.res[i * m..(i + 1) * m],
+            );
         }
         self.stats.residual_evals += 3;
     }
@@ -204,21 +198,9 @@ impl<S: StageSystems> Integrator<'_, S> {
         loop {
             self.stage_residuals(t, h);
             let w = &mut self.w;
-            if w.res.iter().any(|v| !v.is_finite()) {
-                return Newton::NonFinite(self.newton.iterations());
-            }
             // R = −(T⁻¹ ⊗ I) G.
-            {
-                let (g1, g2, g3) = (&w.res[..m], &w.res[m..2 * m], &w.res[2 * m..3 * m]);
-                let (r1, r) = w.dw.split_at_mut(m);
-                let (r2, r3) = r.split_at_mut(m);
-                let (r2, r3) = (&mut r2[..m], &mut r3[..m]);
-                for k in 0..m {
-                    let (g1, g2, g3) = (g1[k], g2[k], g3[k]);
-                    r1[k] = -(TI[0][0] * g1 + TI[0][1] * g2 + TI[0][2] * g3);
-                    r2[k] = -(TI[1][0] * g1 + TI[1][1] * g2 + TI[1][2] * g3);
-                    r3[k] = -(TI[2][0] * g1 + TI[2][1] * g2 + TI[2][2] * g3);
-                }
+            if !kernels::transform_residuals(&w.res, &mut w.dw, m) {
+                return Newton::NonFinite(self.newton.iterations());
             }
             w.stages.solve_real(&mut w.dw[..m]);
             let (re, im) = w.dw[m..].split_at_mut(m);
@@ -240,16 +222,7 @@ impl<S: StageSystems> Integrator<'_, S> {
 
             // Z += (T ⊗ I) ΔW   (T₃₂ = 1, T₃₃ = 0).
             let w = &mut self.w;
-            let (a1, a2, a3) = (&w.dw[..n], &w.dw[m..m + n], &w.dw[2 * m..2 * m + n]);
-            let (z1, z) = w.z.split_at_mut(n);
-            let (z2, z3) = z.split_at_mut(n);
-            let (z2, z3) = (&mut z2[..n], &mut z3[..n]);
-            for k in 0..n {
-                let (a1, a2, a3) = (a1[k], a2[k], a3[k]);
-                z1[k] += T[0][0] * a1 + T[0][1] * a2 + T[0][2] * a3;
-                z2[k] += T[1][0] * a1 + T[1][1] * a2 + T[1][2] * a3;
-                z3[k] += T[2][0] * a1 + a2;
-            }
+            kernels::add_increments(&w.dw, m, &mut w.z, n);
             if verdict == Verdict::Converged {
                 return Newton::Converged(iterations);
             }
@@ -261,13 +234,7 @@ impl<S: StageSystems> Integrator<'_, S> {
         let (n, m) = (self.n, self.m);
         let w = &mut self.w;
         // tmp = (1/h) Σ d_i Z_i,  ez = E(y_n) tmp.
-        {
-            let (z1, z2, z3) = (&w.z[..n], &w.z[n..2 * n], &w.z[2 * n..3 * n]);
-            let tmp = &mut w.tmp[..n];
-            for k in 0..n {
-                tmp[k] = (DD[0] * z1[k] + DD[1] * z2[k] + DD[2] * z3[k]) / h;
-            }
-        }
+        kernels::error_combination(&w.z, h, &mut w.tmp, n);
         mat_vec(&w.e_n, &w.tmp, &mut w.ez);
         for k in 0..m {
             w.err[k] = w.f0[k] + w.ez[k];
@@ -278,7 +245,7 @@ impl<S: StageSystems> Integrator<'_, S> {
             for k in 0..n {
                 w.ys[k] = w.y[k] + w.err[k];
             }
-            self.sys.rhs(t, &w.ys, &mut w.fm);
+            self.sys.rhs(t, &w.ys[..n], &mut w.fm);
             self.stats.residual_evals += 1;
             for k in 0..m {
                 w.err[k] = w.fm[k] + w.ez[k];
@@ -297,23 +264,7 @@ impl<S: StageSystems> Integrator<'_, S> {
     /// polynomial (Newton form on `s = 0, c₂ − 1, c₁ − 1, −1`) and
     /// `y'_{n+1} = Y'_3`.
     pub(super) fn advance(&mut self, h: f64) {
-        let n = self.n;
         let w = &mut self.w;
-        let (z1, z2, z3) = (&w.z[..n], &w.z[n..2 * n], &w.z[2 * n..3 * n]);
-        let (y, yp) = (&mut w.y[..n], &mut w.yp[..n]);
-        let (c0, c) = w.cont.split_at_mut(n);
-        let (c1, c) = c.split_at_mut(n);
-        let (c2, c3) = c.split_at_mut(n);
-        let (c0, c1, c2, c3) = (&mut c0[..n], &mut c1[..n], &mut c2[..n], &mut c3[..n]);
-        for k in 0..n {
-            let (z1, z2, z3) = (z1[k], z2[k], z3[k]);
-            y[k] += z3;
-            let d = divided_differences(z1, z2, z3);
-            c0[k] = y[k];
-            c1[k] = d[0];
-            c2[k] = d[1];
-            c3[k] = d[2];
-            yp[k] = (AINV[2][0] * z1 + AINV[2][1] * z2 + AINV[2][2] * z3) / h;
-        }
+        kernels::advance(&w.z, h, &mut w.y, &mut w.yp, &mut w.cont);
     }
 }

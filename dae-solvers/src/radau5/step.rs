@@ -10,6 +10,7 @@ use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::matrix::StageSystems;
 use crate::core::newton::{Contraction, Rule};
+use crate::linalg::all_finite;
 use crate::options::Options;
 use crate::{Problem, SolveError, Stats};
 use dae_core::system::DaeSystem;
@@ -131,7 +132,7 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
     fn evaluate_at_step_point(&mut self, t: f64, first: bool) -> Result<(), SolveError> {
         self.sys.rhs(t, &self.w.y, &mut self.w.f0);
         self.stats.residual_evals += 1;
-        if self.w.f0.iter().any(|v| !v.is_finite()) {
+        if !all_finite(&self.w.f0) {
             return Err(SolveError::NonFinite {
                 t,
                 what: "residual",
@@ -139,7 +140,7 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
         }
         if first || !self.constant_leading {
             self.sys.leading(&self.w.y, &mut self.w.e_n);
-            if self.w.e_n.iter().any(|v| !v.is_finite()) {
+            if !all_finite(self.w.e_n.as_slice()) {
                 return Err(SolveError::NonFinite {
                     t,
                     what: "leading matrix",

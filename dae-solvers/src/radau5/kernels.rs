@@ -1,0 +1,156 @@
+//! The per-unknown loops of a Radau IIA step, written once for `n`
+//! unknowns and instantiated for the constant sizes 1 … 12 by
+//! [`with_size!`](crate::linalg::with_size): at five unknowns a loop's own
+//! counting and bounds checks cost as much as its arithmetic. Stages are
+//! stored stage-major (`Z_1, Z_2, Z_3`, `n` apart); transformed
+//! right-hand sides `m` apart.
+
+use super::tableau::{divided_differences, polynomial_increment, AINV, C, DD, T, TI};
+use crate::linalg::with_size;
+
+/// The stage points: `Y_i = y + Z_i` into `ys`, `Y'_i = (1/h) Σ_j A⁻¹_ij
+/// Z_j` into `yd` (both stage-major, `3n`).
+pub(super) fn stage_points(y: &[f64], z: &[f64], h: f64, ys: &mut [f64], yd: &mut [f64]) {
+    let n = y.len();
+    with_size!(n, |N| stage_points_n(
+        &y[..N],
+        &z[..3 * N],
+        h,
+        &mut ys[..3 * N],
+        &mut yd[..3 * N],
+        N
+    ))
+}
+
+#[inline(always)]
+fn stage_points_n(y: &[f64], z: &[f64], h: f64, ys: &mut [f64], yd: &mut [f64], n: usize) {
+    let (z1, z2, z3) = (&z[..n], &z[n..2 * n], &z[2 * n..3 * n]);
+    for (i, a) in AINV.iter().enumerate() {
+        let zi = &z[i * n..(i + 1) * n];
+        let (ysi, ydi) = (&mut ys[i * n..(i + 1) * n], &mut yd[i * n..(i + 1) * n]);
+        for k in 0..n {
+            ysi[k] = y[k] + zi[k];
+            ydi[k] = (a[0] * z1[k] + a[1] * z2[k] + a[2] * z3[k]) / h;
+        }
+    }
+}
+
+/// `R = −(T⁻¹ ⊗ I) G`: the stage residuals `res` (three blocks of `m`)
+/// into the transformed right-hand sides `dw` (three blocks of `m`).
+/// Whether every residual is finite (checked on the way, not in a pass of
+/// its own).
+pub(super) fn transform_residuals(res: &[f64], dw: &mut [f64], m: usize) -> bool {
+    with_size!(m, |M| transform_residuals_n(
+        &res[..3 * M],
+        &mut dw[..3 * M],
+        M
+    ))
+}
+
+#[inline(always)]
+fn transform_residuals_n(res: &[f64], dw: &mut [f64], m: usize) -> bool {
+    // `x · 0` is zero for a finite `x` and NaN otherwise: one multiplication
+    // and one addition per entry instead of a classification.
+    let mut check = 0.0;
+    let (g1, g2, g3) = (&res[..m], &res[m..2 * m], &res[2 * m..3 * m]);
+    let (r1, r) = dw.split_at_mut(m);
+    let (r2, r3) = r.split_at_mut(m);
+    let (r1, r2, r3) = (&mut r1[..m], &mut r2[..m], &mut r3[..m]);
+    for k in 0..m {
+        let (g1, g2, g3) = (g1[k], g2[k], g3[k]);
+        check += g1 * 0.0 + g2 * 0.0 + g3 * 0.0;
+        r1[k] = -(TI[0][0] * g1 + TI[0][1] * g2 + TI[0][2] * g3);
+        r2[k] = -(TI[1][0] * g1 + TI[1][1] * g2 + TI[1][2] * g3);
+        r3[k] = -(TI[2][0] * g1 + TI[2][1] * g2 + TI[2][2] * g3);
+    }
+    check == 0.0
+}
+
+/// `Z += (T ⊗ I) ΔW` (`T₃₂ = 1`, `T₃₃ = 0`): the increments, the first `n`
+/// of each block of `dw` (`m` apart), added to the stages `z`.
+pub(super) fn add_increments(dw: &[f64], m: usize, z: &mut [f64], n: usize) {
+    with_size!(n, |N| add_increments_n(dw, m, &mut z[..3 * N], N))
+}
+
+#[inline(always)]
+fn add_increments_n(dw: &[f64], m: usize, z: &mut [f64], n: usize) {
+    let (a1, a2, a3) = (&dw[..n], &dw[m..m + n], &dw[2 * m..2 * m + n]);
+    let (z1, zr) = z.split_at_mut(n);
+    let (z2, z3) = zr.split_at_mut(n);
+    let (z1, z2, z3) = (&mut z1[..n], &mut z2[..n], &mut z3[..n]);
+    for k in 0..n {
+        let (a1, a2, a3) = (a1[k], a2[k], a3[k]);
+        z1[k] += T[0][0] * a1 + T[0][1] * a2 + T[0][2] * a3;
+        z2[k] += T[1][0] * a1 + T[1][1] * a2 + T[1][2] * a3;
+        z3[k] += T[2][0] * a1 + a2;
+    }
+}
+
+/// Starting stages: the collocation polynomial `cont` (`4n`, Newton form)
+/// of the last step extrapolated to the new nodes, `ratio = h / h_old`.
+pub(super) fn extrapolate(cont: &[f64], ratio: f64, z: &mut [f64], n: usize) {
+    with_size!(n, |N| extrapolate_n(
+        &cont[..4 * N],
+        ratio,
+        &mut z[..3 * N],
+        N
+    ))
+}
+
+#[inline(always)]
+fn extrapolate_n(cont: &[f64], ratio: f64, z: &mut [f64], n: usize) {
+    let (d1, d2, d3) = (&cont[n..2 * n], &cont[2 * n..3 * n], &cont[3 * n..4 * n]);
+    for (i, &ci) in C.iter().enumerate() {
+        let s = ci * ratio;
+        let zi = &mut z[i * n..(i + 1) * n];
+        for k in 0..n {
+            zi[k] = polynomial_increment(&[d1[k], d2[k], d3[k]], s);
+        }
+    }
+}
+
+/// `(1/h) Σ d_i Z_i` into `out` (the embedded estimate's combination).
+pub(super) fn error_combination(z: &[f64], h: f64, out: &mut [f64], n: usize) {
+    with_size!(n, |N| error_combination_n(&z[..3 * N], h, &mut out[..N], N))
+}
+
+#[inline(always)]
+fn error_combination_n(z: &[f64], h: f64, out: &mut [f64], n: usize) {
+    let (z1, z2, z3) = (&z[..n], &z[n..2 * n], &z[2 * n..3 * n]);
+    for k in 0..n {
+        out[k] = (DD[0] * z1[k] + DD[1] * z2[k] + DD[2] * z3[k]) / h;
+    }
+}
+
+/// An accepted step: `y += Z_3`, the new collocation polynomial `cont`
+/// (Newton form on `s = 0, c₂ − 1, c₁ − 1, −1`) and `y' = Y'_3` into `yp`.
+pub(super) fn advance(z: &[f64], h: f64, y: &mut [f64], yp: &mut [f64], cont: &mut [f64]) {
+    let n = y.len();
+    with_size!(n, |N| advance_n(
+        &z[..3 * N],
+        h,
+        &mut y[..N],
+        &mut yp[..N],
+        &mut cont[..4 * N],
+        N
+    ))
+}
+
+#[inline(always)]
+fn advance_n(z: &[f64], h: f64, y: &mut [f64], yp: &mut [f64], cont: &mut [f64], n: usize) {
+    let (z1, z2, z3) = (&z[..n], &z[n..2 * n], &z[2 * n..3 * n]);
+    let (c0, c) = cont.split_at_mut(n);
+    let (c1, c) = c.split_at_mut(n);
+    let (c2, c3) = c.split_at_mut(n);
+    let (c0, c1, c2, c3) = (&mut c0[..n], &mut c1[..n], &mut c2[..n], &mut c3[..n]);
+    for k in 0..n {
+        let (z1, z2, z3) = (z1[k], z2[k], z3[k]);
+        y[k] += z3;
+        let d = divided_differences(z1, z2, z3);
+        c0[k] = y[k];
+        c1[k] = d[0];
+        c2[k] = d[1];
+        c3[k] = d[2];
+        yp[k] = (AINV[2][0] * z1 + AINV[2][1] * z2 + AINV[2][2] * z3) / h;
+    }
+}
