@@ -4,8 +4,10 @@
 
 use dae::runner::{Accuracy, ErrorInfo, Named, Residuals, RunRecord, Trajectory};
 use dae::scene::Scene;
+use dae::sweep::fortran;
 use dae::sweep::paper::{self, PaperCell, PaperTable, Verdict};
 use dae::sweep::pareto::{self, Point};
+use dae::sweep::plot;
 use dae::sweep::table::{self, Mark};
 use dae::sweep::write::{atomic_write, atomic_write_via, atomic_write_with};
 use dae::sweep::{self, Pair, SweepOptions, SweepRun};
@@ -727,4 +729,276 @@ fn bad_grids_are_refused() {
         sweep::validate(&empty),
         Err(sweep::SweepError::Empty { what: "tolerances" })
     ));
+}
+
+// ------------------------------------------ Fortran reference lines (S01/S02)
+
+/// A hand-built report of the built-in pendulum: radau5 on rcd1, rcd0 and
+/// (not applicable) ovd0 at 1e-5 and 1e-6.
+fn pendulum_report(name: &str, t_end: f64, reference: &'static str) -> sweep::SweepReport {
+    let forms = names(&["rcd1", "rcd0", "ovd0"]);
+    let mut runs = Vec::new();
+    for f in ["rcd1", "rcd0"] {
+        runs.push(run(rec("radau5", f, 1e-5, 0.2, Some(1e-3))));
+        runs.push(run(rec("radau5", f, 1e-6, 0.3, Some(1e-4))));
+    }
+    sweep::SweepReport {
+        scene: sweep::SceneInfo {
+            name: name.into(),
+            origin: "test".into(),
+            model: "pendulum".into(),
+            t0: 0.0,
+            t_end,
+            checks: 1000,
+            reference,
+        },
+        solvers: names(&["radau5"]),
+        formulations: forms,
+        tolerances: vec![1e-5, 1e-6],
+        repeats: 1,
+        jobs: 1,
+        figure_tol: 1e-6,
+        pairs: vec![
+            pair("radau5", "rcd1", None),
+            pair("radau5", "rcd0", None),
+            pair(
+                "radau5",
+                "ovd0",
+                Some("overdetermined: solver needs a square system"),
+            ),
+        ],
+        runs,
+        wall_s: 1.0,
+        variables: names(&["x", "y", "v", "w", "lambda"]),
+        invariants: names(&["energy"]),
+        constraints: vec![(0, "x^2 + y^2 - l^2".into())],
+        builtin_pendulum: true,
+    }
+}
+
+fn work_precision(report: &sweep::SweepReport) -> plot::Figure {
+    plot::figures(report)
+        .figures
+        .into_iter()
+        .find(|f| f.file == "work_precision")
+        .expect("a work-precision figure")
+}
+
+/// The Fortran series of a work-precision figure: (label, points).
+fn fortran_series(fig: &plot::Figure) -> Vec<(String, usize)> {
+    fig.panels[0]
+        .series
+        .iter()
+        .filter(|s| s.label.contains("(Fortran, "))
+        .map(|s| (s.label.clone(), s.points.len()))
+        .collect()
+}
+
+#[test]
+fn shipped_fortran_measurements_parse() {
+    let shipped = fortran::Shipped::load().unwrap_or_else(|e| panic!("{e}"));
+    // side_by_side: 8 Fortran code/formulation/scenario rows × 8 tols, and
+    // as many dae-* rows; extended: × 4 tols each; anchors: 38 × 8.
+    assert_eq!(shipped.fortran.len(), 64 + 32 + 304);
+    assert_eq!(shipped.ours.len(), 64 + 32);
+    // The note's claims rest on the anchors' header: the same error as
+    // ours, CPU seconds, the machine class.
+    let header = shipped.anchors_header.join("\n");
+    for claim in [
+        "err_true: max over check times of max(|x-x*|,|y-y*|,|v-v*|,|w-w*|)",
+        "cpu_s: median CPU seconds per integration",
+        "gfortran 12 -O2",
+        "2-core machine",
+    ] {
+        assert!(header.contains(claim), "anchors header lacks `{claim}`");
+    }
+    // Side-by-side and anchors are the same binaries: where both have a
+    // run, error and steps agree (so taking either changes no error).
+    let mut both = 0;
+    for s in shipped
+        .fortran
+        .iter()
+        .filter(|m| m.file != fortran::ANCHORS_FILE)
+    {
+        if let Some(a) = shipped.fortran.iter().find(|a| {
+            a.file == fortran::ANCHORS_FILE
+                && a.code == s.code
+                && a.formulation == s.formulation
+                && a.scenario == s.scenario
+                && paper::same_tol(a.tol, s.tol)
+        }) {
+            assert_eq!((a.ok, a.steps), (s.ok, s.steps), "{s:?}");
+            assert!((a.err / s.err - 1.0).abs() < 1e-3, "{s:?} vs {a:?}");
+            both += 1;
+        }
+    }
+    assert_eq!(both, 64);
+}
+
+#[test]
+fn malformed_fortran_csv_is_a_typed_error() {
+    let bad = "code,formulation,scenario,tol,err_true,steps,time_median_s,status\n\
+               fortran-radau5,rcd1,S02,1e-5,oops,10,0.1,ok\n";
+    match fortran::Shipped::parse(
+        bad,
+        fortran::SIDE_BY_SIDE_EXTENDED_CSV,
+        fortran::ANCHORS_CSV,
+    ) {
+        Err(fortran::FortranError::Csv { file, .. }) => {
+            assert_eq!(file, fortran::SIDE_BY_SIDE_FILE)
+        }
+        other => panic!("expected a CSV error, got {other:?}"),
+    }
+    // A missing time column is an error too, not a line without times.
+    let no_time = "solver,formulation,scenario,tol,status,err_true,steps\n\
+                   radau5,rcd1,S02,1e-5,ok,1e-3,10\n";
+    assert!(matches!(
+        fortran::Shipped::parse(
+            fortran::SIDE_BY_SIDE_CSV,
+            fortran::SIDE_BY_SIDE_EXTENDED_CSV,
+            no_time
+        ),
+        Err(fortran::FortranError::Csv {
+            file: fortran::ANCHORS_FILE,
+            ..
+        })
+    ));
+}
+
+#[test]
+fn s02_work_precision_carries_the_fortran_curves() {
+    let report = pendulum_report("S02", 2000.0, "exact");
+    let fig = work_precision(&report);
+    // The swept formulations with an applicable pair (ovd0 has none, so no
+    // ODASSL(ovd0)), codes in the files' order; successful runs only
+    // (RADAU5 rcd1: 1e-3 … 1e-14 of the side-by-side files; MEBDF rcd0
+    // fails from 1e-7 on).
+    assert_eq!(
+        fortran_series(&fig),
+        [
+            ("RADAU5 (Fortran, rcd1)", 12),
+            ("MEBDF (Fortran, rcd1)", 5),
+            ("MEBDF maxder5 (Fortran, rcd1)", 8),
+            ("RADAU5 (Fortran, rcd0)", 11),
+            ("DASSL (Fortran, rcd0)", 9),
+            ("ODASSL (Fortran, rcd0)", 6),
+            ("DASPK (Fortran, rcd0)", 8),
+            ("MEBDF (Fortran, rcd0)", 2),
+            ("MEBDF maxder5 (Fortran, rcd0)", 8),
+        ]
+        .map(|(l, n)| (l.to_string(), n))
+    );
+    let series = &fig.panels[0].series;
+    let radau = series
+        .iter()
+        .find(|s| s.label == "RADAU5 (Fortran, rcd1)")
+        .unwrap();
+    // (time_median_s, err_true) of fortran-radau5,rcd1,S02 at 1e-3 (the
+    // loosest, first) and 1e-5.
+    assert_eq!(radau.points[0], (4.9045e-02, 5.1650e+00));
+    assert_eq!(radau.points[2], (8.1936e-02, 5.2536e+00));
+    // Anchors' curves plot cpu_s: daspk,rcd0,S02,1e-5.
+    let daspk = series
+        .iter()
+        .find(|s| s.label == "DASPK (Fortran, rcd0)")
+        .unwrap();
+    assert_eq!(daspk.points[0].1, 8.23471);
+    // Drawn apart from ours: dotted, hollow markers; under our lines.
+    assert_eq!(radau.look, plot::reference_look("radau5", "rcd1"));
+    assert!(radau.look.hollow && radau.look.line == plot::Line::Dotted);
+    let ours = series
+        .iter()
+        .position(|s| s.label == "radau5(rcd1)")
+        .unwrap();
+    let last_ref = series
+        .iter()
+        .rposition(|s| s.label.contains("(Fortran, "))
+        .unwrap();
+    assert!(last_ref < ours);
+    assert!(fig
+        .legend
+        .iter()
+        .any(|(l, lk, m)| l == "DASSL (Fortran, rcd0)" && lk.hollow && *m));
+    assert!(fig.caption.contains("time_median_s") && fig.caption.contains("cpu_s"));
+    assert!(fig.caption.contains("another session"));
+    // The legend fits: the figure grows with its entries.
+    assert!(fig.size.1 >= 44 + 26 * fig.legend.len() as u32 + 48);
+
+    // results.json, index.html and the text report name them too.
+    let summary = sweep::Summary::of(&report);
+    let lines = summary.reference_lines.as_ref().expect("reference lines");
+    assert_eq!(lines.curves.len(), 9);
+    let json = sweep::results_json(&report, &summary);
+    let curves = json["reference_lines"]["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), 9);
+    assert_eq!(curves[0]["label"], "RADAU5 (Fortran, rcd1)");
+    assert_eq!(curves[0]["time_column"], "time_median_s");
+    assert_eq!(curves[0]["points"].as_array().unwrap().len(), 12);
+    assert_eq!(json["reference_lines"]["scenario"], "S02");
+    let html = sweep::html::index(&report, &summary, &[&fig], &[]);
+    assert!(html.contains("id=\"fortran\"") && html.contains("DASPK (Fortran, rcd0)"));
+    assert!(html.contains(
+        "MEBDF (Fortran, rcd0) (2 point(s), cpu_s of data/fortran_anchors.csv; failed at 1e-7"
+    ));
+    let text = table::text_report(&report, &summary);
+    assert!(text.contains("Reference lines in the work-precision diagram: RADAU5 (Fortran, rcd1)"));
+}
+
+#[test]
+fn s01_gets_its_own_curves_and_other_scenes_none() {
+    let s01 = pendulum_report("s01", 20.0, "exact");
+    let got = fortran_series(&work_precision(&s01));
+    assert_eq!(got.len(), 9);
+    assert_eq!(got[0], ("RADAU5 (Fortran, rcd1)".to_string(), 12));
+    // DASSL rcd0 S01 fails only at 1e-14.
+    assert!(got.contains(&("DASSL (Fortran, rcd0)".to_string(), 11)));
+    // Not the paper's scenario: another name, another horizon, another
+    // model, or no reference (the y axis is then a residual).
+    let mut other_model = pendulum_report("S02", 2000.0, "exact");
+    other_model.builtin_pendulum = false;
+    for report in [
+        pendulum_report("pendulum", 2000.0, "exact"),
+        pendulum_report("S02", 200.0, "exact"),
+        pendulum_report("S02", 2000.0, "none"),
+        other_model,
+    ] {
+        let fig = work_precision(&report);
+        assert!(fortran_series(&fig).is_empty(), "{}", report.scene.name);
+        assert!(!fig.caption.contains("Fortran"));
+        assert!(sweep::Summary::of(&report).reference_lines.is_none());
+    }
+    // Formulations without any Fortran run get no line: S02 on ovd1 alone.
+    let mut ovd1 = pendulum_report("S02", 2000.0, "exact");
+    ovd1.formulations = names(&["ovd1"]);
+    ovd1.pairs = vec![pair("odradau", "ovd1", None)];
+    ovd1.runs = vec![run(rec("odradau", "ovd1", 1e-5, 0.2, Some(1e-3)))];
+    assert!(fortran_series(&work_precision(&ovd1)).is_empty());
+}
+
+#[test]
+fn timing_calibration_against_the_side_by_side_session() {
+    let shipped = fortran::Shipped::load().unwrap();
+    // The session's own radau5(rcd1) run on S02 at 1e-5 (a dae-* row); a
+    // run here with twice its time per step gives the ratio 2.
+    let there = shipped
+        .ours
+        .iter()
+        .find(|m| {
+            m.code == "radau5" && m.formulation == "rcd1" && m.scenario == "S02" && m.tol == 1e-5
+        })
+        .unwrap()
+        .clone();
+    let mut r = rec("radau5", "rcd1", 1e-5, 2.0 * there.time_s, Some(1.0));
+    r.stats.steps = there.steps as usize;
+    let runs = vec![run(r), run(failed("radau5", "rcd0", 1e-5))];
+    let c = shipped
+        .calibration(paper::Scenario::S02, &runs)
+        .expect("one run to compare");
+    assert_eq!(c.runs, 1);
+    assert!((c.median - 2.0).abs() < 1e-12, "{c:?}");
+    // A tolerance the session did not run: nothing to compare.
+    let elsewhere = vec![run(rec("radau5", "rcd1", 2e-5, 1.0, Some(1.0)))];
+    assert!(shipped
+        .calibration(paper::Scenario::S02, &elsewhere)
+        .is_none());
 }

@@ -1,6 +1,7 @@
 //! `index.html`: the tables and figures of a sweep on one self-contained
 //! page (inline CSS, no JavaScript, figures linked relatively).
 
+use super::fortran::ReferenceLines;
 use super::paper::Verdict;
 use super::plot::Figure;
 use super::table::{accuracy_line, efficiency_rows, paper_cell, sci, tol_label, Mark};
@@ -179,6 +180,42 @@ fn paper_html(summary: &Summary) -> String {
     s
 }
 
+/// The paragraph on the Fortran reference lines of the work-precision
+/// diagram: which codes, where from, how many points, where they failed.
+fn reference_lines_html(lines: &ReferenceLines) -> String {
+    let mut s = format!(
+        "<p id=\"fortran\">The work-precision diagram carries {} Fortran reference line(s) for {}: ",
+        lines.curves.len(),
+        lines.scenario.name()
+    );
+    let items: Vec<String> = lines
+        .curves
+        .iter()
+        .map(|c| {
+            let mut item = format!(
+                "{} ({} point(s), {} of data/{}",
+                c.label,
+                c.points.len(),
+                c.time_column,
+                c.files.join(" and data/")
+            );
+            if !c.failed.is_empty() {
+                let tols: Vec<String> = c.failed.iter().map(|t| tol_label(*t)).collect();
+                let _ = write!(item, "; failed at {}", tols.join(", "));
+            }
+            item.push(')');
+            item
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "{}. They were measured in another session, not by this sweep: errors compare exactly, times only \
+         roughly (see the caption of the diagram).</p>",
+        esc(&items.join("; "))
+    );
+    s
+}
+
 /// The page.
 pub fn index(
     report: &SweepReport,
@@ -273,13 +310,27 @@ pub fn index(
     s.push_str("<h2 id=\"paper\">Against the paper</h2>\n");
     s.push_str(&paper_html(summary));
     s.push_str("<h2 id=\"figures\">Figures</h2>\n");
+    let drawn_wp = figures.iter().any(|f| f.file == "work_precision");
+    if let Some(lines) = summary.reference_lines.as_ref().filter(|_| drawn_wp) {
+        s.push_str(&reference_lines_html(lines));
+    }
     for f in figures {
+        let alt = match &summary.reference_lines {
+            Some(lines) if f.file == "work_precision" => format!(
+                "{}; dotted grey lines with hollow markers: {} Fortran reference curve(s) on this scene ({}), \
+                 measured in another session on a machine of the same class",
+                f.title,
+                lines.curves.len(),
+                lines.scenario.name()
+            ),
+            _ => f.title.clone(),
+        };
         let _ = writeln!(
             s,
             "<figure><a href=\"{0}.svg\"><img src=\"{0}.svg\" alt=\"{1}\"></a><figcaption>{2} \
              (<a href=\"{0}.svg\">SVG</a>, <a href=\"{0}.png\">PNG</a>)</figcaption></figure>",
             esc(&f.file),
-            esc(&f.title),
+            esc(&alt),
             esc(&f.caption)
         );
     }

@@ -1,7 +1,9 @@
 //! `dae sweep`: every solver × formulation × tolerance of a scene, and the
 //! paper's report of the speed/accuracy trade — success matrix, efficiency
 //! table, Pareto front, fastest pair per target error, comparison with the
-//! paper's tables, figures and an `index.html` that shows them together.
+//! paper's tables, figures (on S01/S02 the work-precision diagram carries
+//! the Fortran codes' curves as reference lines, [`fortran`]) and an
+//! `index.html` that shows them together.
 //!
 //! # Flow
 //! [`run`] loads the scene's model, decides for every pair whether it is
@@ -37,6 +39,7 @@
 //!
 //! [`Solver::accepts`]: dae_solvers::Solver::accepts
 
+pub mod fortran;
 pub mod html;
 pub mod paper;
 pub mod pareto;
@@ -313,6 +316,10 @@ pub struct Summary {
     pub targets: Vec<pareto::Target>,
     /// Comparison with the paper (scenes S01 and S02 only).
     pub paper: Option<paper::Comparison>,
+    /// The Fortran reference lines of the work-precision diagram (scenes
+    /// S01 and S02 only; `None` also when the shipped data cannot be read,
+    /// which the figures report as a note).
+    pub reference_lines: Option<fortran::ReferenceLines>,
 }
 
 impl Summary {
@@ -335,6 +342,7 @@ impl Summary {
             pareto: pareto::pareto_front(&report.runs),
             targets: pareto::targets(&report.runs, &pareto::TARGETS),
             paper,
+            reference_lines: fortran::ReferenceLines::for_report(report).ok().flatten(),
         }
     }
 }
@@ -694,8 +702,15 @@ fn parallel(
 ///   "success": {legend, formulations, rows: [{solver, cells: [{formulation, mark, ok, runs, reason?}]}]},
 ///   "pareto":  {error: "err", definition, rows: [{solver, formulation, tol, tsim_s, err}]},
 ///   "targets": {error: "err", rows: [{target, best: {solver, formulation, tol, tsim_s, err} | null}]},
-///   "paper":   {table, note, rows: [...], counts: [...]} | null }
+///   "paper":   {table, note, rows: [...], counts: [...]} | null,
+///   "reference_lines": {scenario, note, header, calibration,
+///                       curves: [{label, code, formulation, time_column, files,
+///                                 points: [{tol, err, time_s, steps}], failed}]} | null }
 /// ```
+///
+/// `reference_lines` are the Fortran curves drawn as reference lines in the
+/// work-precision diagram (measured elsewhere, not by this sweep; see
+/// [`fortran`]).
 pub fn results_json(report: &SweepReport, summary: &Summary) -> serde_json::Value {
     serde_json::to_value(ResultsDoc::new(report, summary)).unwrap_or(serde_json::Value::Null)
 }
@@ -710,6 +725,7 @@ struct ResultsDoc<'a> {
     pareto: Explained<&'a [pareto::Point]>,
     targets: Explained<&'a [pareto::Target]>,
     paper: Option<&'a paper::Comparison>,
+    reference_lines: Option<&'a fortran::ReferenceLines>,
 }
 
 #[derive(Serialize)]
@@ -760,6 +776,7 @@ impl<'a> ResultsDoc<'a> {
                 rows: &summary.targets,
             },
             paper: summary.paper.as_ref(),
+            reference_lines: summary.reference_lines.as_ref(),
         }
     }
 }

@@ -149,17 +149,13 @@ impl PaperTable {
         })
     }
 
-    /// The paper table for a scene, when the scene is one of the paper's:
-    /// its name is `S01`/`S02` (any case), it integrates the built-in
-    /// pendulum and its horizon is the paper's.
+    /// The paper table for a scene, when the scene is one of the paper's
+    /// ([`scenario`]: name `S01`/`S02`, the built-in pendulum, the paper's
+    /// horizon).
     pub fn for_scene(name: &str, builtin_pendulum: bool, t_end: f64) -> Option<PaperTable> {
-        if !builtin_pendulum {
-            return None;
-        }
-        let (label, text) = match name.to_ascii_uppercase().as_str() {
-            "S01" if t_end == 20.0 => ("Table 6 (S01)", TABLE6_S01_CSV),
-            "S02" if t_end == 2000.0 => ("Table 9 (S02)", TABLE9_S02_CSV),
-            _ => return None,
+        let (label, text) = match scenario(name, builtin_pendulum, t_end)? {
+            Scenario::S01 => ("Table 6 (S01)", TABLE6_S01_CSV),
+            Scenario::S02 => ("Table 9 (S02)", TABLE9_S02_CSV),
         };
         PaperTable::parse(label, text).ok()
     }
@@ -184,6 +180,41 @@ impl PaperTable {
         self.rows
             .iter()
             .any(|r| r.solver == solver && r.formulation == formulation)
+    }
+}
+
+/// One of the paper's two scenarios (SPEC §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Scenario {
+    /// The pendulum on [0, 20], checked at t = 20.
+    S01,
+    /// The pendulum on [0, 2000], checked every 2 s.
+    S02,
+}
+
+impl Scenario {
+    /// `S01` or `S02`, as the reference files name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scenario::S01 => "S01",
+            Scenario::S02 => "S02",
+        }
+    }
+}
+
+/// Which of the paper's scenarios a scene is, if any: its name is
+/// `S01`/`S02` (any case), it integrates the built-in pendulum and its
+/// horizon is the scenario's (20 or 2000). The one rule for everything
+/// measured elsewhere on the paper's scenarios: the paper's tables and the
+/// Fortran reference lines ([`super::fortran`]).
+pub fn scenario(name: &str, builtin_pendulum: bool, t_end: f64) -> Option<Scenario> {
+    if !builtin_pendulum {
+        return None;
+    }
+    match name.to_ascii_uppercase().as_str() {
+        "S01" if t_end == 20.0 => Some(Scenario::S01),
+        "S02" if t_end == 2000.0 => Some(Scenario::S02),
+        _ => None,
     }
 }
 

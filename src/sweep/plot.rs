@@ -8,16 +8,21 @@
 //! these three at the figure tolerance with one curve per pair, and
 //! - `work_precision`: `err` against `tsim`, log-log, one line per
 //!   solver(formulation) through its tolerances, with the Pareto front
-//!   (Fig. 6/12). Without a reference it plots the position-constraint
-//!   residual instead of the error.
+//!   (Fig. 6/12). On the paper's scenarios S01/S02 it also carries the
+//!   Fortran codes' curves on the swept formulations as reference lines
+//!   ([`super::fortran`], [`reference_look`]). Without a reference it plots
+//!   the position-constraint residual instead of the error.
 //!
 //! A figure is first described as data ([`Figure`]: panels of series) and
 //! then drawn by one renderer on either backend. Colours encode the
 //! formulation, line style and marker the solver, so a pair keeps its look
-//! in every figure and every sweep. Axes carry no units: the model language
+//! in every figure and every sweep; a Fortran reference line is dotted grey
+//! (tinted towards the formulation) with hollow markers in the
+//! formulation's colour, one shape per code. Axes carry no units: the model language
 //! declares none, and a unit guessed from a name is wrong for the next
 //! model (`tsim` is measured, in seconds).
 
+use super::fortran::ReferenceLines;
 use super::table::tol_label;
 use super::{write, SweepReport, SweepRun};
 use plotters::coord::ranged1d::{Ranged, ValueFormatter};
@@ -60,6 +65,23 @@ pub enum Marker {
     Triangle,
     /// A square.
     Square,
+    /// A diamond.
+    Diamond,
+    /// A triangle pointing down.
+    TriangleDown,
+    /// A diagonal cross.
+    Cross,
+}
+
+/// How a line is stroked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Line {
+    /// Continuous.
+    Solid,
+    /// Dashes of 9 px, gaps of 5 px.
+    Dashed,
+    /// Short dashes of 3 px, gaps of 4 px (the Fortran reference lines).
+    Dotted,
 }
 
 /// How a series looks.
@@ -67,10 +89,14 @@ pub enum Marker {
 pub struct Look {
     /// Colour.
     pub color: RGBColor,
-    /// Dashed line.
-    pub dashed: bool,
+    /// Stroke of the line.
+    pub line: Line,
     /// Marker at the data points (drawn only where `markers` is asked).
     pub marker: Marker,
+    /// Markers are outlines on white instead of filled.
+    pub hollow: bool,
+    /// Colour of the markers (usually `color`).
+    pub marker_color: RGBColor,
     /// Line width in pixels.
     pub width: u32,
 }
@@ -111,10 +137,49 @@ pub fn look(solver: &str, formulation: &str) -> Look {
             c
         }
     };
+    let color = RGBColor(shade(r), shade(g), shade(b));
     Look {
-        color: RGBColor(shade(r), shade(g), shade(b)),
-        dashed: s % 2 == 1,
+        color,
+        line: if s % 2 == 1 {
+            Line::Dashed
+        } else {
+            Line::Solid
+        },
         marker: [Marker::Circle, Marker::Triangle, Marker::Square][s % 3],
+        hollow: false,
+        marker_color: color,
+        width: 2,
+    }
+}
+
+/// The look of a Fortran reference line ([`super::fortran`]): a dotted
+/// grey line tinted towards the formulation's colour (70 % grey, so it
+/// never matches one of our two shades of it) with hollow markers, one
+/// shape per code, outlined in the formulation's colour. It pairs with our
+/// lines on the formulation but never reads as one of ours (solid or
+/// dashed, saturated, filled markers).
+pub fn reference_look(code: &str, formulation: &str) -> Look {
+    let f = dae_core::system::FORMULATION_NAMES
+        .iter()
+        .position(|n| *n == formulation)
+        .unwrap_or(0);
+    let RGBColor(r, g, b) = FORMULATION_COLORS[f % FORMULATION_COLORS.len()];
+    let grey = |c: u8| (0.3 * f64::from(c) + 0.7 * 128.0).round() as u8;
+    let marker = match code.split('-').next().unwrap_or(code) {
+        "radau5" => Marker::Circle,
+        "dassl" => Marker::Square,
+        "daspk" => Marker::Diamond,
+        "odassl" => Marker::Triangle,
+        "mebdf" if code.contains('-') => Marker::Cross,
+        "mebdf" => Marker::TriangleDown,
+        _ => Marker::Diamond,
+    };
+    Look {
+        color: RGBColor(grey(r), grey(g), grey(b)),
+        line: Line::Dotted,
+        marker,
+        hollow: true,
+        marker_color: RGBColor(r, g, b),
         width: 2,
     }
 }
@@ -247,7 +312,16 @@ pub fn figures(report: &SweepReport) -> Figures {
             sampled_at,
         ));
     }
-    match work_precision_figure(report) {
+    let lines = match ReferenceLines::for_report(report) {
+        Ok(lines) => lines,
+        Err(e) => {
+            out.notes.push(format!(
+                "the Fortran reference lines of the work-precision diagram are left out: {e}"
+            ));
+            None
+        }
+    };
+    match work_precision_figure(report, lines.as_ref()) {
         Some(f) => out.figures.push(f),
         None => out.notes.push(
             "no successful run with a finite error: the work-precision diagram is left out".into(),
@@ -570,9 +644,11 @@ fn scd_figure(report: &SweepReport) -> Option<Figure> {
     })
 }
 
-fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
+/// The work-precision diagram; `lines`, the Fortran codes' curves of the
+/// scenario, are drawn under our lines (and above the Pareto band).
+fn work_precision_figure(report: &SweepReport, lines: Option<&ReferenceLines>) -> Option<Figure> {
     let with_ref = report.has_reference();
-    let (mut series, mut legend) = pair_series(report, |r| {
+    let (ours, mut legend) = pair_series(report, |r| {
         let y = if with_ref {
             r.record.err
         } else {
@@ -580,35 +656,57 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
         };
         y.map(|y| (r.record.tsim_s, y)).filter(|(t, _)| *t > 0.0)
     });
-    if series.is_empty() {
+    if ours.is_empty() {
         return None;
     }
+    // Drawn first to last: the Pareto band, the Fortran lines, ours.
+    let mut series = Vec::new();
     if with_ref {
         let front = super::pareto::pareto_front(&report.runs);
         if front.len() > 1 {
             // A wide grey band under the pairs' lines.
             let lk = Look {
                 color: RGBColor(200, 200, 200),
-                dashed: false,
+                line: Line::Solid,
                 marker: Marker::None,
+                hollow: false,
+                marker_color: RGBColor(200, 200, 200),
                 width: 9,
             };
             legend.push(("Pareto front".into(), lk, false));
-            series.insert(
-                0,
-                Series {
-                    label: "Pareto front".into(),
-                    look: lk,
-                    labels: Vec::new(),
-                    points: front.iter().map(|p| (p.tsim_s, p.err)).collect(),
-                },
-            );
+            series.push(Series {
+                label: "Pareto front".into(),
+                look: lk,
+                labels: Vec::new(),
+                points: front.iter().map(|p| (p.tsim_s, p.err)).collect(),
+            });
         }
     }
+    // Without a reference the y axis is a residual: no Fortran lines.
+    let lines = lines.filter(|_| with_ref);
+    for c in lines.iter().flat_map(|l| &l.curves) {
+        let lk = reference_look(&c.code, &c.formulation);
+        legend.push((c.label.clone(), lk, true));
+        series.push(Series {
+            label: c.label.clone(),
+            look: lk,
+            labels: Vec::new(),
+            points: c.points.iter().map(|p| (p.time_s, p.err)).collect(),
+        });
+    }
+    series.extend(ours);
     let tols: Vec<String> = report.tolerances.iter().map(|t| tol_label(*t)).collect();
     let (title, y_label, what) = if with_ref {
         (
-            format!("{}: work-precision diagram", report.scene.name),
+            format!(
+                "{}: work-precision diagram{}",
+                report.scene.name,
+                if lines.is_some() {
+                    ", with the Fortran codes"
+                } else {
+                    ""
+                }
+            ),
             "err".to_string(),
             "err (largest pointwise error of the differential unknowns over the check times)"
                 .to_string(),
@@ -621,15 +719,22 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
                 .to_string(),
         )
     };
+    // Tall enough for every legend entry.
+    let height = (TITLE_HEIGHT + 80 + 26 * legend.len() as u32).max(850);
     Some(Figure {
         file: "work_precision".into(),
         title,
         caption: format!(
             "{what} against the integration time tsim (median of {} timed runs), log-log; one line per \
-             solver(formulation) through its successful tolerances {}{} (paper Fig. 6 / 12).",
+             solver(formulation) through its successful tolerances {}{} (paper Fig. 6 / 12).{}",
             report.repeats,
             tols.join(", "),
-            if with_ref { "; wide grey band: the Pareto front" } else { "" }
+            if with_ref {
+                "; wide grey band: the Pareto front of this sweep's runs"
+            } else {
+                ""
+            },
+            lines.map_or_else(String::new, |l| format!(" {}", l.note))
         ),
         panels: vec![Panel {
             title: if with_ref {
@@ -637,7 +742,11 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
             } else {
                 "position-constraint residual against integration time".into()
             },
-            x_label: "tsim [s]".into(),
+            x_label: if lines.is_some() {
+                "tsim [s] (Fortran: time_median_s or cpu_s, see caption)".into()
+            } else {
+                "tsim [s]".into()
+            },
             y_label,
             x_log: true,
             y_log: true,
@@ -646,7 +755,7 @@ fn work_precision_figure(report: &SweepReport) -> Option<Figure> {
             series,
         }],
         cols: 1,
-        size: (1300, 850),
+        size: (1300, height),
         legend,
     })
 }
@@ -777,13 +886,13 @@ fn stroke<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     px: &[(i32, i32)],
     style: ShapeStyle,
-    dashed: bool,
+    line: Line,
     segmented: bool,
 ) -> Result<(), PlotError> {
-    let pieces = if dashed {
-        dashes(px, 9.0, 5.0)
-    } else {
-        vec![px.to_vec()]
+    let pieces = match line {
+        Line::Solid => vec![px.to_vec()],
+        Line::Dashed => dashes(px, 9.0, 5.0),
+        Line::Dotted => dashes(px, 3.0, 4.0),
     };
     for piece in pieces {
         if piece.len() < 2 {
@@ -802,25 +911,88 @@ fn stroke<DB: DrawingBackend>(
     Ok(())
 }
 
+/// Corners of a polygonal marker of radius `r` around `at` (empty for
+/// the others).
+fn marker_corners(marker: Marker, at: (i32, i32), r: i32) -> Vec<(i32, i32)> {
+    let (x, y) = at;
+    let around = |degrees: [f64; 3]| {
+        degrees
+            .iter()
+            .map(|d| {
+                let a = d.to_radians();
+                (
+                    (f64::from(x) + f64::from(r) * a.cos()).round() as i32,
+                    (f64::from(y) + f64::from(r) * a.sin()).round() as i32,
+                )
+            })
+            .collect()
+    };
+    match marker {
+        Marker::Triangle => around([-90.0, 30.0, 150.0]),
+        Marker::TriangleDown => around([90.0, 210.0, 330.0]),
+        Marker::Square => {
+            let h = r * 2 / 3;
+            vec![
+                (x - h, y - h),
+                (x + h, y - h),
+                (x + h, y + h),
+                (x - h, y + h),
+            ]
+        }
+        Marker::Diamond => vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y)],
+        Marker::None | Marker::Circle | Marker::Cross => Vec::new(),
+    }
+}
+
+/// Draw a look's marker in its marker colour: filled, or (`hollow`) its
+/// outline on white, a little larger, so that the line under it does not
+/// show.
 fn draw_marker<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     at: (i32, i32),
-    marker: Marker,
-    style: ShapeStyle,
+    look: &Look,
 ) -> Result<(), PlotError> {
+    let (marker, hollow) = (look.marker, look.hollow);
+    let style = ShapeStyle {
+        color: look.marker_color.to_rgba(),
+        filled: false,
+        stroke_width: look.width,
+    };
     let filled = style.filled();
+    // Radius of the polygonal markers (the square's half side is 2/3 of it).
+    let r = 6;
     match marker {
         Marker::None => Ok(()),
+        Marker::Circle if hollow => {
+            area.draw(&Circle::new(at, 5, WHITE.filled()))
+                .map_err(draw_err)?;
+            area.draw(&Circle::new(at, 5, style)).map_err(draw_err)
+        }
         Marker::Circle => area.draw(&Circle::new(at, 4, filled)).map_err(draw_err),
-        Marker::Triangle => area
-            .draw(&TriangleMarker::new(at, 6, filled))
-            .map_err(draw_err),
-        Marker::Square => area
-            .draw(&Rectangle::new(
-                [(at.0 - 4, at.1 - 4), (at.0 + 4, at.1 + 4)],
-                filled,
-            ))
-            .map_err(draw_err),
+        Marker::Cross => {
+            let d = r * 2 / 3;
+            for (a, b) in [
+                ((at.0 - d, at.1 - d), (at.0 + d, at.1 + d)),
+                ((at.0 - d, at.1 + d), (at.0 + d, at.1 - d)),
+            ] {
+                area.draw(&PathElement::new(vec![a, b], style))
+                    .map_err(draw_err)?;
+            }
+            Ok(())
+        }
+        _ => {
+            let corners = marker_corners(marker, at, if hollow { r + 1 } else { r });
+            if hollow {
+                area.draw(&Polygon::new(corners.clone(), WHITE.filled()))
+                    .map_err(draw_err)?;
+                let mut closed = corners.clone();
+                closed.extend(corners.first().copied());
+                area.draw(&PathElement::new(closed, style))
+                    .map_err(draw_err)
+            } else {
+                area.draw(&Polygon::new(corners, filled)).map_err(draw_err)
+            }
+        }
     }
 }
 
@@ -880,10 +1052,10 @@ where
             .map(|&(x, y)| area.map_coordinate(&(x, if p.y_log { y.max(y_span.0) } else { y })))
             .collect();
         px.dedup();
-        stroke(&screen, &px, style, s.look.dashed, segmented)?;
+        stroke(&screen, &px, style, s.look.line, segmented)?;
         if p.markers {
             for q in &px {
-                draw_marker(&screen, *q, s.look.marker, style)?;
+                draw_marker(&screen, *q, &s.look)?;
             }
         }
         for (i, text) in &s.labels {
@@ -967,9 +1139,9 @@ fn draw_legend<DB: DrawingBackend>(
             filled: false,
             stroke_width: lk.width,
         };
-        stroke(area, &[(12, y), (58, y)], style, lk.dashed, segmented)?;
+        stroke(area, &[(12, y), (58, y)], style, lk.line, segmented)?;
         if *marker {
-            draw_marker(area, (35, y), lk.marker, style)?;
+            draw_marker(area, (35, y), lk)?;
         }
         area.draw(&Text::new(text.as_str(), (68, y - 8), font.clone()))
             .map_err(draw_err)?;
@@ -993,7 +1165,18 @@ pub fn draw<DB: DrawingBackend>(
     ))
     .map_err(draw_err)?;
     let (w, _) = body.dim_in_pixel();
-    let (plots, legend) = body.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
+    // Wider than LEGEND_WIDTH when a label needs it (the reference lines'
+    // `MEBDF maxder5 (Fortran, rcd1)`).
+    let font: TextStyle = ("sans-serif", 15).into_font().into();
+    let widest = fig
+        .legend
+        .iter()
+        .filter_map(|(text, _, _)| root.estimate_text_size(text, &font).ok())
+        .map(|(tw, _)| tw + 68 + 12)
+        .max()
+        .unwrap_or(0);
+    let legend_w = LEGEND_WIDTH.max(widest).min(w / 2);
+    let (plots, legend) = body.split_horizontally(w.saturating_sub(legend_w));
     let cols = fig.cols.max(1);
     let rows = fig.panels.len().div_ceil(cols).max(1);
     let areas = plots.split_evenly((rows, cols));

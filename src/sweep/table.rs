@@ -556,6 +556,15 @@ pub fn text_report(report: &SweepReport, summary: &Summary) -> String {
             );
         }
     }
+    if let Some(lines) = &summary.reference_lines {
+        let labels: Vec<&str> = lines.curves.iter().map(|c| c.label.as_str()).collect();
+        let _ = writeln!(
+            s,
+            "\nReference lines in the work-precision diagram: {}.\n{}",
+            labels.join(", "),
+            lines.note
+        );
+    }
     s
 }
 
