@@ -102,15 +102,7 @@ impl Nodes {
     }
 }
 
-/// `a + b` as `(s, e)` with `s = fl(a + b)` and `s + e = a + b` exactly
-/// (Knuth's two-sum; no condition on the sizes of `a` and `b`, so a
-/// component passing through zero is summed exactly too).
-#[inline]
-pub(super) fn two_sum(a: f64, b: f64) -> (f64, f64) {
-    let s = a + b;
-    let bb = s - a;
-    (s, (a - (s - bb)) + (b - bb))
-}
+pub(super) use crate::linalg::two_sum;
 
 /// The Lagrange weights `l_0(θ) … l_m(θ)` on the nodes `0 … m` into the
 /// first `m + 1` entries of the result.

@@ -97,6 +97,16 @@ pub(crate) fn mat_vec(m: &DMatrix<f64>, v: &[f64], out: &mut [f64]) {
     })
 }
 
+/// `a + b` as `(s, e)` with `s = fl(a + b)` and `s + e = a + b` exactly
+/// (Knuth's two-sum; no condition on the sizes of `a` and `b`, so a
+/// component passing through zero is summed exactly too).
+#[inline]
+pub(crate) fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
 /// Whether every entry of `v` is finite: `x · 0` is zero for a finite `x`
 /// and NaN otherwise, so one multiplication and one addition per entry decide
 /// it, without a branch per entry.

@@ -23,6 +23,8 @@ pub(super) enum Next {
 pub(super) struct Control {
     /// Time of the last accepted step (`t₀` at first).
     pub(super) t: f64,
+    /// Rounding error of `t` (compensated summation of the steps).
+    pub(super) t_lo: f64,
     /// Step size of the next attempt.
     pub(super) h: f64,
     /// Largest step.

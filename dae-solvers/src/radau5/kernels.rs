@@ -6,7 +6,7 @@
 //! right-hand sides `m` apart.
 
 use super::tableau::{divided_differences, polynomial_increment, AINV, C, DD, T, TI};
-use crate::linalg::with_size;
+use crate::linalg::{two_sum, with_size};
 
 /// The stage points: `Y_i = y + Z_i` into `ys`, `Y'_i = (1/h) Σ_j A⁻¹_ij
 /// Z_j` into `yd` (both stage-major, `3n`).
@@ -124,20 +124,50 @@ fn error_combination_n(z: &[f64], h: f64, out: &mut [f64], n: usize) {
 
 /// An accepted step: `y += Z_3`, the new collocation polynomial `cont`
 /// (Newton form on `s = 0, c₂ − 1, c₁ − 1, −1`) and `y' = Y'_3` into `yp`.
-pub(super) fn advance(z: &[f64], h: f64, y: &mut [f64], yp: &mut [f64], cont: &mut [f64]) {
+/// With `y_lo` the sum is compensated: `y + y_lo` carries the rounding
+/// error of every update so far (Knuth's two-sum), so that millions of
+/// steps do not add up millions of roundings.
+pub(super) fn advance(
+    z: &[f64],
+    h: f64,
+    y: &mut [f64],
+    y_lo: Option<&mut [f64]>,
+    yp: &mut [f64],
+    cont: &mut [f64],
+) {
     let n = y.len();
-    with_size!(n, |N| advance_n(
-        &z[..3 * N],
-        h,
-        &mut y[..N],
-        &mut yp[..N],
-        &mut cont[..4 * N],
-        N
-    ))
+    match y_lo {
+        None => with_size!(n, |N| advance_n::<false>(
+            &z[..3 * N],
+            h,
+            &mut y[..N],
+            &mut [],
+            &mut yp[..N],
+            &mut cont[..4 * N],
+            N
+        )),
+        Some(lo) => with_size!(n, |N| advance_n::<true>(
+            &z[..3 * N],
+            h,
+            &mut y[..N],
+            &mut lo[..N],
+            &mut yp[..N],
+            &mut cont[..4 * N],
+            N
+        )),
+    }
 }
 
 #[inline(always)]
-fn advance_n(z: &[f64], h: f64, y: &mut [f64], yp: &mut [f64], cont: &mut [f64], n: usize) {
+fn advance_n<const COMPENSATED: bool>(
+    z: &[f64],
+    h: f64,
+    y: &mut [f64],
+    y_lo: &mut [f64],
+    yp: &mut [f64],
+    cont: &mut [f64],
+    n: usize,
+) {
     let (z1, z2, z3) = (&z[..n], &z[n..2 * n], &z[2 * n..3 * n]);
     let (c0, c) = cont.split_at_mut(n);
     let (c1, c) = c.split_at_mut(n);
@@ -145,7 +175,11 @@ fn advance_n(z: &[f64], h: f64, y: &mut [f64], yp: &mut [f64], cont: &mut [f64],
     let (c0, c1, c2, c3) = (&mut c0[..n], &mut c1[..n], &mut c2[..n], &mut c3[..n]);
     for k in 0..n {
         let (z1, z2, z3) = (z1[k], z2[k], z3[k]);
-        y[k] += z3;
+        if COMPENSATED {
+            (y[k], y_lo[k]) = two_sum(y[k], z3 + y_lo[k]);
+        } else {
+            y[k] += z3;
+        }
         let d = divided_differences(z1, z2, z3);
         c0[k] = y[k];
         c1[k] = d[0];

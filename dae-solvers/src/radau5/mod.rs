@@ -246,6 +246,31 @@ const TOL_ANCHOR: f64 = 3.162_277_660_168_379e-13;
 /// Round-off floor `100 ε` of relative tolerances.
 const TOL_FLOOR: f64 = 100.0 * f64::EPSILON;
 
+/// From this tolerance down (the smallest relative tolerance, or absolute
+/// where all relative ones are zero) the integration is run for the last
+/// digits: the updates of `t` and `y` are summed with compensation (a
+/// rounding of `u|y|` per step is no longer small against the error after
+/// 10⁵–10⁷ steps), and the Newton iteration stops at [`TIGHT_NEWTON`] times
+/// RADAU5's bound (an iteration stopped at RADAU5's bound leaves an error
+/// of one sign step after step). Measured in BENCHMARKS.md §6b; above it
+/// nothing changes, bit for bit.
+pub const TIGHT_TOL: f64 = 1e-10;
+
+/// The factor on RADAU5's Newton bound at tight tolerances.
+pub const TIGHT_NEWTON: f64 = 0.01;
+
+/// Whether `options` ask for a tight run (see [`TIGHT_TOL`]).
+pub(crate) fn tight(options: &Options, n: usize) -> bool {
+    let min = |f: &dyn Fn(usize) -> f64| (0..n).map(f).fold(f64::INFINITY, f64::min);
+    let r = min(&|i| options.tol.rtol(i));
+    let r = if r > 0.0 {
+        r
+    } else {
+        min(&|i| options.tol.atol(i))
+    };
+    r <= TIGHT_TOL
+}
+
 /// The tolerance the error test uses for a user tolerance `tol > 0`:
 /// `tol (τ/tol)^(1/5)` above `τ = 10^(−12.5)`, `tol` itself below, and
 /// never less than the round-off floor `100 ε ≈ 2.2·10⁻¹⁴` (see the module

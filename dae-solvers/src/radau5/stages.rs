@@ -22,6 +22,9 @@ use nalgebra::DMatrix;
 pub(super) struct Work<S> {
     /// `y_n`.
     pub(super) y: Vec<f64>,
+    /// Rounding error of `y_n` (compensated summation at tight
+    /// tolerances, see [`super::TIGHT_TOL`]).
+    pub(super) y_lo: Vec<f64>,
     /// Stage increments `Z_1, Z_2, Z_3` (stage-major, `3N`).
     pub(super) z: Vec<f64>,
     /// Transformed Newton right-hand sides (stride `M`), then increments
@@ -73,6 +76,7 @@ impl<S: StageSystems> Work<S> {
         let mat = || DMatrix::zeros(m, n);
         Work {
             y: v(n),
+            y_lo: v(n),
             z: v(3 * n),
             dw: v(3 * m),
             res: v(3 * m),
@@ -265,6 +269,7 @@ impl<S: StageSystems> Integrator<'_, S> {
     /// `y'_{n+1} = Y'_3`.
     pub(super) fn advance(&mut self, h: f64) {
         let w = &mut self.w;
-        kernels::advance(&w.z, h, &mut w.y, &mut w.yp, &mut w.cont);
+        let y_lo = self.compensated.then_some(&mut w.y_lo[..]);
+        kernels::advance(&w.z, h, &mut w.y, y_lo, &mut w.yp, &mut w.cont);
     }
 }

@@ -5,12 +5,12 @@
 use super::control::{classical_quotient, predictive_quotient, Control, Next};
 use super::stages::{Newton, Work};
 use super::tableau::dense;
-use super::{H0_DEFAULT, NIT, UROUND};
+use super::{tight, H0_DEFAULT, NIT, TIGHT_NEWTON, UROUND};
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::matrix::StageSystems;
 use crate::core::newton::{Contraction, Rule};
-use crate::linalg::all_finite;
+use crate::linalg::{all_finite, two_sum};
 use crate::options::Options;
 use crate::{Problem, SolveError, Stats};
 use dae_core::system::DaeSystem;
@@ -42,6 +42,9 @@ pub(super) struct Integrator<'a, S> {
     pub(super) newton: Contraction,
     /// Step-size controller state.
     pub(super) c: Control,
+    /// Sum the step updates of `t` and `y` with compensation (tight
+    /// tolerances, [`super::TIGHT_TOL`]).
+    pub(super) compensated: bool,
 }
 
 impl<S: StageSystems> Method for Integrator<'_, S> {
@@ -52,7 +55,14 @@ impl<S: StageSystems> Method for Integrator<'_, S> {
         &self.w.y
     }
     fn dense(&self, tau: f64, out: &mut [f64]) {
-        dense(self.n, &self.w.cont, tau, self.c.t, self.c.h_old, out)
+        dense(
+            self.n,
+            &self.w.cont,
+            tau - self.c.t_lo,
+            self.c.t,
+            self.c.h_old,
+            out,
+        )
     }
     fn finished(&self) -> bool {
         self.c.done
@@ -92,7 +102,12 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                 .fold(f64::INFINITY, f64::min)
         };
         let r = r.max(10.0 * UROUND);
-        let fnewt = (10.0 * UROUND / r).max(0.03f64.min(r.sqrt()));
+        let compensated = tight(options, n);
+        // Not at index 3: there the multipliers carry a round-off of
+        // `ε/h²` that a tighter bound only iterates on.
+        let tight_newton = compensated && info.d_index.is_some_and(|k| k <= 2);
+        let fnewt = (10.0 * UROUND / r).max(0.03f64.min(r.sqrt()))
+            * if tight_newton { TIGHT_NEWTON } else { 1.0 };
         let rule = Rule::Radau5 {
             slow_exit: options.fixed_step.is_none(),
         };
@@ -105,11 +120,13 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
             t0: problem.t0,
             t_end: problem.t_end,
             constant_leading: info.constant_leading,
+            compensated,
             w,
             stats: Stats::default(),
             newton: Contraction::new(rule, NIT, fnewt, 1.0),
             c: Control {
                 t: problem.t0,
+                t_lo: 0.0,
                 h: 0.0,
                 h_max: options.h_max.unwrap_or(span).min(span),
                 fixed: options.fixed_step,
@@ -288,13 +305,19 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                 c.err_acc = err.max(1e-2);
             }
             c.first = false;
-            c.t = if c.last { t_end } else { t + h };
+            if c.last {
+                (c.t, c.t_lo) = (t_end, 0.0);
+            } else if self.compensated {
+                (c.t, c.t_lo) = two_sum(t, h + c.t_lo);
+            } else {
+                c.t = t + h;
+            }
             c.h_old = h;
             c.caljac = false;
             self.advance(h);
             self.stats.steps += 1;
             let t = self.c.t;
-            if self.w.y.iter().any(|v| !v.is_finite()) {
+            if !all_finite(&self.w.y) {
                 return Err(SolveError::NonFinite {
                     t,
                     what: "solution",
