@@ -633,3 +633,24 @@ fn the_step_loop_does_not_allocate() {
     // too.
     assert_eq!(with_output, base + 399, "{with_output} vs {base}");
 }
+
+/// At tight tolerances (`radau5::TIGHT_TOL`) the step updates are summed
+/// with compensation and the Newton iteration is stopped closer to the
+/// solution: S01 then reaches errors no uncompensated run reaches
+/// (BENCHMARKS.md §6b). On this system rcd0 reaches 1.2e-13, 1.2e-13 and
+/// 8.1e-14 at the three tolerances; before, 2.5e-12, 7.6e-12 and 1.6e-11
+/// (the error grew as the tolerance fell). The bound sits 4× above the
+/// first and 5–30× below the second.
+#[test]
+fn s01_tight_tolerances_reach_the_last_digits() {
+    let exact = exact_at_20();
+    let sys = Pendulum::new(Form::Rcd0);
+    let y0 = sys.y0();
+    for tol in [1e-13, 5e-14, 2.5e-14] {
+        let sol = solve(&sys, &y0, 20.0, &Options::with_tol(tol))
+            .unwrap_or_else(|e| panic!("rcd0 at {tol:e}: {e}"));
+        let err = max_err(sol.last().unwrap(), &exact, 4);
+        println!("rcd0 tol {tol:e}: err {err:e}, {} steps", sol.stats.steps);
+        assert!(err < 5e-13, "rcd0 tol {tol:e}: err {err:e}");
+    }
+}
