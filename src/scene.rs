@@ -552,6 +552,49 @@ impl Scene {
         Scene::parse(text, &format!("<built-in {key}>"), None).ok()
     }
 
+    /// Whether this scene is the paper's setup of the scenario it is named
+    /// after (`S01`/`S02`, any case): the built-in pendulum with the
+    /// parameters, initial values, start and check times of the built-in
+    /// scene of that name. Only then do the paper's tables and the Fortran
+    /// measurements apply; a scene named `S02` with another `g`, other
+    /// initial values or other check times is compared with neither.
+    ///
+    /// ```
+    /// use dae::scene::Scene;
+    /// let paper = Scene::builtin("s02").unwrap();
+    /// assert!(paper.is_paper_setup());
+    /// let mut other_g = paper.clone();
+    /// other_g.parameters.iter_mut().find(|p| p.name == "g").unwrap().value = 9.81;
+    /// assert!(!other_g.is_paper_setup());
+    /// let mut other_start = paper.clone();
+    /// other_start.initial.iter_mut().find(|p| p.name == "x").unwrap().value = 0.5;
+    /// assert!(!other_start.is_paper_setup());
+    /// let mut fewer_checks = paper.clone();
+    /// fewer_checks.time.checks.retain(|t| t % 20.0 == 0.0);
+    /// assert!(!fewer_checks.is_paper_setup());
+    /// let mut renamed = paper.clone();
+    /// renamed.name = "my run".into();
+    /// assert!(!renamed.is_paper_setup());
+    /// ```
+    pub fn is_paper_setup(&self) -> bool {
+        if self.model != ModelSource::Builtin("pendulum".into()) {
+            return false;
+        }
+        let Some(paper) = Scene::builtin(&self.name) else {
+            return false;
+        };
+        let values = |v: &[NamedValue]| {
+            let mut v: Vec<(String, f64)> = v.iter().map(|x| (x.name.clone(), x.value)).collect();
+            v.sort_by(|a, b| a.0.cmp(&b.0));
+            v
+        };
+        values(&self.parameters) == values(&paper.parameters)
+            && values(&self.initial) == values(&paper.initial)
+            && self.time.start == paper.time.start
+            && self.time.end == paper.time.end
+            && self.time.checks == paper.time.checks
+    }
+
     /// Read a scene file, or a built-in scene by name when no file of that
     /// name exists. Model paths in the file are resolved against its
     /// directory.

@@ -772,7 +772,7 @@ fn pendulum_report(name: &str, t_end: f64, reference: &'static str) -> sweep::Sw
         variables: names(&["x", "y", "v", "w", "lambda"]),
         invariants: names(&["energy"]),
         constraints: vec![(0, "x^2 + y^2 - l^2".into())],
-        builtin_pendulum: true,
+        paper_setup: true,
     }
 }
 
@@ -955,7 +955,7 @@ fn s01_gets_its_own_curves_and_other_scenes_none() {
     // Not the paper's scenario: another name, another horizon, another
     // model, or no reference (the y axis is then a residual).
     let mut other_model = pendulum_report("S02", 2000.0, "exact");
-    other_model.builtin_pendulum = false;
+    other_model.paper_setup = false;
     for report in [
         pendulum_report("pendulum", 2000.0, "exact"),
         pendulum_report("S02", 200.0, "exact"),

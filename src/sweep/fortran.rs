@@ -397,11 +397,9 @@ impl ReferenceLines {
     /// curve per Fortran code on each formulation with an applicable pair.
     /// `Ok(None)` for any other scene or when no curve is left.
     pub fn for_report(report: &SweepReport) -> Result<Option<ReferenceLines>, FortranError> {
-        let Some(scenario) = paper::scenario(
-            &report.scene.name,
-            report.builtin_pendulum,
-            report.scene.t_end,
-        ) else {
+        let Some(scenario) =
+            paper::scenario(&report.scene.name, report.paper_setup, report.scene.t_end)
+        else {
             return Ok(None);
         };
         if !report.has_reference() {

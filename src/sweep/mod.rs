@@ -264,9 +264,11 @@ pub struct SweepReport {
     /// Constraint levels present in the model's chain, with their
     /// expressions (`level`, `0 = expr`).
     pub constraints: Vec<(u8, String)>,
-    /// `true` for the built-in pendulum (enables the paper comparison).
+    /// `true` when the scene is the paper's setup of S01 or S02
+    /// ([`crate::scene::Scene::is_paper_setup`]; enables the paper
+    /// comparison and the Fortran reference lines).
     #[serde(skip)]
-    pub builtin_pendulum: bool,
+    pub paper_setup: bool,
 }
 
 impl SweepReport {
@@ -327,7 +329,7 @@ impl Summary {
     pub fn of(report: &SweepReport) -> Summary {
         let paper = paper::PaperTable::for_scene(
             &report.scene.name,
-            report.builtin_pendulum,
+            report.paper_setup,
             report.scene.t_end,
         )
         .filter(|_| report.has_reference())
@@ -568,7 +570,7 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
         .map(|c| (c.level, c.expr.clone()))
         .collect();
     levels.sort_by_key(|(l, _)| *l);
-    let builtin_pendulum = scene.model == ModelSource::Builtin("pendulum".into());
+    let paper_setup = scene.is_paper_setup();
     Ok(SweepReport {
         scene: SceneInfo {
             name: scene.name.clone(),
@@ -594,7 +596,7 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
         variables: info.variables.iter().map(|v| v.name.clone()).collect(),
         invariants: info.invariants.clone(),
         constraints: levels,
-        builtin_pendulum,
+        paper_setup,
     })
 }
 

@@ -152,8 +152,8 @@ impl PaperTable {
     /// The paper table for a scene, when the scene is one of the paper's
     /// ([`scenario`]: name `S01`/`S02`, the built-in pendulum, the paper's
     /// horizon).
-    pub fn for_scene(name: &str, builtin_pendulum: bool, t_end: f64) -> Option<PaperTable> {
-        let (label, text) = match scenario(name, builtin_pendulum, t_end)? {
+    pub fn for_scene(name: &str, paper_setup: bool, t_end: f64) -> Option<PaperTable> {
+        let (label, text) = match scenario(name, paper_setup, t_end)? {
             Scenario::S01 => ("Table 6 (S01)", TABLE6_S01_CSV),
             Scenario::S02 => ("Table 9 (S02)", TABLE9_S02_CSV),
         };
@@ -203,12 +203,14 @@ impl Scenario {
 }
 
 /// Which of the paper's scenarios a scene is, if any: its name is
-/// `S01`/`S02` (any case), it integrates the built-in pendulum and its
-/// horizon is the scenario's (20 or 2000). The one rule for everything
+/// `S01`/`S02` (any case), it is the paper's setup of that scenario
+/// (`paper_setup`: [`crate::scene::Scene::is_paper_setup`], the built-in
+/// pendulum with the scenario's parameters, initial values and check times)
+/// and its horizon is the scenario's (20 or 2000). The one rule for everything
 /// measured elsewhere on the paper's scenarios: the paper's tables and the
 /// Fortran reference lines ([`super::fortran`]).
-pub fn scenario(name: &str, builtin_pendulum: bool, t_end: f64) -> Option<Scenario> {
-    if !builtin_pendulum {
+pub fn scenario(name: &str, paper_setup: bool, t_end: f64) -> Option<Scenario> {
+    if !paper_setup {
         return None;
     }
     match name.to_ascii_uppercase().as_str() {
