@@ -131,6 +131,7 @@ impl Contraction {
     /// Judge the increment of norm `norm`; `tiny` is DASSL's round-off
     /// bound `100 ε ‖y‖` (ignored by the RADAU5 rule). A non-finite norm
     /// diverges.
+    #[inline]
     pub(crate) fn observe(&mut self, norm: f64, tiny: f64) -> Verdict {
         self.k += 1;
         let k = self.k;
