@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 /// Largest size with a generated kernel.
-const MAX_UNROLLED: usize = 8;
+const MAX_UNROLLED: usize = 12;
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");

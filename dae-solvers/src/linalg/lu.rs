@@ -147,12 +147,7 @@ impl ComplexLu {
         {
             return r;
         }
-        with_size!(n, |N| complex_factor(
-            &mut self.re[..N * N],
-            &mut self.im[..N * N],
-            &mut self.piv[..N],
-            N
-        ))
+        complex_factor(&mut self.re, &mut self.im, &mut self.piv, n)
     }
 
     /// Overwrite the matrix with `entry(i, j) = (re, im)` and factorise it.
@@ -185,14 +180,7 @@ impl ComplexLu {
         {
             return;
         }
-        with_size!(n, |N| complex_solve(
-            &self.re[..N * N],
-            &self.im[..N * N],
-            &self.piv[..N],
-            &mut re[..N],
-            &mut im[..N],
-            N
-        ))
+        complex_solve(&self.re, &self.im, &self.piv, &mut re[..n], &mut im[..n], n)
     }
 }
 
@@ -212,12 +200,7 @@ pub(crate) fn factor_in_place(
     {
         return r;
     }
-    with_size!(n, |N| real_factor(
-        &mut a[..N * N],
-        &mut piv[..N],
-        N,
-        pivoting
-    ))
+    real_factor(&mut a[..n * n], piv, n, pivoting)
 }
 
 #[inline(always)]
@@ -277,13 +260,7 @@ pub(crate) fn solve_in_place(a: &[f64], piv: &[usize], b: &mut [f64], pivoting: 
     {
         return;
     }
-    with_size!(n, |N| real_solve(
-        &a[..N * N],
-        &piv[..N],
-        &mut b[..N],
-        N,
-        pivoting
-    ))
+    real_solve(&a[..n * n], piv, &mut b[..n], n, pivoting)
 }
 
 #[inline(always)]

@@ -8,7 +8,8 @@
 /// step loop meets most (1 … 12 unknowns), and with the run-time `n`
 /// otherwise. The kernels are written once; the constant copies let the
 /// compiler unroll the short loops and drop their bounds checks, which is
-/// most of the cost of a 5 × 5 factorisation (and of a norm of 5 entries).
+/// most of the cost of a norm or a stage update of 5 entries. (The LU
+/// kernels go further: `build.rs` writes them out in straight lines.)
 macro_rules! with_size {
     ($n:expr, |$c:ident| $body:expr) => {
         match $n {
