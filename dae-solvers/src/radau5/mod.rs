@@ -261,14 +261,26 @@ pub const TIGHT_NEWTON: f64 = 0.01;
 
 /// Whether `options` ask for a tight run (see [`TIGHT_TOL`]).
 pub(crate) fn tight(options: &Options, n: usize) -> bool {
-    let min = |f: &dyn Fn(usize) -> f64| (0..n).map(f).fold(f64::INFINITY, f64::min);
-    let r = min(&|i| options.tol.rtol(i));
-    let r = if r > 0.0 {
+    let r = smallest_tolerance(
+        (0..n).map(|i| options.tol.rtol(i)),
+        (0..n).map(|i| options.tol.atol(i)),
+    );
+    r <= TIGHT_TOL
+}
+
+/// The smallest relative tolerance, or the smallest absolute one where all
+/// relative tolerances are zero: the one number RADAU5's rules of thumb
+/// (the Newton bound, [`TIGHT_TOL`]) read.
+pub(crate) fn smallest_tolerance(
+    rtol: impl Iterator<Item = f64>,
+    atol: impl Iterator<Item = f64>,
+) -> f64 {
+    let r = rtol.fold(f64::INFINITY, f64::min);
+    if r > 0.0 {
         r
     } else {
-        min(&|i| options.tol.atol(i))
-    };
-    r <= TIGHT_TOL
+        atol.fold(f64::INFINITY, f64::min)
+    }
 }
 
 /// The tolerance the error test uses for a user tolerance `tol > 0`:

@@ -5,7 +5,7 @@
 use super::control::{classical_quotient, predictive_quotient, Control, Next};
 use super::stages::{Newton, Work};
 use super::tableau::dense;
-use super::{tight, H0_DEFAULT, NIT, TIGHT_NEWTON, UROUND};
+use super::{smallest_tolerance, tight, H0_DEFAULT, NIT, TIGHT_NEWTON, UROUND};
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::matrix::StageSystems;
@@ -86,21 +86,10 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
         // RADAU5: fnewt = max(10 u / rtol, min(0.03, rtol^(1/2))), here
         // with the smallest relative tolerance (an absolute one where all
         // relative tolerances are zero), kept above 10 u.
-        let rmin = w
-            .weights
-            .rtol()
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        let r = if rmin > 0.0 {
-            rmin
-        } else {
-            w.weights
-                .atol()
-                .iter()
-                .copied()
-                .fold(f64::INFINITY, f64::min)
-        };
+        let r = smallest_tolerance(
+            w.weights.rtol().iter().copied(),
+            w.weights.atol().iter().copied(),
+        );
         let r = r.max(10.0 * UROUND);
         let compensated = tight(options, n);
         // Not at index 3: there the multipliers carry a round-off of
