@@ -7,7 +7,7 @@ use super::EPS;
 use crate::core::control::Failure as Fail;
 use crate::core::matrix::Corrector;
 use crate::core::newton::{Contraction, Rule, Verdict};
-use crate::linalg::small;
+use crate::linalg::{all_finite, small};
 
 /// Newton iterations per attempt (DASSL's `MAXIT`).
 const MAX_NEWTON_ITERATIONS: usize = 4;
@@ -33,7 +33,7 @@ impl<L: Corrector> Integrator<'_, L> {
         self.sys
             .residual(self.t, &self.y, &self.yp, &mut self.delta);
         self.stats.residual_evals += 1;
-        if self.delta.iter().all(|v| v.is_finite()) {
+        if all_finite(&self.delta) {
             Ok(())
         } else {
             Err(Fail::NonFinite("residual"))
@@ -60,7 +60,7 @@ impl<L: Corrector> Integrator<'_, L> {
                 *g += l;
             }
         }
-        if !a.iter().all(|v| v.is_finite()) {
+        if !all_finite(a) {
             return Err(Fail::NonFinite("iteration matrix"));
         }
         self.cjold = cj;

@@ -8,6 +8,7 @@ use super::{Idec, FAC, H0_DEFAULT, RATIO_MAX, RATIO_MIN};
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::weights::Weights;
+use crate::linalg::all_finite;
 use crate::{Options, Problem, SolveError, Stats};
 use dae_core::system::DaeSystem;
 
@@ -193,7 +194,7 @@ impl<'a> Integrator<'a> {
         self.sys.rhs_jacobian(t, &self.y, &mut self.sweep.jac);
         self.stats.jacobian_evals += 1;
         self.factored = None;
-        if self.sweep.jac.iter().all(|v| v.is_finite()) {
+        if all_finite(self.sweep.jac.as_slice()) {
             Ok(())
         } else {
             Err(SolveError::NonFinite {

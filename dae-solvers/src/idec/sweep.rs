@@ -19,7 +19,7 @@
 use super::interp::{two_sum, Nodes};
 use crate::core::control::Failure;
 use crate::core::matrix::{Corrector, Rows, SquareLu};
-use crate::linalg::mat_vec;
+use crate::linalg::{all_finite, mat_vec};
 use crate::Stats;
 use dae_core::system::{DaeSystem, FormulationInfo};
 use nalgebra::DMatrix;
@@ -177,7 +177,7 @@ impl Sweep {
     ) -> Result<(), Failure> {
         sys.rhs_jacobian(t, y, jac);
         stats.jacobian_evals += 1;
-        if jac.iter().any(|v| !v.is_finite()) {
+        if !all_finite(jac.as_slice()) {
             return Err(Failure::NonFinite("Jacobian"));
         }
         stats.factorizations += 1;
@@ -194,7 +194,7 @@ impl Sweep {
     ) -> Result<(), Failure> {
         sys.rhs(t, y, out);
         stats.residual_evals += 1;
-        if out.iter().all(|v| v.is_finite()) {
+        if all_finite(out) {
             Ok(())
         } else {
             Err(Failure::NonFinite("residual"))
@@ -318,7 +318,7 @@ impl Sweep {
             self.np_end_lo[j * n..(j + 1) * n].copy_from_slice(&self.pi_lo);
         }
         let last = self.node(self.corrections, m);
-        if last.iter().all(|v| v.is_finite()) {
+        if all_finite(last) {
             Ok(())
         } else {
             Err(Failure::NonFinite("solution"))

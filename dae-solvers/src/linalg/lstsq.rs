@@ -174,7 +174,7 @@ impl ConstrainedLstsq {
             "ConstrainedLstsq::factor: exact and weight must have one entry per row"
         );
         self.factored = false;
-        if self.a.iter().any(|v| !v.is_finite()) {
+        if !super::all_finite(self.a.as_slice()) {
             return Err(Singular);
         }
 

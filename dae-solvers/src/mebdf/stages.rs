@@ -24,6 +24,7 @@ use super::step::Integrator;
 use crate::core::control::Failure;
 use crate::core::matrix::{Corrector, Rows};
 use crate::core::newton::{Contraction, Rule, Verdict};
+use crate::linalg::all_finite;
 
 /// Newton iterations per stage.
 const MAX_ITER: usize = 5;
@@ -164,7 +165,7 @@ impl Integrator<'_> {
         {
             *g = inv * e - j;
         }
-        if !a.iter().all(|v| v.is_finite()) {
+        if !all_finite(a) {
             return Err(Failure::NonFinite("iteration matrix"));
         }
         self.stats.factorizations += 1;
@@ -181,7 +182,7 @@ impl Integrator<'_> {
     fn residual(&mut self, t: f64, y: &[f64]) -> bool {
         self.sys.residual(t, y, &self.yp, &mut self.delta);
         self.stats.residual_evals += 1;
-        self.delta.iter().all(|v| v.is_finite())
+        all_finite(&self.delta)
     }
 
     /// Simplified Newton iteration on `F(t, y, (y + c)/(hβ)) = 0` from the
