@@ -14,6 +14,7 @@
 //! | [`odbdf`] | BDF 1–5 with a least-squares corrector (ODASSL/OVDBDF) | `M ≥ N`, c-level 0 |
 //! | [`mebdf`] | modified extended BDF orders 1–8 (Cash's MEBDF/MEBDFDAE) | square, constant `E` |
 //! | [`idec`] | linearly implicit Euler + iterated defect correction (Somali) | square, constant `E`, index ≤ 2 |
+//! | [`gauss`] | Gauss–Legendre order 6, symmetric, quasi-constant step | square, index ≤ 1 |
 //!
 //! [`init`] computes consistent initial values from the model's constraint
 //! chain, and the initial derivative BDF starts from. Every solver returns
@@ -26,6 +27,7 @@
 pub mod bdf;
 pub mod core;
 pub mod error;
+pub mod gauss;
 pub mod idec;
 pub mod init;
 mod linalg;
@@ -134,9 +136,12 @@ pub fn solver_by_name(name: &str) -> Option<Box<dyn Solver + Send + Sync>> {
         "odbdf" => Some(Box::new(odbdf::OdBdf)),
         "mebdf" => Some(Box::new(mebdf::Mebdf)),
         "idec" => Some(Box::new(idec::Idec::default())),
+        "gauss" => Some(Box::new(gauss::Gauss)),
         _ => None,
     }
 }
 
 /// Names of all solvers, in report order.
-pub const SOLVER_NAMES: [&str; 6] = ["radau5", "bdf", "odradau", "odbdf", "mebdf", "idec"];
+pub const SOLVER_NAMES: [&str; 7] = [
+    "radau5", "bdf", "odradau", "odbdf", "mebdf", "idec", "gauss",
+];

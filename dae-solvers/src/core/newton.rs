@@ -92,8 +92,15 @@ pub(crate) struct Contraction {
     q_prev: f64,
     /// Current contraction estimate `θ`.
     pub(crate) theta: f64,
+    /// The first observed ratio `q₂ = ‖Δ₂‖/‖Δ₁‖` of this iteration (RADAU5
+    /// rule; the initial `θ` until there is one): the contraction of the
+    /// iteration matrix, before round-off can mask it.
+    pub(crate) theta_first: f64,
     /// `η = θ/(1 − θ)`, carried between iterations.
     pub(crate) eta: f64,
+    /// Increments of at most this norm that no longer contract are
+    /// round-off ([`ROUND_OFF_FLOOR`] unless a method sets its own).
+    pub(crate) floor: f64,
 }
 
 impl Contraction {
@@ -109,7 +116,9 @@ impl Contraction {
             reference: 0.0,
             q_prev: 0.0,
             theta: 0.0,
+            theta_first: 0.0,
             eta,
+            floor: ROUND_OFF_FLOOR,
         }
     }
 
@@ -121,6 +130,7 @@ impl Contraction {
         self.q_prev = 0.0;
         self.eta = eta;
         self.theta = theta;
+        self.theta_first = theta;
     }
 
     /// Increments observed in this iteration.
@@ -142,9 +152,14 @@ impl Contraction {
             Rule::Radau5 { slow_exit } => {
                 if k > 1 && k < self.max_iter {
                     let q = norm / self.reference;
-                    self.theta = if k == 2 { q } else { (q * self.q_prev).sqrt() };
+                    self.theta = if k == 2 {
+                        self.theta_first = q;
+                        q
+                    } else {
+                        (q * self.q_prev).sqrt()
+                    };
                     self.q_prev = q;
-                    if q.max(self.theta) >= STAGNANT && norm <= ROUND_OFF_FLOOR {
+                    if q.max(self.theta) >= STAGNANT && norm <= self.floor {
                         return Verdict::Converged;
                     }
                     if self.theta >= 0.99 {
@@ -155,7 +170,7 @@ impl Contraction {
                     let predicted = self.eta * norm * self.theta.powi(remaining) / self.kappa;
                     // Near the round-off floor slow contraction may be
                     // noise: iterate on, so that stagnation is seen (above).
-                    if slow_exit && predicted >= 1.0 && norm > ROUND_OFF_FLOOR {
+                    if slow_exit && predicted >= 1.0 && norm > self.floor {
                         let q = predicted.clamp(1e-4, 20.0);
                         let factor = 0.8 * q.powf(-1.0 / (4.0 + f64::from(remaining)));
                         return Verdict::TooSlow { factor };

@@ -3,7 +3,8 @@
 //! accepted one, and the classical and predictive step-size quotients.
 
 use super::step::Integrator;
-use super::{FACL, FACR, NIT, QUOT1, QUOT2, SAFE, THET, UROUND};
+use super::tableau::Collocation;
+use super::{FACL, FACR, QUOT1, QUOT2, SAFE, UROUND};
 use crate::core::control::Budget;
 use crate::core::matrix::StageSystems;
 
@@ -52,6 +53,8 @@ pub(super) struct Control {
     pub(super) budget: Budget,
     /// What the step loop does next.
     pub(super) next: Next,
+    /// The quasi-constant step rule of a symmetric method.
+    pub(super) hold: Hold,
 }
 
 impl Control {
@@ -75,12 +78,118 @@ impl Control {
     }
 }
 
-impl<S: StageSystems> Integrator<'_, S> {
+/// The step-size rule of a symmetric method ([`Collocation::QUASI_CONSTANT`]):
+/// the step is held constant and changed only when it must be.
+///
+/// A symmetric method on a reversible problem keeps the error of periodic
+/// motion growing linearly in time — but only at constant step size; a step
+/// that follows the error estimate through every swing of a pendulum makes
+/// the method non-symmetric, and the phase error grows quadratically again
+/// (Hairer, Lubich & Wanner, *Geometric Numerical Integration*, VIII.1).
+/// So, after a start-up in which RADAU5's controller sets the scale (until
+/// its first proposal to shorten the step):
+///
+/// - a step is shortened at once when the error test rejects it or its
+///   proposal is shorter than the current step (an estimate above
+///   `≈ 0.66`), to the proposal;
+/// - a step is lengthened only when the proposals of `window` accepted
+///   steps in a row have all been at least twice the current step, to the
+///   smallest of them;
+/// - a shortening that follows a lengthening doubles `window` (from 16):
+///   on periodic motion the window soon spans a whole period, and the step
+///   settles at what the hardest part of the orbit needs.
+#[derive(Clone, Debug)]
+pub(super) struct Hold {
+    /// The start-up is over.
+    settled: bool,
+    /// Accepted steps whose proposals must all allow a doubling.
+    window: usize,
+    /// Accepted steps in a row whose proposal was at least twice the step.
+    calm: usize,
+    /// The smallest of their proposals.
+    calm_min: f64,
+    /// The step was lengthened and has not been shortened since.
+    raised: bool,
+}
+
+impl Default for Hold {
+    fn default() -> Self {
+        Hold {
+            settled: false,
+            window: Hold::FIRST_WINDOW,
+            calm: 0,
+            calm_min: f64::INFINITY,
+            raised: false,
+        }
+    }
+}
+
+impl Hold {
+    /// The first window.
+    const FIRST_WINDOW: usize = 16;
+    /// Proposals must allow at least this ratio for a lengthening.
+    const RAISE: f64 = 2.0;
+    /// A shortened step is this fraction of the proposal: room for the
+    /// estimate to grow `(1/0.75)⁴ ≈ 3` times before the next shortening.
+    const SHORTEN: f64 = 0.75;
+
+    /// The next step after one of size `h` accepted with `proposal`.
+    pub(super) fn accepted(&mut self, h: f64, proposal: f64) -> f64 {
+        if !self.settled {
+            if proposal >= h {
+                return proposal;
+            }
+            self.settled = true;
+        }
+        if proposal < h {
+            self.shortened();
+            return Self::SHORTEN * proposal;
+        }
+        if proposal >= Self::RAISE * h {
+            self.calm += 1;
+            self.calm_min = self.calm_min.min(proposal);
+            if self.calm >= self.window {
+                let longer = self.calm_min;
+                self.calm = 0;
+                self.calm_min = f64::INFINITY;
+                self.raised = true;
+                return longer;
+            }
+        } else {
+            self.calm = 0;
+            self.calm_min = f64::INFINITY;
+        }
+        h
+    }
+
+    /// A step was rejected (it is retried shorter).
+    pub(super) fn rejected(&mut self) {
+        self.settled = true;
+        self.shortened();
+    }
+
+    fn shortened(&mut self) {
+        if self.raised {
+            self.window *= 2;
+            self.raised = false;
+        }
+        self.calm = 0;
+        self.calm_min = f64::INFINITY;
+    }
+}
+
+impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// Size of the next step after one accepted with proposal `h_new`, and
     /// whether the factorisation (or the Jacobian) can be kept.
     pub(super) fn next_step(&mut self, mut h_new: f64) {
         let t_end = self.t_end;
-        let small_theta = self.newton.theta <= THET;
+        let theta = if K::SLOW_EXIT {
+            self.newton.theta
+        } else {
+            // Iterated towards round-off: the last ratios are noise.
+            self.newton.theta_first
+        };
+        let small_theta = theta <= K::THET;
         let c = &mut self.c;
         let (t, h) = (c.t, c.h);
         if let Some(hf) = c.fixed {
@@ -133,10 +242,11 @@ impl<S: StageSystems> Integrator<'_, S> {
 
 /// The classical step-size quotient `q = h/h_new` (HW IV.8 (8.21)):
 /// `clamp(‖err‖^(1/4) / fac, 1/8, 5)` with the safety factor
-/// `fac = min(0.9, 0.9 (2 NIT + 1) / (newt + 2 NIT))` lowered when Newton
+/// `fac = min(0.9, 0.9 (2 nit + 1) / (newt + 2 nit))` (`nit` = RADAU5's
+/// `NIT`) lowered when Newton
 /// needed many iterations.
-pub(super) fn classical_quotient(err: f64, newt: usize) -> f64 {
-    let fac = SAFE.min(SAFE * (2 * NIT + 1) as f64 / (newt + 2 * NIT) as f64);
+pub(super) fn classical_quotient(err: f64, newt: usize, nit: usize) -> f64 {
+    let fac = SAFE.min(SAFE * (2 * nit + 1) as f64 / (newt + 2 * nit) as f64);
     FACR.max(FACL.min(err.sqrt().sqrt() / fac))
 }
 

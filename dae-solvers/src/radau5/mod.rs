@@ -148,7 +148,7 @@ mod control;
 mod kernels;
 mod stages;
 mod step;
-mod tableau;
+pub(crate) mod tableau;
 
 use crate::core::driver;
 use crate::core::matrix::{SquareStages, StageSystems};
@@ -157,6 +157,7 @@ use crate::options::Options;
 use crate::{NotApplicable, Problem, Solution, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 use step::Integrator;
+use tableau::{Collocation, RadauIIA};
 
 /// 3-stage Radau IIA of order 5 (see the [module documentation](self)).
 ///
@@ -204,8 +205,17 @@ pub(crate) fn integrate<S: StageSystems>(
     problem: &Problem<'_>,
     options: &Options,
 ) -> Result<Solution, SolveError> {
+    collocate::<S, RadauIIA>(problem, options)
+}
+
+/// Integrate with the three-stage collocation method `K` (Radau IIA or
+/// Gauss–Legendre), the stage systems solved by `S`.
+pub(crate) fn collocate<S: StageSystems, K: Collocation>(
+    problem: &Problem<'_>,
+    options: &Options,
+) -> Result<Solution, SolveError> {
     problem.check(problem.system.info().unknowns(), options)?;
-    let mut integrator = Integrator::<S>::new(problem, options);
+    let mut integrator = Integrator::<S, K>::new(problem, options);
     integrator.start()?;
     driver::solve(&mut integrator, options, problem.t0, problem.t_end)
 }
@@ -288,28 +298,36 @@ pub(crate) fn smallest_tolerance(
 /// never less than the round-off floor `100 ε ≈ 2.2·10⁻¹⁴` (see the module
 /// documentation). Larger than `tol` only below that floor.
 pub fn internal_tolerance(tol: f64) -> f64 {
-    if tol > TOL_ANCHOR {
-        tol * (TOL_ANCHOR / tol).powf(0.2)
+    map_tolerance(tol, TOL_ANCHOR, 0.2)
+}
+
+/// `tol (anchor/tol)^power` above `anchor`, `tol` itself below, never
+/// less than the round-off floor: the shape of every tolerance map of the
+/// collocation methods.
+pub(crate) fn map_tolerance(tol: f64, anchor: f64, power: f64) -> f64 {
+    if tol > anchor {
+        tol * (anchor / tol).powf(power)
     } else {
         tol.max(TOL_FLOOR)
     }
 }
 
-/// The factor `internal_tolerance(rtol_i)/rtol_i` applied to `rtol_i` and
+/// The factor `map_tolerance(rtol_i)/rtol_i` applied to `rtol_i` and
 /// `atol_i` (as RADAU5 scales `ATOL` with `RTOL`); a purely absolute
 /// tolerance (`rtol_i = 0`) is tightened like a relative one but not floored.
-fn tolerance_factor(options: &Options, i: usize) -> f64 {
-    let r = options.tol.rtol(i);
-    if r > 0.0 {
-        internal_tolerance(r) / r
+pub(crate) fn map_factor(rtol: f64, atol: f64, anchor: f64, power: f64) -> f64 {
+    if rtol > 0.0 {
+        map_tolerance(rtol, anchor, power) / rtol
+    } else if atol > anchor {
+        (anchor / atol).powf(power)
     } else {
-        let a = options.tol.atol(i);
-        if a > TOL_ANCHOR {
-            (TOL_ANCHOR / a).powf(0.2)
-        } else {
-            1.0
-        }
+        1.0
     }
+}
+
+/// Radau IIA's tolerance factor (anchor `10^(−12.5)`, power `1/5`).
+fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
+    map_factor(rtol, atol, TOL_ANCHOR, 0.2)
 }
 
 #[cfg(test)]

@@ -6,15 +6,15 @@
 
 use super::kernels;
 use super::step::Integrator;
-use super::tableau::{ALPHA, BETA, C, GAMMA};
-use super::{tolerance_factor, NIT, NIT_FIXED, THET, UROUND};
+use super::tableau::Collocation;
+use super::{NIT_FIXED, UROUND};
 use crate::core::matrix::{Rows, StageSystems};
 use crate::core::newton::Verdict;
 use crate::core::weights::Weights;
-use crate::linalg::{all_finite, mat_vec, Singular};
+use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
 use crate::options::Options;
 use crate::SolveError;
-use dae_core::system::FormulationInfo;
+use dae_core::system::{FormulationInfo, RowKind};
 use nalgebra::DMatrix;
 
 /// Every buffer the step loop touches, allocated once (`N` unknowns, `M`
@@ -65,12 +65,20 @@ pub(super) struct Work<S> {
     pub(super) e_n: DMatrix<f64>,
     /// `γ/h E₀ − J` and `(α + iβ)/h E₀ − J`, factorised.
     pub(super) stages: S,
+    /// The algebraic rows (constraint rows whose row of `E` is zero at
+    /// `t₀`), for the end-point projection of a method that is not
+    /// stiffly accurate; empty when there is none to make.
+    pub(super) algebraic: Vec<usize>,
+    /// The matrix of the projection: rows of `E(y_{n+1})` and of `J`.
+    pub(super) projection: DenseLu,
+    /// Its right-hand side, then the correction.
+    pub(super) delta: Vec<f64>,
 }
 
 impl<S: StageSystems> Work<S> {
     /// The buffers for `info`, with the error weights of `options` (the
     /// tolerance map, and the index of each unknown for the scaling).
-    pub(super) fn new(info: &FormulationInfo, options: &Options) -> Self {
+    pub(super) fn new<K: Collocation>(info: &FormulationInfo, options: &Options) -> Self {
         let (m, n) = (info.equations(), info.unknowns());
         let v = |len: usize| vec![0.0; len];
         let mat = || DMatrix::zeros(m, n);
@@ -86,7 +94,7 @@ impl<S: StageSystems> Work<S> {
             yp: v(n),
             weights: Weights::new(
                 &options.tol,
-                |i| tolerance_factor(options, i),
+                |i| K::tolerance_factor(options.tol.rtol(i), options.tol.atol(i)),
                 vec![true; n],
                 info.variables
                     .iter()
@@ -104,6 +112,9 @@ impl<S: StageSystems> Work<S> {
             e_jac: mat(),
             e_n: mat(),
             stages: S::new(m, n),
+            algebraic: Vec::new(),
+            projection: DenseLu::new(if K::END.is_some() { n } else { 0 }, Pivoting::Checked),
+            delta: v(if K::END.is_some() { n } else { 0 }),
         }
     }
 }
@@ -120,7 +131,7 @@ pub(super) enum Newton {
     NonFinite(usize),
 }
 
-impl<S: StageSystems> Integrator<'_, S> {
+impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// `J = ∂f/∂y − ∂(E z)/∂y` and `E₀` at `(t, y_n)`.
     pub(super) fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
         let w = &mut self.w;
@@ -158,7 +169,7 @@ impl<S: StageSystems> Integrator<'_, S> {
             w.rows.update(e0, w.weights.get());
         }
         w.stages
-            .factor(e0, &w.jac, GAMMA / h, ALPHA / h, BETA / h, &w.rows)
+            .factor(e0, &w.jac, K::GAMMA / h, K::ALPHA / h, K::BETA / h, &w.rows)
     }
 
     /// Zero on the first step, otherwise the last collocation polynomial
@@ -170,7 +181,7 @@ impl<S: StageSystems> Integrator<'_, S> {
             w.z.fill(0.0);
             return;
         }
-        kernels::extrapolate(&w.cont, ratio, &mut w.z, n);
+        kernels::extrapolate::<K>(&w.cont, ratio, &mut w.z, n);
     }
 
     /// Stage residuals `G_i(Z) = E(Y_i) Y'_i − f(t + c_i h, Y_i)` into `res`.
@@ -178,8 +189,8 @@ impl<S: StageSystems> Integrator<'_, S> {
         let m = self.m;
         let w = &mut self.w;
         let n = self.n;
-        kernels::stage_points(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
-        for (i, &ci) in C.iter().enumerate() {
+        kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
+        for (i, &ci) in K::C.iter().enumerate() {
             self.sys.residual(
                 t + ci * h,
                 &w.ys[i * n..(i + 1) * n],
@@ -196,14 +207,18 @@ impl<S: StageSystems> Integrator<'_, S> {
     /// iterations are made.
     pub(super) fn newton(&mut self, t: f64, h: f64, may_shorten: bool) -> Newton {
         let (n, m) = (self.n, self.m);
-        let max_iter = if may_shorten { NIT } else { NIT_FIXED };
+        let max_iter = if may_shorten {
+            K::MAX_NEWTON
+        } else {
+            NIT_FIXED
+        };
         let eta = self.newton.eta.max(UROUND).powf(0.8);
-        self.newton.restart(max_iter, eta, THET);
+        self.newton.restart(max_iter, eta, K::THET);
         loop {
             self.stage_residuals(t, h);
             let w = &mut self.w;
             // R = −(T⁻¹ ⊗ I) G.
-            if !kernels::transform_residuals(&w.res, &mut w.dw, m) {
+            if !kernels::transform_residuals::<K>(&w.res, &mut w.dw, m) {
                 return Newton::NonFinite(self.newton.iterations());
             }
             w.stages.solve_real(&mut w.dw[..m]);
@@ -226,7 +241,7 @@ impl<S: StageSystems> Integrator<'_, S> {
 
             // Z += (T ⊗ I) ΔW   (T₃₂ = 1, T₃₃ = 0).
             let w = &mut self.w;
-            kernels::add_increments(&w.dw, m, &mut w.z, n);
+            kernels::add_increments::<K>(&w.dw, m, &mut w.z, n);
             if verdict == Verdict::Converged {
                 return Newton::Converged(iterations);
             }
@@ -238,7 +253,7 @@ impl<S: StageSystems> Integrator<'_, S> {
         let (n, m) = (self.n, self.m);
         let w = &mut self.w;
         // tmp = (1/h) Σ d_i Z_i,  ez = E(y_n) tmp.
-        kernels::error_combination(&w.z, h, &mut w.tmp, n);
+        kernels::error_combination::<K>(&w.z, h, &mut w.tmp, n);
         mat_vec(&w.e_n, &w.tmp, &mut w.ez);
         for k in 0..m {
             w.err[k] = w.f0[k] + w.ez[k];
@@ -264,12 +279,74 @@ impl<S: StageSystems> Integrator<'_, S> {
         }
     }
 
+    /// The algebraic rows of the end-point projection, from `E(y₀)`
+    /// (evaluated by the start); only for a method that is not stiffly
+    /// accurate.
+    pub(super) fn find_algebraic_rows(&mut self, info: &FormulationInfo) {
+        if K::END.is_none() || S::LEAST_SQUARES {
+            return;
+        }
+        let e = &self.w.e_n;
+        self.w.algebraic = (0..self.m)
+            .filter(|&i| {
+                matches!(info.rows[i].kind, RowKind::Constraint { .. })
+                    && (0..self.n).all(|j| e[(i, j)] == 0.0)
+            })
+            .collect();
+    }
+
+    /// Make the end point of an accepted step consistent (a method that is
+    /// not stiffly accurate, see [`crate::gauss`]): with `f` and `E`
+    /// already evaluated at `y_{n+1}`, one simplified Newton step for
+    /// `δ` with `E(y_{n+1}) δ = 0` (the differential part kept) and
+    /// `f_a(t, y_{n+1}) + J_a δ = 0` on the algebraic rows `a`, `J` the
+    /// iteration's Jacobian. Returns whether `y` moved (then `f` and `E`
+    /// must be evaluated again).
+    pub(super) fn project(&mut self, t: f64, h: f64) -> Result<bool, SolveError> {
+        let w = &mut self.w;
+        if w.algebraic.is_empty() {
+            return Ok(false);
+        }
+        let (alg, e, jac) = (&w.algebraic, &w.e_n, &w.jac);
+        w.projection
+            .factor_from(|i, j| {
+                if alg.contains(&i) {
+                    jac[(i, j)]
+                } else {
+                    e[(i, j)]
+                }
+            })
+            .map_err(|_| SolveError::SingularMatrix { t, h })?;
+        w.delta.fill(0.0);
+        for &i in alg {
+            w.delta[i] = -w.f0[i];
+        }
+        w.projection.solve(&mut w.delta);
+        if !all_finite(&w.delta) {
+            return Err(SolveError::NonFinite {
+                t,
+                what: "end-point projection",
+            });
+        }
+        for k in 0..self.n {
+            let d = w.delta[k];
+            if self.compensated {
+                (w.y[k], w.y_lo[k]) = two_sum(w.y[k], d + w.y_lo[k]);
+            } else {
+                w.y[k] += d;
+            }
+            // The dense output ends at the projected value.
+            w.cont[k] = w.y[k];
+        }
+        Ok(true)
+    }
+
     /// Accept the step: `y_{n+1} = y_n + Z_3`, the new collocation
     /// polynomial (Newton form on `s = 0, c₂ − 1, c₁ − 1, −1`) and
     /// `y'_{n+1} = Y'_3`.
     pub(super) fn advance(&mut self, h: f64) {
         let w = &mut self.w;
         let y_lo = self.compensated.then_some(&mut w.y_lo[..]);
-        kernels::advance(&w.z, h, &mut w.y, y_lo, &mut w.yp, &mut w.cont);
+        kernels::advance::<K>(&w.z, h, &mut w.y, y_lo, &mut w.yp, &mut w.cont);
     }
 }

@@ -2,10 +2,14 @@
 //! acceptance of a step): the start at `t₀`, one accepted step with its
 //! retries, and the driver's view of it.
 
-use super::control::{classical_quotient, predictive_quotient, Control, Next};
+use super::control::{classical_quotient, predictive_quotient, Control, Hold, Next};
 use super::stages::{Newton, Work};
-use super::tableau::dense;
-use super::{smallest_tolerance, tight, H0_DEFAULT, NIT, TIGHT_NEWTON, UROUND};
+use super::tableau::{dense, Collocation};
+use super::{smallest_tolerance, tight, H0_DEFAULT, TIGHT_NEWTON, UROUND};
+
+/// The round-off floor of a Newton iteration run towards round-off, in
+/// units of round-off.
+const ROUND_OFF: f64 = 1e3;
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::matrix::StageSystems;
@@ -18,7 +22,7 @@ use dae_core::system::DaeSystem;
 /// The state of one Radau IIA 5 integration: the formulation, the buffers
 /// of the step loop, the work counters, the contraction monitor and the
 /// step-size controller.
-pub(super) struct Integrator<'a, S> {
+pub(super) struct Integrator<'a, S, K> {
     /// The formulation.
     pub(super) sys: &'a dyn DaeSystem,
     /// The caller's options.
@@ -45,9 +49,11 @@ pub(super) struct Integrator<'a, S> {
     /// Sum the step updates of `t` and `y` with compensation (tight
     /// tolerances, [`super::TIGHT_TOL`]).
     pub(super) compensated: bool,
+    /// The tableau.
+    pub(super) method: std::marker::PhantomData<K>,
 }
 
-impl<S: StageSystems> Method for Integrator<'_, S> {
+impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
     fn t(&self) -> f64 {
         self.c.t
     }
@@ -55,7 +61,7 @@ impl<S: StageSystems> Method for Integrator<'_, S> {
         &self.w.y
     }
     fn dense(&self, tau: f64, out: &mut [f64]) {
-        dense(
+        dense::<K>(
             self.n,
             &self.w.cont,
             tau - self.c.t_lo,
@@ -75,13 +81,13 @@ impl<S: StageSystems> Method for Integrator<'_, S> {
     }
 }
 
-impl<'a, S: StageSystems> Integrator<'a, S> {
+impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
     /// The integrator of `problem` at `t₀`, its buffers allocated; nothing
     /// is evaluated before [`Integrator::start`].
     pub(super) fn new(problem: &Problem<'a>, options: &'a Options) -> Self {
         let info = problem.system.info();
         let (m, n) = (info.equations(), info.unknowns());
-        let mut w = Work::<S>::new(info, options);
+        let mut w = Work::<S>::new::<K>(info, options);
         w.y.copy_from_slice(problem.y0);
         // RADAU5: fnewt = max(10 u / rtol, min(0.03, rtol^(1/2))), here
         // with the smallest relative tolerance (an absolute one where all
@@ -95,12 +101,24 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
         // Not at index 3: there the multipliers carry a round-off of
         // `ε/h²` that a tighter bound only iterates on.
         let tight_newton = compensated && info.d_index.is_some_and(|k| k <= 2);
-        let fnewt = (10.0 * UROUND / r).max(0.03f64.min(r.sqrt()))
-            * if tight_newton { TIGHT_NEWTON } else { 1.0 };
+        let fnewt = match K::NEWTON_ROUND_OFF {
+            None => {
+                (10.0 * UROUND / r).max(0.03f64.min(r.sqrt()))
+                    * if tight_newton { TIGHT_NEWTON } else { 1.0 }
+            }
+            // Towards round-off, whatever the tolerance.
+            Some(units) => units * UROUND / r,
+        };
         let rule = Rule::Radau5 {
-            slow_exit: options.fixed_step.is_none(),
+            slow_exit: K::SLOW_EXIT && options.fixed_step.is_none(),
         };
         let span = problem.t_end - problem.t0;
+        let mut newton = Contraction::new(rule, K::MAX_NEWTON, fnewt, 1.0);
+        if K::NEWTON_ROUND_OFF.is_some() {
+            // Iterating towards round-off: stagnation counts as convergence
+            // only at a few hundred units of round-off.
+            newton.floor = ROUND_OFF * UROUND / r;
+        }
         Integrator {
             sys: problem.system,
             options,
@@ -110,9 +128,10 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
             t_end: problem.t_end,
             constant_leading: info.constant_leading,
             compensated,
+            method: std::marker::PhantomData,
             w,
             stats: Stats::default(),
-            newton: Contraction::new(rule, NIT, fnewt, 1.0),
+            newton,
             c: Control {
                 t: problem.t0,
                 t_lo: 0.0,
@@ -129,6 +148,7 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                 err_acc: 1e-2,
                 budget: Budget::new(options.max_steps),
                 next: Next::Jacobian,
+                hold: Hold::default(),
             },
         }
     }
@@ -161,6 +181,7 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
         let (t0, t_end) = (self.t0, self.t_end);
         let span = t_end - t0;
         self.evaluate_at_step_point(t0, true)?;
+        self.find_algebraic_rows(self.sys.info());
         let c = &mut self.c;
         c.h = match c.fixed {
             Some(hf) => hf,
@@ -238,7 +259,7 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
             if !newton_failed && fixed.is_none() {
                 err = self.error_norm(t, h, self.c.first || self.c.reject);
                 if err.is_finite() {
-                    h_new = h / classical_quotient(err, newt);
+                    h_new = h / classical_quotient(err, newt, K::MAX_NEWTON);
                 } else {
                     non_finite = true;
                     newton_failed = true;
@@ -263,6 +284,9 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                     return Err(Budget::error(failure, t, h, newt));
                 }
                 c.h *= failed_factor.unwrap_or(0.5);
+                if K::QUASI_CONSTANT {
+                    c.hold.rejected();
+                }
                 c.reject = true;
                 c.last = false;
                 c.next = c.after_failure();
@@ -279,6 +303,9 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                 } else {
                     c.h = h_new;
                 }
+                if K::QUASI_CONSTANT {
+                    c.hold.rejected();
+                }
                 c.next = c.after_failure();
                 continue;
             }
@@ -292,6 +319,9 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                 }
                 c.h_acc = h;
                 c.err_acc = err.max(1e-2);
+                if K::QUASI_CONSTANT {
+                    h_new = c.hold.accepted(h, h_new);
+                }
             }
             c.first = false;
             if c.last {
@@ -312,11 +342,20 @@ impl<'a, S: StageSystems> Integrator<'a, S> {
                     what: "solution",
                 });
             }
+            if K::END.is_some() {
+                // Not stiffly accurate: the end point is made consistent.
+                self.evaluate_at_step_point(t, false)?;
+                if self.project(t, h)? && !self.c.last {
+                    self.evaluate_at_step_point(t, false)?;
+                }
+            }
             if self.c.last {
                 self.c.done = true;
                 return Ok(());
             }
-            self.evaluate_at_step_point(t, false)?;
+            if K::END.is_none() {
+                self.evaluate_at_step_point(t, false)?;
+            }
             self.next_step(h_new);
             return Ok(());
         }

@@ -1,33 +1,139 @@
-//! The coefficients of Radau IIA (s = 3) and of RADAU5's transformation of
-//! `A⁻¹`, and the collocation polynomial of a step in Newton form, which
-//! gives the dense output and the starting values of the next Newton
-//! iteration.
+//! The three-stage collocation methods on RADAU5's linear algebra: the
+//! [`Collocation`] trait a tableau implements (its coefficients, the
+//! transformation of `A⁻¹`, the embedded error estimate, the end value and
+//! the collocation polynomial of a step in Newton form, which gives the
+//! dense output and the starting values of the next Newton iteration), and
+//! Radau IIA (s = 3), the tableau of [`crate::radau5`]. The symmetric
+//! Gauss–Legendre tableau of [`crate::gauss`] is the other implementation.
+
+/// A three-stage collocation method whose `A⁻¹` has one real eigenvalue `γ`
+/// and a complex pair `α ± iβ`, so that RADAU5's transformed Newton
+/// iteration (one real and one complex system of size `N`) applies.
+///
+/// The collocation polynomial of a step is stored in Newton form on four
+/// nodes `0, ν₁, ν₂, ν₃` of `s = (t − t_{n+1})/h` (the end point first,
+/// where it is `0` relative to the end value), as `cont = [y_{n+1}, d₁, d₂,
+/// d₃]`.
+pub(crate) trait Collocation: 'static {
+    /// Nodes `c_i`.
+    const C: [f64; 3];
+    /// `A⁻¹`: the stage derivatives are `(1/h) A⁻¹ Z`.
+    const AINV: [[f64; 3]; 3];
+    /// Real eigenvalue of `A⁻¹`.
+    const GAMMA: f64;
+    /// Complex pair `α ± iβ` of eigenvalues of `A⁻¹`.
+    const ALPHA: f64;
+    const BETA: f64;
+    /// `T` with `T⁻¹ A⁻¹ T = diag(γ, [[α, −β], [β, α]])`, normalised so
+    /// that `T₃₂ = 1` and `T₃₃ = 0` (the kernels rely on it).
+    const T: [[f64; 3]; 3];
+    /// `T⁻¹`.
+    const TI: [[f64; 3]; 3];
+    /// `d_i = e_i/γ₀` of the embedded error estimate `err = (γ/h E₀ −
+    /// J)⁻¹ [f(t_n, y_n) + E (1/h) Σ d_i Z_i]`, `γ₀ = 1/γ` (HW IV.8
+    /// (8.19)–(8.20)).
+    const DD: [f64; 3];
+    /// `y_{n+1} = y_n + Σ END_i Z_i` (`END = bᵀA⁻¹`); `None` for a stiffly
+    /// accurate method, where it is `y_n + Z_3`.
+    const END: Option<[f64; 3]>;
+    /// The step size is held constant until the error test asks for a
+    /// change (see `control::Hold`); otherwise RADAU5's
+    /// controller proposes every step.
+    const QUASI_CONSTANT: bool;
+    /// Newton iterations allowed per step attempt (RADAU5's `NIT`), also
+    /// the reference of the controller's safety factor.
+    const MAX_NEWTON: usize;
+    /// The Jacobian is kept for the next step while the observed
+    /// contraction factor stays at or below this (RADAU5's `THET`).
+    const THET: f64;
+    /// A slowly converging Newton iteration is abandoned early for a
+    /// shorter step (RADAU5); otherwise it runs to `MAX_NEWTON`.
+    const SLOW_EXIT: bool;
+    /// `None`: RADAU5's Newton bound, relative to the internal tolerance.
+    /// `Some(units)`: the iteration runs towards round-off, its bound
+    /// `units` units of round-off whatever the tolerance (see
+    /// [`crate::gauss`]).
+    const NEWTON_ROUND_OFF: Option<f64>;
+
+    /// The factor applied to `rtol_i` and `atol_i` (the tolerance map).
+    fn tolerance_factor(rtol: f64, atol: f64) -> f64;
+
+    /// Divided differences `d₁, d₂, d₃` of the collocation polynomial
+    /// relative to its end value, from the stage increments.
+    fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3];
+
+    /// The polynomial minus its end value at `s`.
+    fn polynomial_increment(d: &[f64; 3], s: f64) -> f64;
+
+    /// `h y'(t_{n+1})` from the stage increments and the divided
+    /// differences.
+    fn end_slope(z: [f64; 3], d: &[f64; 3]) -> f64;
+}
+
+/// Radau IIA of order 5 (RADAU5's coefficients).
+pub(crate) struct RadauIIA;
+
+impl Collocation for RadauIIA {
+    const C: [f64; 3] = C;
+    const AINV: [[f64; 3]; 3] = AINV;
+    const GAMMA: f64 = GAMMA;
+    const ALPHA: f64 = ALPHA;
+    const BETA: f64 = BETA;
+    const T: [[f64; 3]; 3] = T;
+    const TI: [[f64; 3]; 3] = TI;
+    const DD: [f64; 3] = DD;
+    const END: Option<[f64; 3]> = None;
+    const QUASI_CONSTANT: bool = false;
+    const MAX_NEWTON: usize = super::NIT;
+    const THET: f64 = super::THET;
+    const SLOW_EXIT: bool = true;
+    const NEWTON_ROUND_OFF: Option<f64> = None;
+
+    fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
+        super::tolerance_factor(rtol, atol)
+    }
+
+    #[inline(always)]
+    fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3] {
+        divided_differences(z1, z2, z3)
+    }
+
+    #[inline(always)]
+    fn polynomial_increment(d: &[f64; 3], s: f64) -> f64 {
+        polynomial_increment(d, s)
+    }
+
+    #[inline(always)]
+    fn end_slope(z: [f64; 3], _d: &[f64; 3]) -> f64 {
+        AINV[2][0] * z[0] + AINV[2][1] * z[1] + AINV[2][2] * z[2]
+    }
+}
 
 /// Nodes `c₁ = (4 − √6)/10`, `c₂ = (4 + √6)/10`, `c₃ = 1`.
 const C1: f64 = 0.1550510257216822;
 const C2: f64 = 0.6449489742783178;
-pub(super) const C: [f64; 3] = [C1, C2, 1.0];
+const C: [f64; 3] = [C1, C2, 1.0];
 const C1M1: f64 = C1 - 1.0;
 const C2M1: f64 = C2 - 1.0;
 const C1MC2: f64 = C1 - C2;
 
 /// `A⁻¹` of the Radau IIA(3) matrix `A` (the stage derivatives of the
 /// collocation polynomial are `(1/h) A⁻¹ Z`).
-pub(super) const AINV: [[f64; 3]; 3] = [
+const AINV: [[f64; 3]; 3] = [
     [3.224744871391589, 1.1678400846904056, -0.25319726474218085],
     [-3.5678400846904057, 0.775255128608411, 1.0531972647421808],
     [5.531972647421808, -7.531972647421808, 5.0],
 ];
 
 /// Real eigenvalue `γ = 1/γ₀` of `A⁻¹`, `γ₀ = (6 + 81^(1/3) − 9^(1/3))/30`.
-pub(super) const GAMMA: f64 = 3.637834252744496;
+const GAMMA: f64 = 3.637834252744496;
 /// Complex pair `α ± iβ` of eigenvalues of `A⁻¹`.
-pub(super) const ALPHA: f64 = 2.6810828736277523;
-pub(super) const BETA: f64 = 3.0504301992474105;
+const ALPHA: f64 = 2.6810828736277523;
+const BETA: f64 = 3.0504301992474105;
 
 /// `T` with `T⁻¹ A⁻¹ T = diag(γ, [[α, −β], [β, α]])`, normalised as in
 /// HW IV.8 (`T₃₂ = 1`, `T₃₃ = 0`).
-pub(super) const T: [[f64; 3]; 3] = [
+const T: [[f64; 3]; 3] = [
     [
         0.09123239487089295,
         -0.1412552950209542,
@@ -37,7 +143,7 @@ pub(super) const T: [[f64; 3]; 3] = [
     [0.966048182615093, 1.0, 0.0],
 ];
 /// `T⁻¹`.
-pub(super) const TI: [[f64; 3]; 3] = [
+const TI: [[f64; 3]; 3] = [
     [4.325579890063155, 0.33919925181580984, 0.5417705399358749],
     [
         -4.178718591551905,
@@ -49,15 +155,22 @@ pub(super) const TI: [[f64; 3]; 3] = [
 
 /// `d_i = e_i/γ₀` of the embedded error estimate (HW IV.8 (8.20)):
 /// `(−(13 + 7√6)/3, (−13 + 7√6)/3, −1/3)`.
-pub(super) const DD: [f64; 3] = [-10.048809399827416, 1.382142733160749, -1.0 / 3.0];
+const DD: [f64; 3] = [-10.048809399827416, 1.382142733160749, -1.0 / 3.0];
 
 /// The collocation polynomial `cont` (`4N`) of the step `[t − h, t]` at
 /// `tau` into `out`.
-pub(super) fn dense(n: usize, cont: &[f64], tau: f64, t: f64, h: f64, out: &mut [f64]) {
+pub(super) fn dense<K: Collocation>(
+    n: usize,
+    cont: &[f64],
+    tau: f64,
+    t: f64,
+    h: f64,
+    out: &mut [f64],
+) {
     let s = (tau - t) / h;
     for k in 0..n {
         let d = [cont[n + k], cont[2 * n + k], cont[3 * n + k]];
-        out[k] = cont[k] + polynomial_increment(&d, s);
+        out[k] = cont[k] + K::polynomial_increment(&d, s);
     }
 }
 
@@ -65,7 +178,7 @@ pub(super) fn dense(n: usize, cont: &[f64], tau: f64, t: f64, h: f64, out: &mut 
 /// relative to its end value, on the nodes `s = 0, c₂ − 1, c₁ − 1, −1` of
 /// `s = (t − t_{n+1})/h`, where it takes the values `0, Z₂ − Z₃, Z₁ − Z₃,
 /// −Z₃` (RADAU5's `CONT`).
-pub(super) fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3] {
+fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3] {
     let d1 = (z2 - z3) / C2M1;
     let d12 = (z1 - z2) / C1MC2;
     let d2 = (d12 - d1) / C1M1;
@@ -75,7 +188,7 @@ pub(super) fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3] {
 
 /// `u(s) = s (d₁ + (s − c₂ + 1)(d₂ + (s − c₁ + 1) d₃))`: the polynomial minus
 /// its end value.
-pub(super) fn polynomial_increment(d: &[f64; 3], s: f64) -> f64 {
+fn polynomial_increment(d: &[f64; 3], s: f64) -> f64 {
     s * (d[0] + (s - C2M1) * (d[1] + (s - C1M1) * d[2]))
 }
 
