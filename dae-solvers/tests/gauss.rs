@@ -87,7 +87,7 @@ fn fixed_step_order_is_six_on_an_ode_and_an_index1_dae() {
 #[test]
 fn s01_rcd0_and_psi0_reach_the_exact_solution() {
     // Ten periods. Measured (x, y, v, w error at t = 20, in units of tol):
-    // rcd0 1.3 / 0.77 at tol 1e-6 / 1e-8; psi0 0.68 / 0.36.
+    // rcd0 0.47 / 0.81 at tol 1e-6 / 1e-8; psi0 0.83 / 0.73.
     let exact = s01_exact_at_20();
     for form in [Form::Rcd0, Form::Psi0] {
         let sys = Pendulum::new(form);
@@ -156,7 +156,8 @@ fn symmetry_beats_damping_over_100_periods() {
 #[test]
 fn the_step_settles_on_a_periodic_motion() {
     // After the start-up the step changes only when it must: on ten
-    // periods of the pendulum a handful of step sizes, not one per step.
+    // periods of the pendulum a handful of step sizes, not one per step
+    // (measured: 10 changes in 926 steps, most in the first period).
     let sys = Pendulum::new(Form::Rcd0);
     let options = Options {
         record_steps: true,

@@ -83,7 +83,7 @@ pub(crate) struct Contraction {
     /// Iterations allowed.
     max_iter: usize,
     /// Convergence bound `κ`.
-    kappa: f64,
+    pub(crate) kappa: f64,
     /// Increments so far.
     k: usize,
     /// `‖Δ_1‖` (DASSL) or `‖Δ_{k−1}‖` (RADAU5).
@@ -167,10 +167,11 @@ impl Contraction {
                     }
                     self.eta = self.theta / (1.0 - self.theta);
                     let remaining = (self.max_iter - k - 1) as i32;
-                    let predicted = self.eta * norm * self.theta.powi(remaining) / self.kappa;
                     // Near the round-off floor slow contraction may be
                     // noise: iterate on, so that stagnation is seen (above).
-                    if slow_exit && predicted >= 1.0 && norm > self.floor {
+                    let predicted = || self.eta * norm * self.theta.powi(remaining) / self.kappa;
+                    if slow_exit && predicted() >= 1.0 && norm > self.floor {
+                        let predicted = predicted();
                         let q = predicted.clamp(1e-4, 20.0);
                         let factor = 0.8 * q.powf(-1.0 / (4.0 + f64::from(remaining)));
                         return Verdict::TooSlow { factor };

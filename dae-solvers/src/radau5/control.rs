@@ -87,27 +87,29 @@ impl Control {
 /// the method non-symmetric, and the phase error grows quadratically again
 /// (Hairer, Lubich & Wanner, *Geometric Numerical Integration*, VIII.1).
 /// So, after a start-up in which RADAU5's controller sets the scale (until
-/// its first proposal to shorten the step):
+/// its first proposal to shorten the step), the step is set from the
+/// largest error estimate `e_max` seen at the current step size, aiming at
+/// `AIM` (`‖err‖ ∝ h⁴`):
 ///
-/// - a step is shortened at once when the error test rejects it or its
-///   proposal is shorter than the current step (an estimate above
-///   `≈ 0.66`), to the proposal;
-/// - a step is lengthened only when the proposals of `window` accepted
-///   steps in a row have all been at least twice the current step, to the
-///   smallest of them;
+/// - at once, to `h (AIM/‖err‖)^(1/4)`, when an accepted step's estimate
+///   exceeds `SHORTEN_AT` (a rejected step is retried with RADAU5's
+///   proposal);
+/// - after `window` accepted steps, to `h (AIM/e_max)^(1/4)` if that
+///   differs from `h` by more than `CHANGE`;
 /// - a shortening that follows a lengthening doubles `window` (from 16):
 ///   on periodic motion the window soon spans a whole period, and the step
-///   settles at what the hardest part of the orbit needs.
+///   settles where the hardest part of the orbit has the estimate `AIM`,
+///   whatever the point of the orbit the start-up ended at.
 #[derive(Clone, Debug)]
 pub(super) struct Hold {
     /// The start-up is over.
     settled: bool,
-    /// Accepted steps whose proposals must all allow a doubling.
+    /// Accepted steps between reviews of the step size.
     window: usize,
-    /// Accepted steps in a row whose proposal was at least twice the step.
-    calm: usize,
-    /// The smallest of their proposals.
-    calm_min: f64,
+    /// Accepted steps at the current step size since the last review.
+    count: usize,
+    /// The largest estimate among them.
+    err_max: f64,
     /// The step was lengthened and has not been shortened since.
     raised: bool,
 }
@@ -117,8 +119,8 @@ impl Default for Hold {
         Hold {
             settled: false,
             window: Hold::FIRST_WINDOW,
-            calm: 0,
-            calm_min: f64::INFINITY,
+            count: 0,
+            err_max: 0.0,
             raised: false,
         }
     }
@@ -127,39 +129,45 @@ impl Default for Hold {
 impl Hold {
     /// The first window.
     const FIRST_WINDOW: usize = 16;
-    /// Proposals must allow at least this ratio for a lengthening.
-    const RAISE: f64 = 2.0;
-    /// A shortened step is this fraction of the proposal: room for the
-    /// estimate to grow `(1/0.75)⁴ ≈ 3` times before the next shortening.
-    const SHORTEN: f64 = 0.75;
+    /// The estimate the step size aims at, at its largest over a window.
+    const AIM: f64 = 0.3;
+    /// An accepted estimate above this shortens the step at once.
+    const SHORTEN_AT: f64 = 0.8;
+    /// A review changes the step only by more than this ratio.
+    const CHANGE: f64 = 1.1;
+    /// Largest lengthening of one review.
+    const MAX_RAISE: f64 = 4.0;
 
-    /// The next step after one of size `h` accepted with `proposal`.
-    pub(super) fn accepted(&mut self, h: f64, proposal: f64) -> f64 {
+    /// The next step after one of size `h` accepted with the estimate
+    /// `err` and RADAU5's `proposal`.
+    pub(super) fn accepted(&mut self, h: f64, err: f64, proposal: f64) -> f64 {
         if !self.settled {
             if proposal >= h {
                 return proposal;
             }
             self.settled = true;
         }
-        if proposal < h {
+        if err > Self::SHORTEN_AT {
             self.shortened();
-            return Self::SHORTEN * proposal;
+            return h * (Self::AIM / err).sqrt().sqrt();
         }
-        if proposal >= Self::RAISE * h {
-            self.calm += 1;
-            self.calm_min = self.calm_min.min(proposal);
-            if self.calm >= self.window {
-                let longer = self.calm_min;
-                self.calm = 0;
-                self.calm_min = f64::INFINITY;
-                self.raised = true;
-                return longer;
-            }
+        self.count += 1;
+        self.err_max = self.err_max.max(err);
+        if self.count < self.window {
+            return h;
+        }
+        let ideal = h * (Self::AIM / self.err_max).sqrt().sqrt();
+        self.count = 0;
+        self.err_max = 0.0;
+        if ideal > Self::CHANGE * h {
+            self.raised = true;
+            ideal.min(Self::MAX_RAISE * h)
+        } else if ideal * Self::CHANGE < h {
+            self.shortened();
+            ideal
         } else {
-            self.calm = 0;
-            self.calm_min = f64::INFINITY;
+            h
         }
-        h
     }
 
     /// A step was rejected (it is retried shorter).
@@ -173,8 +181,8 @@ impl Hold {
             self.window *= 2;
             self.raised = false;
         }
-        self.calm = 0;
-        self.calm_min = f64::INFINITY;
+        self.count = 0;
+        self.err_max = 0.0;
     }
 }
 

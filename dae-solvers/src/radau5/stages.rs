@@ -71,6 +71,13 @@ pub(super) struct Work<S> {
     pub(super) algebraic: Vec<usize>,
     /// The matrix of the projection: rows of `E(y_{n+1})` and of `J`.
     pub(super) projection: DenseLu,
+    /// With a constant `E` whose zero columns are as many as the algebraic
+    /// rows: those columns, the algebraic unknowns. The projection then
+    /// moves only them, and its matrix is the `k × k` block of `J`
+    /// (`projection_small`); empty otherwise.
+    pub(super) algebraic_unknowns: Vec<usize>,
+    /// That block, factorised.
+    pub(super) projection_small: DenseLu,
     /// Its right-hand side, then the correction.
     pub(super) delta: Vec<f64>,
 }
@@ -114,6 +121,8 @@ impl<S: StageSystems> Work<S> {
             stages: S::new(m, n),
             algebraic: Vec::new(),
             projection: DenseLu::new(if K::END.is_some() { n } else { 0 }, Pivoting::Checked),
+            algebraic_unknowns: Vec::new(),
+            projection_small: DenseLu::new(0, Pivoting::Checked),
             delta: v(if K::END.is_some() { n } else { 0 }),
         }
     }
@@ -214,6 +223,9 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         };
         let eta = self.newton.eta.max(UROUND).powf(0.8);
         self.newton.restart(max_iter, eta, K::THET);
+        if K::NEWTON_ROUND_OFF.is_some() {
+            self.newton.kappa = self.newton_floor.max(self.newton_drift * h * h);
+        }
         loop {
             self.stage_residuals(t, h);
             let w = &mut self.w;
@@ -293,6 +305,15 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
                     && (0..self.n).all(|j| e[(i, j)] == 0.0)
             })
             .collect();
+        if self.constant_leading && !self.w.algebraic.is_empty() {
+            let zero_columns: Vec<usize> = (0..self.n)
+                .filter(|&j| (0..self.m).all(|i| e[(i, j)] == 0.0))
+                .collect();
+            if zero_columns.len() == self.w.algebraic.len() {
+                self.w.projection_small = DenseLu::new(zero_columns.len(), Pivoting::Checked);
+                self.w.algebraic_unknowns = zero_columns;
+            }
+        }
     }
 
     /// Make the end point of an accepted step consistent (a method that is
@@ -300,25 +321,38 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// already evaluated at `y_{n+1}`, one simplified Newton step for
     /// `δ` with `E(y_{n+1}) δ = 0` (the differential part kept) and
     /// `f_a(t, y_{n+1}) + J_a δ = 0` on the algebraic rows `a`, `J` the
-    /// iteration's Jacobian. Returns whether `y` moved (then `f` and `E`
-    /// must be evaluated again).
+    /// iteration's Jacobian. Returns whether `f` and `E` must be evaluated
+    /// again at the new `y`: with a constant `E`, `f(t, y_{n+1})` is
+    /// updated to `f + J δ` instead (exact where `f` is linear in the
+    /// algebraic unknowns, as in `rcd0`; it only feeds the next error
+    /// estimate).
     pub(super) fn project(&mut self, t: f64, h: f64) -> Result<bool, SolveError> {
         let w = &mut self.w;
         if w.algebraic.is_empty() {
             return Ok(false);
         }
-        let (alg, e, jac) = (&w.algebraic, &w.e_n, &w.jac);
+        if !w.algebraic_unknowns.is_empty() {
+            self.project_algebraic_unknowns(t, h)?;
+            return Ok(false);
+        }
+        // Column-major: the rows of `E`, then the algebraic rows of `J`.
+        let n = self.n;
         w.projection
-            .factor_from(|i, j| {
-                if alg.contains(&i) {
-                    jac[(i, j)]
-                } else {
-                    e[(i, j)]
-                }
-            })
+            .matrix_mut()
+            .as_mut_slice()
+            .copy_from_slice(w.e_n.as_slice());
+        let p = w.projection.matrix_mut().as_mut_slice();
+        let jac = w.jac.as_slice();
+        for &i in &w.algebraic {
+            for j in 0..n {
+                p[i + j * n] = jac[i + j * n];
+            }
+        }
+        w.projection
+            .factor()
             .map_err(|_| SolveError::SingularMatrix { t, h })?;
         w.delta.fill(0.0);
-        for &i in alg {
+        for &i in &w.algebraic {
             w.delta[i] = -w.f0[i];
         }
         w.projection.solve(&mut w.delta);
@@ -338,7 +372,52 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
             // The dense output ends at the projected value.
             w.cont[k] = w.y[k];
         }
-        Ok(true)
+        if !self.constant_leading {
+            return Ok(true);
+        }
+        mat_vec(&w.jac, &w.delta, &mut w.fm);
+        for (f, d) in w.f0.iter_mut().zip(&w.fm) {
+            *f += d;
+        }
+        Ok(false)
+    }
+
+    /// [`Integrator::project`] when `E` is constant and its zero columns
+    /// are the algebraic unknowns `a` (as `λ` in `rcd0`): `E δ = 0` is
+    /// `δ` zero outside `a`, and the algebraic rows `r` give the `k × k`
+    /// system `J_ra δ_a = −f_r`; then `f += J_·a δ_a`.
+    fn project_algebraic_unknowns(&mut self, t: f64, h: f64) -> Result<(), SolveError> {
+        let w = &mut self.w;
+        let (rows, cols) = (&w.algebraic, &w.algebraic_unknowns);
+        let jac = &w.jac;
+        w.projection_small
+            .factor_from(|a, b| jac[(rows[a], cols[b])])
+            .map_err(|_| SolveError::SingularMatrix { t, h })?;
+        let k = rows.len();
+        let mu = &mut w.delta[..k];
+        for (m, &i) in mu.iter_mut().zip(rows) {
+            *m = -w.f0[i];
+        }
+        w.projection_small.solve(mu);
+        if !all_finite(mu) {
+            return Err(SolveError::NonFinite {
+                t,
+                what: "end-point projection",
+            });
+        }
+        for (&d, &j) in mu.iter().zip(cols) {
+            if self.compensated {
+                (w.y[j], w.y_lo[j]) = two_sum(w.y[j], d + w.y_lo[j]);
+            } else {
+                w.y[j] += d;
+            }
+            w.cont[j] = w.y[j];
+            let col = &jac.as_slice()[j * self.m..(j + 1) * self.m];
+            for (f, &jij) in w.f0.iter_mut().zip(col) {
+                *f += jij * d;
+            }
+        }
+        Ok(())
     }
 
     /// Accept the step: `y_{n+1} = y_n + Z_3`, the new collocation

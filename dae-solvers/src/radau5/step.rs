@@ -51,6 +51,11 @@ pub(super) struct Integrator<'a, S, K> {
     pub(super) compensated: bool,
     /// The tableau.
     pub(super) method: std::marker::PhantomData<K>,
+    /// Newton bounds of a method iterating towards round-off: the floor,
+    /// and the coefficient `c` of the drift bound `c h²` (see
+    /// [`crate::gauss`]); zero otherwise.
+    pub(super) newton_floor: f64,
+    pub(super) newton_drift: f64,
 }
 
 impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
@@ -101,6 +106,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         // Not at index 3: there the multipliers carry a round-off of
         // `ε/h²` that a tighter bound only iterates on.
         let tight_newton = compensated && info.d_index.is_some_and(|k| k <= 2);
+        let span = problem.t_end - problem.t0;
         let fnewt = match K::NEWTON_ROUND_OFF {
             None => {
                 (10.0 * UROUND / r).max(0.03f64.min(r.sqrt()))
@@ -109,10 +115,23 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             // Towards round-off, whatever the tolerance.
             Some(units) => units * UROUND / r,
         };
+        // The drift bound of a method iterating towards round-off: an
+        // error of one sign per step, `δ`, grows over `N = T/h` steps into
+        // a phase error of order `N² δ`; `δ ≤ DRIFT · tol (h/T)²` keeps it
+        // at a fraction of the tolerance.
+        let newton_drift = match K::NEWTON_ROUND_OFF {
+            None => 0.0,
+            Some(_) => {
+                let user = smallest_tolerance(
+                    (0..n).map(|i| options.tol.rtol(i)),
+                    (0..n).map(|i| options.tol.atol(i)),
+                );
+                K::NEWTON_DRIFT * user / r / (span * span)
+            }
+        };
         let rule = Rule::Radau5 {
             slow_exit: K::SLOW_EXIT && options.fixed_step.is_none(),
         };
-        let span = problem.t_end - problem.t0;
         let mut newton = Contraction::new(rule, K::MAX_NEWTON, fnewt, 1.0);
         if K::NEWTON_ROUND_OFF.is_some() {
             // Iterating towards round-off: stagnation counts as convergence
@@ -129,6 +148,8 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             constant_leading: info.constant_leading,
             compensated,
             method: std::marker::PhantomData,
+            newton_floor: fnewt,
+            newton_drift,
             w,
             stats: Stats::default(),
             newton,
@@ -320,7 +341,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 c.h_acc = h;
                 c.err_acc = err.max(1e-2);
                 if K::QUASI_CONSTANT {
-                    h_new = c.hold.accepted(h, h_new);
+                    h_new = c.hold.accepted(h, err, h_new);
                 }
             }
             c.first = false;

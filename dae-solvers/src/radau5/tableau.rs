@@ -54,6 +54,9 @@ pub(crate) trait Collocation: 'static {
     /// `units` units of round-off whatever the tolerance (see
     /// [`crate::gauss`]).
     const NEWTON_ROUND_OFF: Option<f64>;
+    /// With `NEWTON_ROUND_OFF`: the iteration may stop at `NEWTON_DRIFT ·
+    /// tol · (h/T)²` (`T` the horizon) when that is above round-off.
+    const NEWTON_DRIFT: f64;
 
     /// The factor applied to `rtol_i` and `atol_i` (the tolerance map).
     fn tolerance_factor(rtol: f64, atol: f64) -> f64;
@@ -88,6 +91,7 @@ impl Collocation for RadauIIA {
     const THET: f64 = super::THET;
     const SLOW_EXIT: bool = true;
     const NEWTON_ROUND_OFF: Option<f64> = None;
+    const NEWTON_DRIFT: f64 = 0.0;
 
     fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
         super::tolerance_factor(rtol, atol)
