@@ -128,10 +128,14 @@ pub fn look(solver: &str, formulation: &str) -> Look {
         .position(|n| *n == solver)
         .unwrap_or(0);
     let RGBColor(r, g, b) = FORMULATION_COLORS[f % FORMULATION_COLORS.len()];
-    // Every other solver a darker shade, so that coinciding curves of two
-    // solvers on one formulation stay apart.
+    // The papers' six solvers: every other one a darker shade, so that
+    // coinciding curves of two solvers on one formulation stay apart. Those
+    // after them (`gauss`): a lighter tint, a wider line and diamonds.
+    let later = s >= 6;
     let shade = |c: u8| {
-        if s % 2 == 1 {
+        if later {
+            (0.55 * f64::from(c) + 0.45 * 255.0).round() as u8
+        } else if s % 2 == 1 {
             (f64::from(c) * 0.62).round() as u8
         } else {
             c
@@ -140,15 +144,19 @@ pub fn look(solver: &str, formulation: &str) -> Look {
     let color = RGBColor(shade(r), shade(g), shade(b));
     Look {
         color,
-        line: if s % 2 == 1 {
+        line: if s % 2 == 1 && !later {
             Line::Dashed
         } else {
             Line::Solid
         },
-        marker: [Marker::Circle, Marker::Triangle, Marker::Square][s % 3],
+        marker: if later {
+            Marker::Diamond
+        } else {
+            [Marker::Circle, Marker::Triangle, Marker::Square][s % 3]
+        },
         hollow: false,
         marker_color: color,
-        width: 2,
+        width: if later { 3 } else { 2 },
     }
 }
 
@@ -1205,4 +1213,30 @@ pub fn render(fig: &Figure, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
         Ok(())
     })?;
     Ok(vec![svg_path, png_path])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_solver_and_formulation_has_its_own_look() {
+        let mut seen: Vec<(String, String, Look)> = Vec::new();
+        for solver in dae_solvers::SOLVER_NAMES {
+            for formulation in dae_core::system::FORMULATION_NAMES {
+                let lk = look(solver, formulation);
+                for (s, f, other) in &seen {
+                    let same_color = lk.color == other.color;
+                    let same_style = lk.line == other.line
+                        && lk.marker == other.marker
+                        && lk.width == other.width;
+                    assert!(
+                        !(same_color && same_style),
+                        "{solver}({formulation}) looks like {s}({f})"
+                    );
+                }
+                seen.push((solver.to_string(), formulation.to_string(), lk));
+            }
+        }
+    }
 }
