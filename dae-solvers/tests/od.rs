@@ -1775,3 +1775,23 @@ fn the_step_loop_does_not_allocate() {
         );
     }
 }
+
+/// At tight tolerances odradau runs radau5's tight mode (compensated sums,
+/// Newton at 0.01 × RADAU5's bound) on overdetermined formulations too.
+/// Their differentiation index is undefined (`None`), which the index-3
+/// exception of the Newton bound once read as "not at most 2". Measured on
+/// this (hand-written) ovd0: 4.7e-14 with the tight bound, 1.8e-13 without;
+/// the macro-generated ovd0 of `dae run s01`: 1.3e-15 and 1.7e-13, and on
+/// S02 at 5e-14 7.4e-11 and 2.1e-9.
+#[test]
+fn s01_ovd0_at_a_tight_tolerance_reaches_the_last_digits() {
+    let sys = PendulumOvd0::new();
+    assert_eq!(sys.info().d_index, None);
+    let exact = s01_exact_at_20();
+    let sol = solve_with(&OdRadau, &sys, &sys.y0(), 20.0, &Options::with_tol(1e-13))
+        .expect("ovd0 at 1e-13");
+    let y = sol.last().unwrap();
+    let err = (0..4).map(|k| (y[k] - exact[k]).abs()).fold(0.0, f64::max);
+    println!("ovd0 tol 1e-13: err {err:e}, {} steps", sol.stats.steps);
+    assert!(err < 1e-13, "ovd0 at 1e-13: err {err:e}");
+}

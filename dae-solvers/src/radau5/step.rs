@@ -104,8 +104,9 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         let r = r.max(10.0 * UROUND);
         let compensated = tight(options, n);
         // Not at index 3: there the multipliers carry a round-off of
-        // `ε/h²` that a tighter bound only iterates on.
-        let tight_newton = compensated && info.d_index.is_some_and(|k| k <= 2);
+        // `ε/h²` that a tighter bound only iterates on. An overdetermined
+        // formulation has no differentiation index (`None`) and gets it.
+        let tight_newton = compensated && info.d_index.is_none_or(|k| k < 3);
         let span = problem.t_end - problem.t0;
         let fnewt = match K::NEWTON_ROUND_OFF {
             None => {
