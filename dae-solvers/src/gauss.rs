@@ -67,7 +67,7 @@
 //! runs at `tol' = 0.25 tol^(2/3)` (see [`internal_tolerance`]), so that the
 //! global error, `∝ h⁶ ∝ tol'^(3/2)`, is proportional to the user's
 //! tolerance — RADAU5's own map is `0.1 tol^(2/3)`, for the same reason. On
-//! the pendulum over 20 s the error is 0.4–1 times the tolerance from
+//! the pendulum over 20 s the error is 0.4–1.1 times the tolerance from
 //! `10⁻⁵` to `10⁻¹¹` (BENCHMARKS §6d).
 //!
 //! # The Newton iteration runs (almost) to round-off
@@ -165,8 +165,8 @@ pub fn internal_tolerance(tol: f64) -> f64 {
 }
 
 /// The constant of the tolerance map `tol' = TOL_MAP · tol^(2/3)`: over ten
-/// periods of the pendulum (S01) the error is then 0.4–1 times the
-/// tolerance (BENCHMARKS.md §6d).
+/// periods of the pendulum (S01) the error is then 0.4–1.1 times the
+/// tolerance from `10⁻⁵` to `10⁻¹¹` (BENCHMARKS.md §6d).
 pub const TOL_MAP: f64 = 0.25;
 
 impl Solver for Gauss {
