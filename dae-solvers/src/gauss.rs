@@ -42,6 +42,14 @@
 //! which Gauss–Legendre collocation keeps exactly, so nothing drifts.
 //! `psi0`'s projected rows are not reversible in the same way: its energy
 //! drifts and its error grows like that of a non-symmetric method.
+//!
+//! It is a method for oscillatory, non-stiff mechanical systems over long
+//! horizons, not for stiff ones: `|R(∞)| = 1` damps nothing, and the held
+//! step cannot follow a fast transient. On Andrews' squeezer it reaches the
+//! end at some tolerances only (rcd0 at 1e-4 and 1e-6; Newton failure at
+//! 1e-8), and in natural form (state-dependent mass matrix) it stops with
+//! [`SolveError::StepSizeTooSmall`] near `t = 0.01` where `radau5`
+//! integrates it.
 
 //! # Step size: constant where it can be
 //!
