@@ -84,9 +84,9 @@
 //! after step, which a symmetric method does not forgive: on the pendulum's
 //! rcd0 it made `xv + yw` — a quadratic invariant Gauss–Legendre keeps
 //! exactly — drift linearly, the position quadratically and the phase like
-//! `t³` (measured: with a bound of 10 units of round-off, error 1.9·10⁻⁴
-//! after 2000 s at `h = 1/160`, against 6·10⁻¹¹ after 200 s with 0.1
-//! units). A systematic error `δ` per step grows over `N = T/h` steps into
+//! `t³` (measured at `h = 1/160`: with a bound of 10 units of round-off
+//! the error was 1.8·10⁻¹⁰, 1.9·10⁻⁷ and 1.9·10⁻⁴ after 20, 200 and
+//! 2000 s; with 0.1 units 6·10⁻¹¹ after 200 s). A systematic error `δ` per step grows over `N = T/h` steps into
 //! a phase error of order `N² δ`, so the iteration stops at
 //!
 //! ```text
