@@ -289,7 +289,7 @@ impl Collocation for GaussLegendre {
 mod tests {
     use super::*;
 
-    type M3 = [[f64; 3]; 3];
+    use crate::radau5::tableau::check::{self, M3};
 
     fn gauss_a() -> M3 {
         let r = 15f64.sqrt();
@@ -300,55 +300,23 @@ mod tests {
         ]
     }
 
-    fn mul(a: &M3, b: &M3) -> M3 {
-        let mut c = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-            }
-        }
-        c
-    }
-
-    fn assert_close(a: &M3, b: &M3, tol: f64) {
-        for i in 0..3 {
-            for j in 0..3 {
-                assert!(
-                    (a[i][j] - b[i][j]).abs() < tol,
-                    "({i},{j}): {} vs {}",
-                    a[i][j],
-                    b[i][j]
-                );
-            }
-        }
-    }
-
     type G = GaussLegendre;
 
     #[test]
     fn coefficients_are_consistent() {
         let a = gauss_a();
-        let i3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-        assert_close(&mul(&a, &G::AINV), &i3, 1e-14);
-        assert_close(&mul(&G::T, &G::TI), &i3, 1e-14);
-        let lambda = mul(&mul(&G::TI, &G::AINV), &G::T);
+        check::transformation::<G>(&a);
         let (g, al, be) = (G::GAMMA, G::ALPHA, G::BETA);
-        assert_close(
-            &lambda,
-            &[[g, 0.0, 0.0], [0.0, al, -be], [0.0, be, al]],
-            1e-13,
-        );
         // The eigenvalues are the roots of the Padé denominator.
         let p = |z: f64| ((z - 12.0) * z + 60.0) * z - 120.0;
         assert!(p(g).abs() < 1e-12);
         assert!((al + al + g - 12.0).abs() < 1e-13);
         assert!(((al * al + be * be) * g - 120.0).abs() < 1e-11);
-        // Row sums of A are the nodes; bᵀA⁻¹ is END.
+        // bᵀA⁻¹ is END.
         let b = [5.0 / 18.0, 4.0 / 9.0, 5.0 / 18.0];
-        for i in 0..3 {
-            assert!((a[i].iter().sum::<f64>() - C[i]).abs() < 1e-15);
+        for (i, e) in END.iter().enumerate() {
             let d: f64 = (0..3).map(|k| b[k] * G::AINV[k][i]).sum();
-            assert!((d - END[i]).abs() < 1e-14);
+            assert!((d - e).abs() < 1e-14);
         }
         // The embedded formula: b̂ = b + (γ₀ d̂ᵀ A) with b̂₀ = γ₀ integrates
         // 1, t, t² exactly on the nodes 0, c₁, c₂, c₃.

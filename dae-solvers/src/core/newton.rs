@@ -169,12 +169,13 @@ impl Contraction {
                     let remaining = (self.max_iter - k - 1) as i32;
                     // Near the round-off floor slow contraction may be
                     // noise: iterate on, so that stagnation is seen (above).
-                    let predicted = || self.eta * norm * self.theta.powi(remaining) / self.kappa;
-                    if slow_exit && predicted() >= 1.0 && norm > self.floor {
-                        let predicted = predicted();
-                        let q = predicted.clamp(1e-4, 20.0);
-                        let factor = 0.8 * q.powf(-1.0 / (4.0 + f64::from(remaining)));
-                        return Verdict::TooSlow { factor };
+                    if slow_exit && norm > self.floor {
+                        let predicted = self.eta * norm * self.theta.powi(remaining) / self.kappa;
+                        if predicted >= 1.0 {
+                            let q = predicted.clamp(1e-4, 20.0);
+                            let factor = 0.8 * q.powf(-1.0 / (4.0 + f64::from(remaining)));
+                            return Verdict::TooSlow { factor };
+                        }
                     }
                 }
                 self.reference = norm.max(UROUND);

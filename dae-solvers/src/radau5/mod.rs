@@ -269,15 +269,6 @@ pub const TIGHT_TOL: f64 = 1e-10;
 /// The factor on RADAU5's Newton bound at tight tolerances.
 pub const TIGHT_NEWTON: f64 = 0.01;
 
-/// Whether `options` ask for a tight run (see [`TIGHT_TOL`]).
-pub(crate) fn tight(options: &Options, n: usize) -> bool {
-    let r = smallest_tolerance(
-        (0..n).map(|i| options.tol.rtol(i)),
-        (0..n).map(|i| options.tol.atol(i)),
-    );
-    r <= TIGHT_TOL
-}
-
 /// The smallest relative tolerance, or the smallest absolute one where all
 /// relative tolerances are zero: the one number RADAU5's rules of thumb
 /// (the Newton bound, [`TIGHT_TOL`]) read.
@@ -298,36 +289,24 @@ pub(crate) fn smallest_tolerance(
 /// never less than the round-off floor `100 ε ≈ 2.2·10⁻¹⁴` (see the module
 /// documentation). Larger than `tol` only below that floor.
 pub fn internal_tolerance(tol: f64) -> f64 {
-    map_tolerance(tol, TOL_ANCHOR, 0.2)
-}
-
-/// `tol (anchor/tol)^power` above `anchor`, `tol` itself below, never
-/// less than the round-off floor: the shape of every tolerance map of the
-/// collocation methods.
-pub(crate) fn map_tolerance(tol: f64, anchor: f64, power: f64) -> f64 {
-    if tol > anchor {
-        tol * (anchor / tol).powf(power)
+    if tol > TOL_ANCHOR {
+        tol * (TOL_ANCHOR / tol).powf(0.2)
     } else {
         tol.max(TOL_FLOOR)
     }
 }
 
-/// The factor `map_tolerance(rtol_i)/rtol_i` applied to `rtol_i` and
+/// The factor `internal_tolerance(rtol_i)/rtol_i` applied to `rtol_i` and
 /// `atol_i` (as RADAU5 scales `ATOL` with `RTOL`); a purely absolute
 /// tolerance (`rtol_i = 0`) is tightened like a relative one but not floored.
-pub(crate) fn map_factor(rtol: f64, atol: f64, anchor: f64, power: f64) -> f64 {
+fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
     if rtol > 0.0 {
-        map_tolerance(rtol, anchor, power) / rtol
-    } else if atol > anchor {
-        (anchor / atol).powf(power)
+        internal_tolerance(rtol) / rtol
+    } else if atol > TOL_ANCHOR {
+        (TOL_ANCHOR / atol).powf(0.2)
     } else {
         1.0
     }
-}
-
-/// Radau IIA's tolerance factor (anchor `10^(−12.5)`, power `1/5`).
-fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
-    map_factor(rtol, atol, TOL_ANCHOR, 0.2)
 }
 
 #[cfg(test)]

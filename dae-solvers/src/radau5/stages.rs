@@ -128,6 +128,31 @@ impl<S: StageSystems> Work<S> {
     }
 }
 
+impl<S> Work<S> {
+    /// Add the end-point correction `d` to `y_k` (with compensation at
+    /// tight tolerances); the dense output ends at the corrected value.
+    fn correct(&mut self, k: usize, d: f64, compensated: bool) {
+        if compensated {
+            (self.y[k], self.y_lo[k]) = two_sum(self.y[k], d + self.y_lo[k]);
+        } else {
+            self.y[k] += d;
+        }
+        self.cont[k] = self.y[k];
+    }
+}
+
+/// A non-finite end-point correction is a typed error.
+fn check_projection(delta: &[f64], t: f64) -> Result<(), SolveError> {
+    if all_finite(delta) {
+        Ok(())
+    } else {
+        Err(SolveError::NonFinite {
+            t,
+            what: "end-point projection",
+        })
+    }
+}
+
 /// Outcome of one simplified Newton iteration.
 pub(super) enum Newton {
     /// Converged after this many iterations.
@@ -356,21 +381,9 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
             w.delta[i] = -w.f0[i];
         }
         w.projection.solve(&mut w.delta);
-        if !all_finite(&w.delta) {
-            return Err(SolveError::NonFinite {
-                t,
-                what: "end-point projection",
-            });
-        }
+        check_projection(&w.delta, t)?;
         for k in 0..self.n {
-            let d = w.delta[k];
-            if self.compensated {
-                (w.y[k], w.y_lo[k]) = two_sum(w.y[k], d + w.y_lo[k]);
-            } else {
-                w.y[k] += d;
-            }
-            // The dense output ends at the projected value.
-            w.cont[k] = w.y[k];
+            w.correct(k, w.delta[k], self.compensated);
         }
         if !self.constant_leading {
             return Ok(true);
@@ -388,8 +401,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// system `J_ra δ_a = −f_r`; then `f += J_·a δ_a`.
     fn project_algebraic_unknowns(&mut self, t: f64, h: f64) -> Result<(), SolveError> {
         let w = &mut self.w;
-        let (rows, cols) = (&w.algebraic, &w.algebraic_unknowns);
-        let jac = &w.jac;
+        let (rows, cols, jac) = (&w.algebraic, &w.algebraic_unknowns, &w.jac);
         w.projection_small
             .factor_from(|a, b| jac[(rows[a], cols[b])])
             .map_err(|_| SolveError::SingularMatrix { t, h })?;
@@ -399,20 +411,11 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
             *m = -w.f0[i];
         }
         w.projection_small.solve(mu);
-        if !all_finite(mu) {
-            return Err(SolveError::NonFinite {
-                t,
-                what: "end-point projection",
-            });
-        }
-        for (&d, &j) in mu.iter().zip(cols) {
-            if self.compensated {
-                (w.y[j], w.y_lo[j]) = two_sum(w.y[j], d + w.y_lo[j]);
-            } else {
-                w.y[j] += d;
-            }
-            w.cont[j] = w.y[j];
-            let col = &jac.as_slice()[j * self.m..(j + 1) * self.m];
+        check_projection(mu, t)?;
+        for a in 0..k {
+            let (d, j) = (w.delta[a], w.algebraic_unknowns[a]);
+            w.correct(j, d, self.compensated);
+            let col = &w.jac.as_slice()[j * self.m..(j + 1) * self.m];
             for (f, &jij) in w.f0.iter_mut().zip(col) {
                 *f += jij * d;
             }
@@ -420,9 +423,9 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         Ok(())
     }
 
-    /// Accept the step: `y_{n+1} = y_n + Z_3`, the new collocation
-    /// polynomial (Newton form on `s = 0, c₂ − 1, c₁ − 1, −1`) and
-    /// `y'_{n+1} = Y'_3`.
+    /// Accept the step: `y_{n+1} = y_n + Z_3` (or `Σ END_i Z_i`), the new
+    /// collocation polynomial (Newton form, see [`Collocation`]) and
+    /// `y'_{n+1}`.
     pub(super) fn advance(&mut self, h: f64) {
         let w = &mut self.w;
         let y_lo = self.compensated.then_some(&mut w.y_lo[..]);

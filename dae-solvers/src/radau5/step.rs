@@ -5,11 +5,7 @@
 use super::control::{classical_quotient, predictive_quotient, Control, Hold, Next};
 use super::stages::{Newton, Work};
 use super::tableau::{dense, Collocation};
-use super::{smallest_tolerance, tight, H0_DEFAULT, TIGHT_NEWTON, UROUND};
-
-/// The round-off floor of a Newton iteration run towards round-off, in
-/// units of round-off.
-const ROUND_OFF: f64 = 1e3;
+use super::{smallest_tolerance, H0_DEFAULT, TIGHT_NEWTON, TIGHT_TOL, UROUND};
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::matrix::StageSystems;
@@ -18,6 +14,10 @@ use crate::linalg::{all_finite, two_sum};
 use crate::options::Options;
 use crate::{Problem, SolveError, Stats};
 use dae_core::system::DaeSystem;
+
+/// The round-off floor of a Newton iteration run towards round-off, in
+/// units of round-off.
+const ROUND_OFF: f64 = 1e3;
 
 /// The state of one Radau IIA 5 integration: the formulation, the buffers
 /// of the step loop, the work counters, the contraction monitor and the
@@ -102,7 +102,13 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             w.weights.atol().iter().copied(),
         );
         let r = r.max(10.0 * UROUND);
-        let compensated = tight(options, n);
+        // The user's tolerance, before the tolerance map: it decides the
+        // tight mode and a symmetric method's drift bound.
+        let user = smallest_tolerance(
+            (0..n).map(|i| options.tol.rtol(i)),
+            (0..n).map(|i| options.tol.atol(i)),
+        );
+        let compensated = user <= TIGHT_TOL;
         // Not at index 3: there the multipliers carry a round-off of
         // `ε/h²` that a tighter bound only iterates on. An overdetermined
         // formulation has no differentiation index (`None`) and gets it.
@@ -122,13 +128,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         // at a fraction of the tolerance.
         let newton_drift = match K::NEWTON_ROUND_OFF {
             None => 0.0,
-            Some(_) => {
-                let user = smallest_tolerance(
-                    (0..n).map(|i| options.tol.rtol(i)),
-                    (0..n).map(|i| options.tol.atol(i)),
-                );
-                K::NEWTON_DRIFT * user / r / (span * span)
-            }
+            Some(_) => K::NEWTON_DRIFT * user / r / (span * span),
         };
         let rule = Rule::Radau5 {
             slow_exit: K::SLOW_EXIT && options.fixed_step.is_none(),

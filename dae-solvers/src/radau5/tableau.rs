@@ -196,6 +196,59 @@ fn polynomial_increment(d: &[f64; 3], s: f64) -> f64 {
     s * (d[0] + (s - C2M1) * (d[1] + (s - C1M1) * d[2]))
 }
 
+/// What every tableau's constants must satisfy, for the tests of each.
+#[cfg(test)]
+pub(crate) mod check {
+    use super::Collocation;
+
+    /// A 3 × 3 matrix.
+    pub(crate) type M3 = [[f64; 3]; 3];
+
+    fn mul(a: &M3, b: &M3) -> M3 {
+        let mut c = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+            }
+        }
+        c
+    }
+
+    fn assert_close(a: &M3, b: &M3, tol: f64) {
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!(
+                    (a[i][j] - b[i][j]).abs() < tol,
+                    "({i},{j}): {} vs {}",
+                    a[i][j],
+                    b[i][j]
+                );
+            }
+        }
+    }
+
+    /// `K`'s constants against its matrix `a`: `AINV` inverts it, `T` and
+    /// `TI` are inverses, `T⁻¹ A⁻¹ T = diag(γ, [[α, −β], [β, α]])`, the
+    /// row sums of `a` are the nodes, and `T₃₂ = 1`, `T₃₃ = 0` (the
+    /// kernels' normalisation).
+    pub(crate) fn transformation<K: Collocation>(a: &M3) {
+        let i3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        assert_close(&mul(a, &K::AINV), &i3, 1e-14);
+        assert_close(&mul(&K::T, &K::TI), &i3, 1e-14);
+        let lambda = mul(&mul(&K::TI, &K::AINV), &K::T);
+        let (g, al, be) = (K::GAMMA, K::ALPHA, K::BETA);
+        assert_close(
+            &lambda,
+            &[[g, 0.0, 0.0], [0.0, al, -be], [0.0, be, al]],
+            1e-13,
+        );
+        for (row, c) in a.iter().zip(K::C) {
+            assert!((row.iter().sum::<f64>() - c).abs() < 1e-15);
+        }
+        assert_eq!((K::T[2][1], K::T[2][2]), (1.0, 0.0));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -217,43 +270,9 @@ mod tests {
         ]
     }
 
-    fn mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-        let mut c = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-            }
-        }
-        c
-    }
-
-    fn assert_close(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3], tol: f64) {
-        for i in 0..3 {
-            for j in 0..3 {
-                assert!(
-                    (a[i][j] - b[i][j]).abs() < tol,
-                    "({i},{j}): {} vs {}",
-                    a[i][j],
-                    b[i][j]
-                );
-            }
-        }
-    }
-
-    const I3: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-
     #[test]
     fn coefficients_are_consistent() {
-        let a = radau_a();
-        assert_close(&mul(&a, &AINV), &I3, 1e-14);
-        assert_close(&mul(&T, &TI), &I3, 1e-14);
-        let lambda = mul(&mul(&TI, &AINV), &T);
-        let expect = [[GAMMA, 0.0, 0.0], [0.0, ALPHA, -BETA], [0.0, BETA, ALPHA]];
-        assert_close(&lambda, &expect, 1e-13);
-        // Row sums of A are the nodes; the last row is b (stiff accuracy).
-        for i in 0..3 {
-            assert!((a[i].iter().sum::<f64>() - C[i]).abs() < 1e-15);
-        }
+        check::transformation::<RadauIIA>(&radau_a());
         assert!((C1 - (4.0 - 6f64.sqrt()) / 10.0).abs() < 1e-16);
         assert!((DD[0] + (13.0 + 7.0 * 6f64.sqrt()) / 3.0).abs() < 1e-14);
         assert!((DD[1] - (-13.0 + 7.0 * 6f64.sqrt()) / 3.0).abs() < 1e-14);
