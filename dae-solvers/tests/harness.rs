@@ -136,6 +136,11 @@ fn cases() -> Vec<Case> {
         let y0 = sys.y0();
         cases.push(case(name, sys, 0.0, 2.0, Consistent(y0)));
     }
+    // The overdetermined pendulum with every constraint level (the
+    // least-squares solvers' main formulation).
+    let ovd0 = PendulumOvd0::new();
+    let y0 = ovd0.y0();
+    cases.push(case("pendulum_ovd0", ovd0, 0.0, 2.0, Consistent(y0)));
     // Other constrained mechanical and index-2 models.
     let dp = DoublePendulum::new(1.3, 0.7, 1.1, 0.8, G);
     let dp_start = dp.state(0.9, -0.4, 0.5, -1.0);

@@ -74,6 +74,8 @@ pub(super) struct Integrator<'a, L> {
     pub(super) ck: f64,
     /// Newton rate factor `ρ/(1−ρ)` (100 when unknown).
     pub(super) s: f64,
+    /// The corrector's convergence rule (see [`super::corrector::Convergence`]).
+    pub(super) convergence: super::corrector::Convergence,
     /// Whether the iteration matrix is current.
     pub(super) jac: JacState,
     /// Newton iterations of the last attempt.
@@ -159,6 +161,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             cjold: 0.0,
             ck: 0.0,
             s: 100.0,
+            convergence: super::corrector::Convergence::of::<L>(info),
             jac: JacState::Needed,
             last_iterations: 0,
             phi: vec![0.0; n * NCOL],
