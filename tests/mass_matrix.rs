@@ -99,11 +99,18 @@ fn the_cart_pendulum_conserves_energy_and_momentum_in_every_formulation() {
                 .map(|(_, v)| *v)
                 .unwrap()
         };
-        // The momentum has no force acting on it: round-off only. The
-        // energy (≈ 10 J) to a few thousand times the tolerance (bdf's
-        // errors are larger than radau5's at equal tolerance).
+        // The momentum has no force acting on it: round-off only — except
+        // in ovd0, whose dynamics rows (the momentum is a combination of
+        // them) hold only in the least-squares sense once the acceleration
+        // rows are made algebraic and held exactly (dae-solvers'
+        // `core/eliminate.rs`): there it drifts with the discretisation,
+        // measured 1.5e-10 at this tolerance (6.4e-9 at 1e-6, 3.3e-12 at
+        // 1e-10), bounded by a tenth of the tolerance. The energy (≈ 10 J)
+        // to a few thousand times the tolerance (bdf's errors are larger
+        // than radau5's at equal tolerance).
+        let momentum_bound = if f == "ovd0" { 0.1 * tol } else { 1e-10 };
         assert!(
-            drift("momentum") <= 1e-10,
+            drift("momentum") <= momentum_bound,
             "{solver}({f}): {}",
             drift("momentum")
         );

@@ -47,9 +47,9 @@
 //! horizons, not for stiff ones: `|R(∞)| = 1` damps nothing, and the held
 //! step cannot follow a fast transient. On Andrews' squeezer it reaches the
 //! end at some tolerances only (rcd0 at 1e-4 and 1e-6; Newton failure at
-//! 1e-8), and in natural form (state-dependent mass matrix) it stops with
-//! [`SolveError::StepSizeTooSmall`] near `t = 0.01` where `radau5`
-//! integrates it.
+//! 1e-8). In natural form (a state-dependent mass matrix, whose rcd0 the
+//! solvers make semi-explicit at run time, `core/eliminate.rs`) it reaches
+//! the end at 1e-4 … 1e-10 with 135–1 480 steps (radau5: 346–5 711).
 
 //! # Step size: constant where it can be
 //!

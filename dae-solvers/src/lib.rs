@@ -17,7 +17,12 @@
 //! | [`gauss`] | Gauss–Legendre order 6, symmetric, quasi-constant step | square, index ≤ 1 |
 //!
 //! [`init`] computes consistent initial values from the model's constraint
-//! chain, and the initial derivative BDF starts from. Every solver returns
+//! chain, and the initial derivative BDF starts from. A model written with a
+//! mass matrix keeps `der(v)` in the acceleration level of its constraints;
+//! radau5, bdf, odradau, odbdf and gauss integrate such a formulation with
+//! those rows made algebraic (`core/eliminate.rs`: `v'` eliminated with the
+//! dynamics rows, numerically, at every evaluation), which is the same
+//! solution of a semi-explicit index-1 system. Every solver returns
 //! `Result<Solution, SolveError>` and never panics on a user's problem; no
 //! allocation happens inside the step loop. [`Solver::accepts`] says, typed,
 //! why a solver cannot take a formulation.

@@ -222,10 +222,20 @@ pub(crate) fn integrate<L: Corrector>(
     problem: &Problem<'_>,
     options: &Options,
 ) -> Result<Solution, SolveError> {
+    problem.check(problem.system.info().unknowns(), options)?;
+    options.check_orders(MAX_ORDER, "the BDF methods (bdf, odbdf)")?;
+    crate::core::eliminate::with_algebraic_rows(problem, |problem| {
+        integrate_checked::<L>(problem, options)
+    })
+}
+
+/// [`integrate`] after the checks.
+fn integrate_checked<L: Corrector>(
+    problem: &Problem<'_>,
+    options: &Options,
+) -> Result<Solution, SolveError> {
     let sys = problem.system;
     let info = sys.info();
-    problem.check(info.unknowns(), options)?;
-    options.check_orders(MAX_ORDER, "the BDF methods (bdf, odbdf)")?;
     let t0 = problem.t0;
 
     // Components in the error test and the Newton norm.

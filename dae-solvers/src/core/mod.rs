@@ -28,6 +28,7 @@
 
 pub(crate) mod control;
 pub(crate) mod driver;
+pub(crate) mod eliminate;
 pub(crate) mod matrix;
 pub(crate) mod newton;
 pub(crate) mod output;

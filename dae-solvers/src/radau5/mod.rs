@@ -215,9 +215,11 @@ pub(crate) fn collocate<S: StageSystems, K: Collocation>(
     options: &Options,
 ) -> Result<Solution, SolveError> {
     problem.check(problem.system.info().unknowns(), options)?;
-    let mut integrator = Integrator::<S, K>::new(problem, options);
-    integrator.start()?;
-    driver::solve(&mut integrator, options, problem.t0, problem.t_end)
+    crate::core::eliminate::with_algebraic_rows(problem, |problem| {
+        let mut integrator = Integrator::<S, K>::new(problem, options);
+        integrator.start()?;
+        driver::solve(&mut integrator, options, problem.t0, problem.t_end)
+    })
 }
 
 // ---------------------------------------------------------------------------
