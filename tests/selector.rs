@@ -124,3 +124,28 @@ fn numerical_selector_jacobians_match_central_differences() {
         }
     }
 }
+
+/// psi0 finds the multipliers in the acceleration-level constraint; a model
+/// with a mass matrix holds `v'` there instead, so there is no psi0 to build.
+/// The cart pendulum couples the cart's velocity, which no constraint holds,
+/// with the bob's: the numerical psi0 used to be built anyway and stopped
+/// with a singular iteration matrix at t = 0 for every solver. It is refused,
+/// typed, and a run of it reports the formulation as not provided.
+#[test]
+fn a_mass_matrix_model_has_no_numerical_psi0() {
+    let src = std::fs::read_to_string("scenes/cart_pendulum.dae").unwrap();
+    let model = InterpretedModel::from_str(&src).unwrap();
+    let inner = model.formulation("ovd0").unwrap();
+    let y0 = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let err = NumericSelector::new(inner, Projected::Psi0, 0.0, &y0).unwrap_err();
+    assert_eq!(err, dae::dae_core::selector::SelectorError::MassMatrix);
+    // psi1 projects only the kinematic rows: it exists.
+    let inner = model.formulation("ovd1").unwrap();
+    assert!(NumericSelector::new(inner, Projected::Psi1, 0.0, &y0).is_ok());
+    let (scene, inputs) = scene("scenes/cart_pendulum.toml");
+    let spec = inputs.spec(&scene, "radau5", "psi0", 1e-6);
+    match runner::run(&spec) {
+        Err(e) => assert!(e.to_string().contains("psi0"), "{e}"),
+        Ok(r) => panic!("psi0 ran: {:?} {:?}", r.status, r.error),
+    }
+}

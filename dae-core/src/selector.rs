@@ -234,14 +234,21 @@ impl<S: DaeSystem> NumericSelector<S> {
             .filter(|&j| differential(j) && !q.contains(&j) && in_rows(&rows1, j))
             .collect();
         // psi0 finds the multipliers in the acceleration level; with a mass
-        // matrix (a velocity row of E with several entries) that level holds
-        // v', not λ (see `formulation::applicable`).
+        // matrix (a dynamics row of E with several entries among the
+        // unknowns that are not positions) that level holds v', not λ (see
+        // `formulation::applicable`). The coupling may be with a velocity
+        // that no constraint holds (the cart pendulum's cart), so every
+        // dynamics row and every such column is looked at.
         if which == Projected::Psi0 {
             let mut e = DMatrix::zeros(src.equations(), n);
             inner.leading(y0, &mut e);
-            if v.iter()
-                .any(|&r| v.iter().filter(|&&c| e[(r, c)] != 0.0).count() > 1)
-            {
+            let free: Vec<usize> = (0..n)
+                .filter(|&j| differential(j) && !q.contains(&j))
+                .collect();
+            let coupled = (0..src.equations())
+                .filter(|&r| src.rows[r].kind == RowKind::Differential)
+                .any(|r| free.iter().filter(|&&c| e[(r, c)] != 0.0).count() > 1);
+            if coupled {
                 return Err(SelectorError::MassMatrix);
             }
         }
