@@ -23,7 +23,7 @@ const NEWTON_TOL: f64 = 0.33;
 /// carried from step to step (see [`Convergence::Carried`]).
 const NEWTON_TOL_LEAST_SQUARES: f64 = 0.033;
 /// `ρ/(1−ρ)` before a rate has been measured.
-const UNKNOWN_RATE: f64 = 100.0;
+pub(super) const UNKNOWN_RATE: f64 = 100.0;
 
 /// How the corrector decides that it has converged.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -72,7 +72,7 @@ pub(super) struct Integrator<'a, L> {
     pub(super) cjold: f64,
     /// Error constant `C_k`.
     pub(super) ck: f64,
-    /// Newton rate factor `ρ/(1−ρ)` (100 when unknown).
+    /// Newton rate factor `ρ/(1−ρ)` ([`super::corrector::UNKNOWN_RATE`] when unknown).
     pub(super) s: f64,
     /// The corrector's convergence rule (see [`super::corrector::Convergence`]).
     pub(super) convergence: super::corrector::Convergence,
@@ -160,7 +160,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             cj: 0.0,
             cjold: 0.0,
             ck: 0.0,
-            s: 100.0,
+            s: super::corrector::UNKNOWN_RATE,
             convergence: super::corrector::Convergence::of::<L>(info),
             jac: JacState::Needed,
             last_iterations: 0,
