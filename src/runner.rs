@@ -140,6 +140,12 @@ pub struct RunRecord {
     /// Sum over those times of the errors of every unknown the reference
     /// gives.
     pub err_sum: Option<f64>,
+    /// Euclidean norm of the same errors: the square root of the sum over
+    /// those times of the squared errors of every unknown the reference
+    /// gives. On S02 this is the reading of the paper's ERR that Fortran
+    /// DASSL/ODASSL reproduce (BENCHMARKS.md §3c); `err_sum` is SPEC's
+    /// stricter reading.
+    pub err_l2: Option<f64>,
     /// Max over those times of the errors of the algebraic unknowns the
     /// reference gives (the multipliers of a mechanical system); `null`
     /// if it gives none.
@@ -375,6 +381,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         final_values: Named::default(),
         err: None,
         err_sum: None,
+        err_l2: None,
         err_algebraic: None,
         scd: None,
         accuracy: None,
@@ -562,6 +569,7 @@ impl Components {
         let mut e = Errors {
             main: 0.0,
             sum: 0.0,
+            squares: 0.0,
             other: None,
             all: 0.0,
             verdict: 0.0,
@@ -569,6 +577,7 @@ impl Components {
         for (c, &(j, i)) in self.index.iter().enumerate() {
             let d = self.scaling[c].error(y[i], exact[j]);
             e.sum += d;
+            e.squares += d * d;
             e.all = max_or_nan(e.all, d);
             if self.main[c] {
                 e.main = max_or_nan(e.main, d);
@@ -602,6 +611,8 @@ struct Errors {
     main: f64,
     /// Sum over all components.
     sum: f64,
+    /// Sum of squares over all components.
+    squares: f64,
     /// Largest error of the other (algebraic) components.
     other: Option<f64>,
     /// Largest error over all components.
@@ -640,7 +651,8 @@ fn measure(
         None => is_check.clone(),
     };
     let mut exact = vec![0.0; spec.reference.map_or(0, |r| r.names().len())];
-    let (mut err, mut err_sum, mut err_alg, mut worst) = (0.0f64, 0.0f64, None::<f64>, 0.0f64);
+    let (mut err, mut err_sum, mut err_sq, mut err_alg, mut worst) =
+        (0.0f64, 0.0f64, 0.0f64, None::<f64>, 0.0f64);
     let mut compared = false;
     // Largest verdict measure over the reference's times, and where.
     let (mut err_scaled, mut worst_t) = (0.0f64, spec.t0);
@@ -670,6 +682,7 @@ fn measure(
                     }
                     err = max_or_nan(err, e.main);
                     err_sum += e.sum;
+                    err_sq += e.squares;
                     if let Some(o) = e.other {
                         err_alg = Some(err_alg.unwrap_or(0.0).max(o));
                     }
@@ -699,6 +712,7 @@ fn measure(
     if compared {
         record.err = Some(err);
         record.err_sum = Some(err_sum);
+        record.err_l2 = Some(err_sq.sqrt());
         record.err_algebraic = err_alg;
         record.scd = (worst > 0.0 && worst.is_finite()).then(|| -worst.log10());
     }

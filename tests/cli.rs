@@ -149,6 +149,7 @@ fn run_honours_the_json_contract() {
         "final",
         "err",
         "err_sum",
+        "err_l2",
         "err_algebraic",
         "scd",
         "accuracy",

@@ -38,7 +38,8 @@ fn run(scene: &Scene, tol: f64) -> RunRecord {
 
 /// A `values` reference holding the closed form at 0.5 and 2.0 measures
 /// exactly what the `exact` reference measures when checked at those
-/// times: the same err, err_sum and algebraic error, to the last bits.
+/// times: the same err, err_sum, err_l2 and algebraic error, to the last
+/// bits.
 #[test]
 fn values_at_given_times_measure_what_the_closed_form_measures() {
     let times = [0.5, 2.0];
@@ -70,6 +71,7 @@ fn values_at_given_times_measure_what_the_closed_form_measures() {
     for (what, a, b) in [
         ("err", by_values.err, by_exact.err),
         ("err_sum", by_values.err_sum, by_exact.err_sum),
+        ("err_l2", by_values.err_l2, by_exact.err_l2),
         (
             "err_algebraic",
             by_values.err_algebraic,
@@ -149,6 +151,8 @@ fn relative_scaling_and_significant_correct_digits() {
     let worst = rel[0].max(rel[1]);
     assert!((r.err.unwrap() - worst).abs() <= 1e-12 * worst);
     assert!((r.err_sum.unwrap() - (rel[0] + rel[1])).abs() <= 1e-12 * worst);
+    let l2 = rel[0].hypot(rel[1]);
+    assert!((r.err_l2.unwrap() - l2).abs() <= 1e-12 * l2);
     assert!((r.scd.unwrap() + worst.log10()).abs() < 1e-12);
     assert!(r.scd.unwrap() > 4.0, "{:?}", r.scd);
     assert_eq!(r.err_algebraic, None);

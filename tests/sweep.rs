@@ -5,7 +5,7 @@
 use dae::runner::{Accuracy, ErrorInfo, Named, Residuals, RunRecord, Trajectory};
 use dae::scene::Scene;
 use dae::sweep::fortran;
-use dae::sweep::paper::{self, PaperCell, PaperTable, Verdict};
+use dae::sweep::paper::{self, Measure, PaperCell, PaperTable, Verdict};
 use dae::sweep::pareto::{self, Point};
 use dae::sweep::plot;
 use dae::sweep::table::{self, Mark};
@@ -29,6 +29,7 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
         final_values: Named(vec![("x".into(), 1.0), ("y".into(), 0.0)]),
         err,
         err_sum: err.map(|e| 2.0 * e),
+        err_l2: err.map(|e| 1.5 * e),
         err_algebraic: err.map(|e| e / 2.0),
         scd: err.map(|e| -e.log10()),
         // The runner's rule for a solution of order one.
@@ -65,6 +66,7 @@ fn failed(solver: &str, formulation: &str, tol: f64) -> RunRecord {
         }),
         err: None,
         err_sum: None,
+        err_l2: None,
         err_algebraic: None,
         scd: None,
         accuracy: None,
@@ -422,6 +424,7 @@ fn comparison_matches_families_and_tolerances() {
         &names(&["rcd0", "ggl1", "ovd0"]),
         &[1e-5, 1e-10],
         &runs,
+        Measure::ErrSum,
     );
     let rows: Vec<(String, String, String)> = c
         .rows
@@ -455,6 +458,24 @@ fn comparison_matches_families_and_tolerances() {
         .unwrap();
     assert_eq!(more.cells, 3);
     assert!(table::paper_text(&c).contains("more accurate"));
+
+    // The same runs under err_l2: the record's own field is compared, and
+    // the row says which.
+    let mut close = rec("bdf", "rcd0", 1e-5, 1.0, Some(1.0));
+    (close.err_sum, close.err_l2) = (Some(1e3), Some(250.0)); // DASSL 3.1e2
+    let c = paper::compare_runs(
+        &t9,
+        &names(&["bdf"]),
+        &names(&["rcd0"]),
+        &[1e-5],
+        &[run(close)],
+        Measure::ErrL2,
+    );
+    assert_eq!(c.measure, Measure::ErrL2);
+    assert_eq!(c.rows[0].paper_solver, "DASSL");
+    assert_eq!(c.rows[0].cells[0].ours, Some(250.0));
+    assert_eq!(c.rows[0].cells[0].verdict, Verdict::Equal);
+    assert!(table::paper_text(&c).contains("bdf(rcd0) err_l2"));
 }
 
 // --------------------------------------------------------- atomic writes
@@ -616,7 +637,7 @@ fn small_s01_sweep_writes_every_output() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     for key in [
-        "scene", "sweep", "runs", "success", "pareto", "targets", "paper",
+        "scene", "sweep", "runs", "success", "pareto", "targets", "paper", "paper_l2",
     ] {
         assert!(json.get(key).is_some(), "results.json lacks {key}");
     }
@@ -630,6 +651,7 @@ fn small_s01_sweep_writes_every_output() {
         "status",
         "err",
         "err_sum",
+        "err_l2",
         "tsim_s",
         "stats",
         "residuals",
@@ -638,6 +660,8 @@ fn small_s01_sweep_writes_every_output() {
         assert!(runs[0].get(key).is_some(), "run lacks {key}");
     }
     assert_eq!(json["paper"]["table"], "Table 6 (S01)");
+    assert_eq!(json["paper"]["measure"], "err_sum");
+    assert_eq!(json["paper_l2"]["measure"], "err_l2");
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     assert_eq!(csv.lines().count(), 3);
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
@@ -667,7 +691,7 @@ fn sweep_without_reference_reports_residuals_not_errors() {
     assert!(r.residuals.level(0).is_some() && r.residuals.level(1).is_some());
     assert!(r.invariant_drift.get("energy").is_some());
     let summary = sweep::Summary::of(&report);
-    assert!(summary.pareto.is_empty() && summary.paper.is_none());
+    assert!(summary.pareto.is_empty() && summary.paper.is_none() && summary.paper_l2.is_none());
     assert!(summary.targets.iter().all(|t| t.best.is_none()));
     let dir = tempfile::tempdir().unwrap();
     let written = sweep::write_outputs(&report, &summary, dir.path()).unwrap();
@@ -687,7 +711,7 @@ fn sweep_without_reference_reports_residuals_not_errors() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("results.json")).unwrap())
             .unwrap();
     assert!(json["runs"][0]["err"].is_null());
-    assert!(json["paper"].is_null());
+    assert!(json["paper"].is_null() && json["paper_l2"].is_null());
 }
 
 #[test]

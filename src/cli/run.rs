@@ -143,9 +143,10 @@ pub fn text(r: &RunRecord) -> String {
     let _ = writeln!(s, "  final: {}", vals.join(", "));
     let _ = writeln!(
         s,
-        "  err {}  err_sum {}  err_algebraic {}  scd {}",
+        "  err {}  err_sum {}  err_l2 {}  err_algebraic {}  scd {}",
         opt(r.err),
         opt(r.err_sum),
+        opt(r.err_l2),
         opt(r.err_algebraic),
         r.scd.map_or_else(|| "-".into(), |v| format!("{v:.2}"))
     );

@@ -316,8 +316,11 @@ pub struct Summary {
     pub pareto: Vec<pareto::Point>,
     /// Fastest run per target error.
     pub targets: Vec<pareto::Target>,
-    /// Comparison with the paper (scenes S01 and S02 only).
+    /// Comparison with the paper under `err_sum` (scenes S01 and S02 only).
     pub paper: Option<paper::Comparison>,
+    /// The same under `err_l2`, the reading of the paper's ERR that the
+    /// Fortran codes reproduce.
+    pub paper_l2: Option<paper::Comparison>,
     /// The Fortran reference lines of the work-precision diagram (scenes
     /// S01 and S02 only; `None` also when the shipped data cannot be read,
     /// which the figures report as a note).
@@ -327,13 +330,14 @@ pub struct Summary {
 impl Summary {
     /// Derive the tables.
     pub fn of(report: &SweepReport) -> Summary {
-        let paper = paper::PaperTable::for_scene(
+        let table = paper::PaperTable::for_scene(
             &report.scene.name,
             report.paper_setup,
             report.scene.t_end,
         )
-        .filter(|_| report.has_reference())
-        .map(|t| paper::compare(&t, report));
+        .filter(|_| report.has_reference());
+        let [paper, paper_l2] =
+            paper::Measure::ALL.map(|m| table.as_ref().map(|t| paper::compare(t, report, m)));
         Summary {
             success: table::success_matrix(
                 &report.solvers,
@@ -344,6 +348,7 @@ impl Summary {
             pareto: pareto::pareto_front(&report.runs),
             targets: pareto::targets(&report.runs, &pareto::TARGETS),
             paper,
+            paper_l2,
             reference_lines: fortran::ReferenceLines::for_report(report).ok().flatten(),
         }
     }
@@ -704,7 +709,8 @@ fn parallel(
 ///   "success": {legend, formulations, rows: [{solver, cells: [{formulation, mark, ok, runs, reason?}]}]},
 ///   "pareto":  {error: "err", definition, rows: [{solver, formulation, tol, tsim_s, err}]},
 ///   "targets": {error: "err", rows: [{target, best: {solver, formulation, tol, tsim_s, err} | null}]},
-///   "paper":   {table, note, rows: [...], counts: [...]} | null,
+///   "paper":   {table, measure: "err_sum", note, rows: [...], counts: [...]} | null,
+///   "paper_l2": the same with measure "err_l2" | null,
 ///   "reference_lines": {scenario, note, header, calibration,
 ///                       curves: [{label, code, formulation, time_column, files,
 ///                                 points: [{tol, err, time_s, steps}], failed}]} | null }
@@ -727,6 +733,7 @@ struct ResultsDoc<'a> {
     pareto: Explained<&'a [pareto::Point]>,
     targets: Explained<&'a [pareto::Target]>,
     paper: Option<&'a paper::Comparison>,
+    paper_l2: Option<&'a paper::Comparison>,
     reference_lines: Option<&'a fortran::ReferenceLines>,
 }
 
@@ -778,6 +785,7 @@ impl<'a> ResultsDoc<'a> {
                 rows: &summary.targets,
             },
             paper: summary.paper.as_ref(),
+            paper_l2: summary.paper_l2.as_ref(),
             reference_lines: summary.reference_lines.as_ref(),
         }
     }

@@ -479,7 +479,12 @@ pub fn paper_text(c: &Comparison) -> String {
         .chain(tols.iter().map(|t| tol_label(*t)))
         .collect()];
     for r in &c.rows {
-        let mut ours = vec![format!("{}({}) err_sum", r.solver, r.formulation)];
+        let mut ours = vec![format!(
+            "{}({}) {}",
+            r.solver,
+            r.formulation,
+            c.measure.field()
+        )];
         let mut theirs = vec![format!("  {}({}) ERR", r.paper_solver, r.formulation)];
         let mut verdict = vec!["  →".to_string()];
         for t in &tols {
@@ -548,6 +553,10 @@ pub fn text_report(report: &SweepReport, summary: &Summary) -> String {
         Some(c) => {
             let _ = writeln!(s, "\nAgainst the paper");
             s.push_str(&paper_text(c));
+            if let Some(c) = &summary.paper_l2 {
+                let _ = writeln!(s, "\nAgainst the paper, like for like");
+                s.push_str(&paper_text(c));
+            }
         }
         None => {
             let _ = writeln!(
@@ -614,6 +623,7 @@ pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
         "tsim_runs",
         "err",
         "err_sum",
+        "err_l2",
         "err_algebraic",
         "scd",
         "steps",
@@ -658,6 +668,7 @@ pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
                 .join(";"),
             opt(r.err),
             opt(r.err_sum),
+            opt(r.err_l2),
             opt(r.err_algebraic),
             opt(r.scd),
             r.stats.steps.to_string(),
