@@ -145,7 +145,18 @@ fn a_mass_matrix_model_has_no_numerical_psi0() {
     let (scene, inputs) = scene("scenes/cart_pendulum.toml");
     let spec = inputs.spec(&scene, "radau5", "psi0", 1e-6);
     match runner::run(&spec) {
-        Err(e) => assert!(e.to_string().contains("psi0"), "{e}"),
+        // The refusal carries the selector's reason, not only the name.
+        Err(e) => assert!(
+            e.to_string().contains("psi0") && e.to_string().contains("mass matrix"),
+            "{e}"
+        ),
         Ok(r) => panic!("psi0 ran: {:?} {:?}", r.status, r.error),
     }
+    // The sweep's success matrix gives the same reason.
+    let pairs = dae::sweep::pairs(&model, &["radau5".into()], &["psi0".into()]).unwrap();
+    let why = pairs[0].not_applicable.as_deref().unwrap_or_default();
+    assert!(
+        why.starts_with("not provided by the model: ") && why.contains("mass matrix"),
+        "{why}"
+    );
 }

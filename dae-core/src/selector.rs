@@ -484,6 +484,13 @@ pub fn formulation(
         .map_err(|_| not_provided())?;
     let mut y = y0.to_vec();
     y.resize(inner.info().unknowns(), 0.0);
-    let sys = NumericSelector::new(inner, which, t0, &y).map_err(|_| not_provided())?;
+    let sys = NumericSelector::new(inner, which, t0, &y).map_err(|e| {
+        crate::system::FormulationError::NoSelector {
+            model: model.model_info().name.clone(),
+            name: name.to_string(),
+            reason: e.to_string(),
+            available: model.model_info().formulations.join(", "),
+        }
+    })?;
     Ok((Box::new(sys), Some(SelectorKind::Numerical)))
 }

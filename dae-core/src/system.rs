@@ -385,6 +385,19 @@ pub enum FormulationError {
         /// Comma-separated list.
         available: String,
     },
+    /// `psi1`/`psi0` the model has no symbolic selector for, and that the
+    /// numerical selector cannot build from its `ovd1`/`ovd0`.
+    #[error("model `{model}` does not provide formulation `{name}`: {reason} (it provides: {available})")]
+    NoSelector {
+        /// Model name.
+        model: String,
+        /// Name asked for.
+        name: String,
+        /// Why the numerical selector refused (its [`SelectorError`](crate::selector::SelectorError)).
+        reason: String,
+        /// Comma-separated list.
+        available: String,
+    },
 }
 
 /// A model with parameters: the struct the `dae!` macro generates, or an

@@ -438,6 +438,9 @@ pub fn pairs(
                 Err(FormulationError::NotProvided { .. }) => {
                     Some("not provided by the model".to_string())
                 }
+                Err(FormulationError::NoSelector { reason, .. }) => {
+                    Some(format!("not provided by the model: {reason}"))
+                }
                 Err(FormulationError::Unknown { .. }) => {
                     return Err(SweepError::UnknownFormulation { name: f.clone() })
                 }
