@@ -100,6 +100,7 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
         s_index: f.s_index,
         c_level: f.c_level,
         constant_leading: f.constant_leading,
+        constant_differential_leading: f.constant_differential_leading,
         constraints: d.constraint_infos(),
         invariants: model.invariants.iter().map(|i| i.name.clone()).collect(),
         parameters: model.params.iter().map(|p| p.name.clone()).collect(),

@@ -70,6 +70,8 @@ pub struct Formulation {
     pub c_level: u8,
     /// `E` independent of `y`.
     pub constant_leading: bool,
+    /// The differential rows' part of `E` independent of `y`.
+    pub constant_differential_leading: bool,
 }
 
 impl Formulation {
@@ -333,10 +335,15 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         .max()
         .unwrap_or(0) as u8;
     let square = rows.len() == vars.len();
-    let constant_leading = rows.iter().all(|r| {
+    let constant_row = |r: &SymRow| {
         r.e.iter()
             .all(|(_, c)| !c.any_sym(&|s| matches!(s, Sym::Var(_) | Sym::Time)))
-    });
+    };
+    let constant_leading = rows.iter().all(constant_row);
+    let constant_differential_leading = rows
+        .iter()
+        .filter(|r| r.kind == RowKind::Differential)
+        .all(constant_row);
     Ok(Formulation {
         name,
         vars,
@@ -346,6 +353,7 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         s_index: if square { c_level } else { c_level.max(1) },
         c_level,
         constant_leading,
+        constant_differential_leading,
     })
 }
 

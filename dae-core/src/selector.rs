@@ -306,6 +306,7 @@ impl<S: DaeSystem> NumericSelector<S> {
             d_index: Some(src.c_level + 1),
             s_index: src.c_level,
             constant_leading: false,
+            constant_differential_leading: false,
             ..src.clone()
         };
         let m_in = src.equations();

@@ -133,6 +133,12 @@ pub struct FormulationInfo {
     pub c_level: u8,
     /// `true` when `E` does not depend on `y`.
     pub constant_leading: bool,
+    /// `true` when the differential rows' part of `E` does not depend on
+    /// `y` (always when `constant_leading`). A model with a constant mass
+    /// matrix has it, though its acceleration-level constraint rows keep
+    /// `G(q)·v'`: its `E` is constant once those rows are made algebraic,
+    /// which the solvers for a constant `E` then do.
+    pub constant_differential_leading: bool,
     /// The model's constraint chain evaluated by [`DaeSystem::constraints`].
     pub constraints: Vec<ConstraintInfo>,
     /// Names of the invariants evaluated by [`DaeSystem::invariants`].

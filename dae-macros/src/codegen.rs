@@ -492,10 +492,11 @@ fn formulation_info(info: &FormulationInfo, shared: &Shared) -> TokenStream {
         }
         None => quote!(::core::option::Option::None),
     };
-    let (s_index, c_level, constant_leading) = (
+    let (s_index, c_level, constant_leading, constant_differential_leading) = (
         index(info.s_index.into()),
         index(info.c_level.into()),
         info.constant_leading,
+        info.constant_differential_leading,
     );
     let constraints = if info.constraints == shared.constraints {
         quote!(constraint_chain())
@@ -522,6 +523,7 @@ fn formulation_info(info: &FormulationInfo, shared: &Shared) -> TokenStream {
             s_index: #s_index,
             c_level: #c_level,
             constant_leading: #constant_leading,
+            constant_differential_leading: #constant_differential_leading,
             constraints: #constraints,
             invariants: #invariants,
             parameters: #parameters,

@@ -54,6 +54,7 @@
 //! #     let row = RowInfo { kind: RowKind::Differential, text: String::new() };
 //! #     FormulationInfo { model: "M".into(), name: name.into(), variables: vec![var("x"), var("y")],
 //! #         rows: vec![row; m], d_index: None, s_index: 0, c_level, constant_leading: true,
+//! #         constant_differential_leading: true,
 //! #         constraints: vec![], invariants: vec![], parameters: vec![] }
 //! # }
 //! assert!(OdRadau.accepts(&info("ovd1", 3, 1)).is_ok());

@@ -27,9 +27,20 @@
 //! as the right-hand side's Jacobian and `Λ_C − L Λ_D` as the leading
 //! matrix's, and reports the inner system's `constant_leading` (false: the
 //! rows had a state-dependent `E`).
+//!
+//! **A constant mass matrix.** When only the constraint rows' part of `E`
+//! depends on `y` (`constant_differential_leading`: the cart pendulum's
+//! `M` is constant, its acceleration row is not), the eliminated `E` is
+//! constant. [`Eliminated::constant`] presents it so to the methods that
+//! need a constant `E` (mebdf, idec): `constant_leading` set, a zero
+//! leading-matrix Jacobian, and the `(∂L/∂y) f_D` term moved into the
+//! right-hand side's Jacobian, which is then exact. There every constraint
+//! row is transformed, not only those with a non-zero row of `E` at the
+//! start (a row whose `E_C` vanishes there has a zero row of `L` there), so
+//! that `E` stays constant wherever the solution goes.
 
 use crate::linalg::{DenseLu, Pivoting};
-use crate::Problem;
+use crate::{NotApplicable, Problem, SolveError};
 use dae_core::system::{DaeSystem, FormulationInfo, RowKind};
 use nalgebra::DMatrix;
 use std::cell::RefCell;
@@ -45,6 +56,9 @@ pub(crate) struct Eliminated<'a> {
     /// The constraint rows with a non-zero row of `E`.
     rows: Vec<usize>,
     work: RefCell<Work>,
+    /// The constant-`E` presentation ([`Eliminated::constant`]): the inner
+    /// information with `constant_leading` set.
+    constant: Option<FormulationInfo>,
 }
 
 struct Work {
@@ -56,6 +70,13 @@ struct Work {
     l: DMatrix<f64>,
     /// Scratch of length `dyn_rows.len()`.
     col: Vec<f64>,
+    /// The constant presentation's `E_D`, factored once (empty otherwise),
+    /// and its scratch: `f` (length M), `z` with `E_D z = f_D` (length N)
+    /// and `∂(E z)/∂y` (M × N).
+    lu_d: DenseLu,
+    f: Vec<f64>,
+    z: Vec<f64>,
+    lam: DMatrix<f64>,
 }
 
 impl<'a> Eliminated<'a> {
@@ -64,6 +85,20 @@ impl<'a> Eliminated<'a> {
     /// (constraint rows with `E` outside the dynamics' columns, or a
     /// singular `E_D` at `y0`).
     pub(crate) fn new(inner: &'a dyn DaeSystem, y0: &[f64]) -> Option<Self> {
+        Self::build(inner, y0, false)
+    }
+
+    /// The constant-`E` presentation of `inner` at `y0` (see the [module
+    /// documentation](self)), or `None` when its differential rows' `E`
+    /// depends on `y`, or as for [`Eliminated::new`].
+    pub(crate) fn constant(inner: &'a dyn DaeSystem, y0: &[f64]) -> Option<Self> {
+        if !inner.info().constant_differential_leading {
+            return None;
+        }
+        Self::build(inner, y0, true)
+    }
+
+    fn build(inner: &'a dyn DaeSystem, y0: &[f64], constant: bool) -> Option<Self> {
         let info: &FormulationInfo = inner.info();
         if info.constant_leading {
             return None;
@@ -74,7 +109,7 @@ impl<'a> Eliminated<'a> {
         let nonzero_row = |e: &DMatrix<f64>, i: usize| (0..n).any(|j| e[(i, j)] != 0.0);
         let rows: Vec<usize> = (0..m)
             .filter(|&i| matches!(info.rows[i].kind, RowKind::Constraint { .. }))
-            .filter(|&i| nonzero_row(&e, i))
+            .filter(|&i| constant || nonzero_row(&e, i))
             .collect();
         if rows.is_empty() {
             return None;
@@ -100,11 +135,28 @@ impl<'a> Eliminated<'a> {
                 lu: DenseLu::new(k, Pivoting::Checked),
                 l: DMatrix::zeros(rows.len(), k),
                 col: vec![0.0; k],
+                lu_d: DenseLu::new(if constant { k } else { 0 }, Pivoting::Checked),
+                f: vec![0.0; if constant { m } else { 0 }],
+                z: vec![0.0; if constant { n } else { 0 }],
+                lam: if constant {
+                    DMatrix::zeros(m, n)
+                } else {
+                    DMatrix::zeros(0, 0)
+                },
             }),
             dyn_rows,
             dyn_cols,
             rows,
+            constant: constant.then(|| FormulationInfo {
+                constant_leading: true,
+                ..info.clone()
+            }),
         };
+        if constant {
+            let w = &mut *adapter.work.borrow_mut();
+            let (dr, dc) = (&adapter.dyn_rows, &adapter.dyn_cols);
+            w.lu_d.factor_from(|i, c| w.e[(dr[i], dc[c])]).ok()?;
+        }
         adapter.update(y0).then_some(adapter)
     }
 
@@ -148,6 +200,25 @@ impl<'a> Eliminated<'a> {
         }
     }
 
+    /// `j −= ∂(E z)/∂y` with `E_D z = f_D` at `(t, y)`: after the rows are
+    /// combined, the `(∂L/∂y) f_D` term of the new rows' Jacobian (the
+    /// dynamics rows' part of `∂(E z)/∂y` is zero, their `E` constant).
+    fn subtract_leading_term(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+        let w = &mut *self.work.borrow_mut();
+        self.inner.rhs(t, y, &mut w.f);
+        let (dr, dc) = (&self.dyn_rows, &self.dyn_cols);
+        for (c, &i) in dr.iter().enumerate() {
+            w.col[c] = w.f[i];
+        }
+        w.lu_d.solve(&mut w.col);
+        w.z.fill(0.0);
+        for (c, &k) in dc.iter().enumerate() {
+            w.z[k] = w.col[c];
+        }
+        self.inner.leading_jacobian(y, &w.z, &mut w.lam);
+        *j -= &w.lam;
+    }
+
     /// `v[rows] −= L v[dyn_rows]` for a vector of length `M`.
     fn combine(&self, v: &mut [f64]) {
         let w = self.work.borrow();
@@ -181,7 +252,7 @@ impl<'a> Eliminated<'a> {
 
 impl DaeSystem for Eliminated<'_> {
     fn info(&self) -> &FormulationInfo {
-        self.inner.info()
+        self.constant.as_ref().unwrap_or_else(|| self.inner.info())
     }
     fn parameter_values(&self) -> Vec<f64> {
         self.inner.parameter_values()
@@ -204,9 +275,16 @@ impl DaeSystem for Eliminated<'_> {
     }
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
         self.inner.rhs_jacobian(t, y, j);
+        if self.constant.is_some() {
+            self.subtract_leading_term(t, y, j);
+        }
         self.transform_rows(y, j);
     }
     fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+        if self.constant.is_some() {
+            j.fill(0.0);
+            return;
+        }
         self.inner.leading_jacobian(y, z, j);
         self.transform_rows(y, j);
     }
@@ -233,6 +311,26 @@ pub(crate) fn with_algebraic_rows<R>(
             ..*problem
         }),
         None => f(problem),
+    }
+}
+
+/// Run `f` on `problem` with a constant `E`: on `problem` itself when its
+/// `E` is constant, else on its constant presentation
+/// ([`Eliminated::constant`]); [`NotApplicable::LeadingMatrixNotConstant`]
+/// when it has none.
+pub(crate) fn with_constant_leading<R>(
+    problem: &Problem<'_>,
+    f: impl FnOnce(&Problem<'_>) -> Result<R, SolveError>,
+) -> Result<R, SolveError> {
+    if problem.system.info().constant_leading {
+        return f(problem);
+    }
+    match Eliminated::constant(problem.system, problem.y0) {
+        Some(e) => f(&Problem {
+            system: &e,
+            ..*problem
+        }),
+        None => Err(NotApplicable::LeadingMatrixNotConstant.into()),
     }
 }
 
@@ -317,22 +415,59 @@ mod tests {
         el.rhs_jacobian(0.0, y, &mut jac);
         el.leading_jacobian(y, &z, &mut ljac);
         let formed = &jac - &ljac;
-        for j in 0..n {
+        assert_jacobian_of_rhs(&el, y, &formed, &el.rows);
+    }
+
+    /// `jac`'s rows `rows` are the Jacobian of `sys`'s right-hand side at
+    /// `y`, against central differences.
+    fn assert_jacobian_of_rhs(sys: &dyn DaeSystem, y: &[f64], jac: &DMatrix<f64>, rows: &[usize]) {
+        let m = sys.info().equations();
+        for j in 0..y.len() {
             let d = 1e-6 * (1.0 + y[j].abs());
-            let (mut yp, mut ym) = (y.clone(), y.clone());
+            let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
             yp[j] += d;
             ym[j] -= d;
             let (mut fp, mut fm) = (vec![0.0; m], vec![0.0; m]);
-            el.rhs(0.0, &yp, &mut fp);
-            el.rhs(0.0, &ym, &mut fm);
-            for &i in &el.rows {
+            sys.rhs(0.0, &yp, &mut fp);
+            sys.rhs(0.0, &ym, &mut fm);
+            for &i in rows {
                 let fd = (fp[i] - fm[i]) / (2.0 * d);
                 assert!(
-                    (formed[(i, j)] - fd).abs() <= 1e-6 * (1.0 + fd.abs()),
+                    (jac[(i, j)] - fd).abs() <= 1e-6 * (1.0 + fd.abs()),
                     "row {i}, column {j}: {} against {fd}",
-                    formed[(i, j)]
+                    jac[(i, j)]
                 );
             }
         }
+    }
+
+    /// The constant presentation of the cart pendulum's rcd0 (its mass
+    /// matrix is constant): `E` constant and equal at two points, a zero
+    /// leading-matrix Jacobian, and the right-hand side's Jacobian the exact
+    /// one of the new rows (every row, against central differences).
+    #[test]
+    fn a_constant_mass_matrix_gives_a_constant_e_and_the_exact_jacobian() {
+        let (sys, points) = cart("rcd0");
+        assert!(!sys.info().constant_leading && sys.info().constant_differential_leading);
+        let el = Eliminated::constant(&sys, &points[0]).expect("a constant presentation");
+        assert!(el.info().constant_leading);
+        let (m, n) = (sys.info().equations(), sys.info().unknowns());
+        let (mut e0, mut e1) = (DMatrix::zeros(m, n), DMatrix::zeros(m, n));
+        el.leading(&points[0], &mut e0);
+        el.leading(&points[1], &mut e1);
+        assert_eq!(e0, e1);
+        let y = &points[1];
+        let mut lj = DMatrix::from_element(m, n, 1.0);
+        el.leading_jacobian(y, &[0.3; 7], &mut lj);
+        assert!(lj.iter().all(|&v| v == 0.0));
+        let mut jac = DMatrix::zeros(m, n);
+        el.rhs_jacobian(0.0, y, &mut jac);
+        assert_jacobian_of_rhs(&el, y, &jac, &(0..m).collect::<Vec<_>>());
+        // A state-dependent mass matrix has none.
+        let model = InterpretedModel::from_str(include_str!("../../../scenes/andrews_natural.dae"))
+            .expect("the squeezer derives");
+        let rcd0 = model.system("rcd0").expect("rcd0");
+        assert!(!rcd0.info().constant_differential_leading);
+        assert!(Eliminated::constant(&rcd0, &vec![0.0; rcd0.info().unknowns()]).is_none());
     }
 }

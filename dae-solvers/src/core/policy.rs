@@ -88,6 +88,19 @@ pub fn constant_leading(info: &FormulationInfo) -> Result<(), NotApplicable> {
     }
 }
 
+/// A method whose formulas need a constant `E`, and that also takes a
+/// formulation whose `E` is constant once its constraint rows that carry
+/// derivatives are made algebraic (`constant_differential_leading`: a model
+/// with a constant mass matrix, in rcd0). The solver makes them algebraic
+/// before it starts.
+pub fn constant_leading_once_eliminated(info: &FormulationInfo) -> Result<(), NotApplicable> {
+    if info.constant_leading || info.constant_differential_leading {
+        Ok(())
+    } else {
+        Err(NotApplicable::LeadingMatrixNotConstant)
+    }
+}
+
 /// A method for unknowns of index at most `max`.
 pub fn max_index(info: &FormulationInfo, max: u8) -> Result<(), NotApplicable> {
     let index = info.max_index();

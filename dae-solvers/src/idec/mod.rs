@@ -162,6 +162,10 @@
 //! Square formulations with a constant leading matrix and unknowns of index
 //! at most 2: `rcd1`, `rcd0`, `ggl1` of the pendulum; `ori2` (index 3),
 //! `psi1`/`psi0` (`E(y)`) and the overdetermined ones are refused, typed.
+//! A model with a constant mass matrix is taken in rcd0 too, whose
+//! acceleration rows keep `G(q)·v'`: [`Solver::solve`] makes those rows
+//! algebraic first, which leaves `E` constant (the [`Idec::levels`] of the
+//! seed's scheme refuses it).
 //!
 //! # Example
 //!
@@ -274,6 +278,9 @@ impl Idec {
         options: &Options,
     ) -> Result<Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
+        // The scheme itself needs `E` constant: `solve` presents a constant
+        // mass matrix's rcd0 so (`with_constant_leading`); `levels` does not.
+        policy::constant_leading(problem.system.info())?;
         problem.check(problem.system.info().unknowns(), options)?;
         self.check(options)?;
         Integrator::new(self, problem, options)
@@ -322,12 +329,15 @@ impl Solver for Idec {
 
     fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable> {
         policy::square(info)?;
-        policy::constant_leading(info)?;
+        policy::constant_leading_once_eliminated(info)?;
         policy::max_index(info, 2)
     }
 
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
-        let mut integrator = self.integrator(problem, options)?;
-        driver::solve(&mut integrator, options, problem.t0, problem.t_end)
+        self.accepts(problem.system.info())?;
+        crate::core::eliminate::with_constant_leading(problem, |problem| {
+            let mut integrator = self.integrator(problem, options)?;
+            driver::solve(&mut integrator, options, problem.t0, problem.t_end)
+        })
     }
 }

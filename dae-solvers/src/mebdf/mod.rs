@@ -1,6 +1,9 @@
 //! Modified extended BDF (MEBDF) of Cash, variable step and variable order
 //! 1–8, for square DAEs `E y' = f(t, y)` with a constant leading matrix `E`
-//! — the method of the MEBDF/MEBDFDAE codes.
+//! — the method of the MEBDF/MEBDFDAE codes. A model with a constant mass
+//! matrix is taken in rcd0 too, whose acceleration rows keep `G(q)·v'`:
+//! [`Solver::solve`] makes those rows algebraic first, which leaves `E`
+//! constant.
 //!
 //! # The method
 //!
@@ -145,12 +148,14 @@ impl Solver for Mebdf {
 
     fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable> {
         policy::square(info)?;
-        policy::constant_leading(info)
+        policy::constant_leading_once_eliminated(info)
     }
 
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
         self.accepts(problem.system.info())?;
-        integrate(problem, options)
+        crate::core::eliminate::with_constant_leading(problem, |problem| {
+            integrate(problem, options)
+        })
     }
 }
 

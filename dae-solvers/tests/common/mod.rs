@@ -261,6 +261,7 @@ impl Pendulum {
             s_index,
             c_level,
             constant_leading: !matches!(form, Form::Psi1 | Form::Psi0),
+            constant_differential_leading: !matches!(form, Form::Psi1 | Form::Psi0),
             constraints: vec![
                 member(0, 0, PENDULUM_L0),
                 member(1, 0, PENDULUM_L1),
@@ -876,6 +877,7 @@ impl Simple {
                 s_index: max_index.saturating_sub(1),
                 c_level: 0,
                 constant_leading: true,
+                constant_differential_leading: true,
                 constraints: Vec::new(),
                 invariants: Vec::new(),
                 parameters: Vec::new(),
@@ -1210,6 +1212,7 @@ impl DoublePendulum {
             s_index: 0,
             c_level: 0,
             constant_leading: true,
+            constant_differential_leading: true,
             constraints: vec![
                 member(0, 0, DP_A0),
                 member(0, 1, DP_B0),
@@ -1477,6 +1480,7 @@ impl Idec {
             s_index: 1,
             c_level: 1,
             constant_leading: true,
+            constant_differential_leading: true,
             constraints: vec![
                 member(0, 0, IDEC_C0),
                 member(0, 1, IDEC_C1),
@@ -1605,6 +1609,7 @@ impl Toy {
                 s_index: 0,
                 c_level: 0,
                 constant_leading: true,
+                constant_differential_leading: true,
                 constraints: vec![member(0, 0, "x + y - 1"), member(1, 0, "x - y")],
                 invariants: vec![],
                 parameters: vec![],
@@ -1636,6 +1641,7 @@ impl Toy {
                 s_index: 0,
                 c_level: 0,
                 constant_leading: true,
+                constant_differential_leading: true,
                 constraints: vec![],
                 invariants: vec![],
                 parameters: vec![],
