@@ -22,6 +22,7 @@
 //! solvers = ["radau5", "bdf", "odradau", "odbdf", "mebdf", "idec", "gauss"] # and the tolerances 1e-5 … 1e-12
 //! formulations = ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0"]
 //! tolerances = [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
+//! max_steps = 2000000         # optional: steps (accepted + rejected) per run
 //! ```
 //!
 //! Everything that can be checked without the model is checked when the
@@ -483,6 +484,11 @@ pub struct Sweep {
     /// Tolerances (`RTOL = ATOL`), each in `[100 ε, 1)`
     /// ([`dae_solvers::options::check_uniform`]).
     pub tolerances: Vec<f64>,
+    /// Steps (accepted and rejected) each run may take before it stops
+    /// with a step-limit failure; `None`: the library's
+    /// ([`dae_solvers::Options::max_steps`]). Bounds the time of a sweep
+    /// whose slow pairs would otherwise dominate it.
+    pub max_steps: Option<usize>,
 }
 
 impl Default for Sweep {
@@ -491,6 +497,7 @@ impl Default for Sweep {
             solvers: KNOWN_SOLVERS.iter().map(|s| s.to_string()).collect(),
             formulations: KNOWN_FORMULATIONS.iter().map(|s| s.to_string()).collect(),
             tolerances: DEFAULT_TOLERANCES.to_vec(),
+            max_steps: None,
         }
     }
 }
@@ -809,6 +816,7 @@ struct RawSweep {
     solvers: Option<Spanned<Vec<Spanned<String>>>>,
     formulations: Option<Spanned<Vec<Spanned<String>>>>,
     tolerances: Option<Spanned<Vec<Spanned<f64>>>>,
+    max_steps: Option<Spanned<i64>>,
 }
 
 /// A table of `name = number`, in file order, with spans.
@@ -1565,10 +1573,27 @@ impl Source<'_> {
             }
             None => defaults.tolerances,
         };
+        let max_steps = match raw.max_steps {
+            Some(n) => {
+                let at = self.at(&n.span());
+                match usize::try_from(n.into_inner()) {
+                    Ok(n) if n > 0 => Some(n),
+                    _ => {
+                        return Err(SceneError::InvalidValue {
+                            at,
+                            field: "sweep.max_steps".into(),
+                            reason: "must be a positive whole number of steps".into(),
+                        })
+                    }
+                }
+            }
+            None => None,
+        };
         Ok(Sweep {
             solvers,
             formulations,
             tolerances,
+            max_steps,
         })
     }
 }

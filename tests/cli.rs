@@ -331,3 +331,31 @@ fn a_directory_named_s01_does_not_hide_the_builtin_scene() {
     );
     assert!(out.starts_with("S01 radau5("), "{out}");
 }
+
+/// `--max-steps` bounds every run of a sweep: a run that needs more stops
+/// with the typed step-limit failure, the report says the bound, and 0 is
+/// refused.
+#[test]
+fn sweep_max_steps_bounds_every_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bounded");
+    let out_s = out.display().to_string();
+    let bounded = |n: &str| {
+        let mut args: Vec<&str> = "sweep s01 --solvers radau5 --formulations rcd1 --tols 1e-6 \
+                                   --repeats 1 --quiet --format json --max-steps"
+            .split_whitespace()
+            .collect();
+        args.extend([n, "--out", &out_s]);
+        dae(&args)
+    };
+    let o = bounded("50");
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["sweep"]["max_steps"], 50);
+    let run = &v["runs"][0];
+    assert_eq!(run["status"], "error", "{run}");
+    assert_eq!(run["error"]["kind"], "step_limit", "{run}");
+    let o = bounded("0");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--max-steps 0"), "{}", stderr(&o));
+}

@@ -582,3 +582,19 @@ fn scene_serialises_to_json() {
     assert_eq!(json["reference"]["kind"], "exact");
     assert_eq!(json["reference"]["closed_form"], "pendulum");
 }
+
+/// `[sweep] max_steps` bounds every run; anything but a positive whole
+/// number is refused at its place.
+#[test]
+fn sweep_max_steps() {
+    let s = parse(&format!("{BASE}max_steps = 2000000\n")).unwrap();
+    assert_eq!(s.sweep.max_steps, Some(2_000_000));
+    assert_eq!(parse(BASE).unwrap().sweep.max_steps, None);
+    for bad in ["0", "-5"] {
+        let err = expect_err(&format!("{BASE}max_steps = {bad}\n"), "sweep.max_steps", 20);
+        assert!(err.to_string().contains("positive whole number"), "{err}");
+    }
+    for bad in ["1.5", "\"many\""] {
+        expect_err(&format!("{BASE}max_steps = {bad}\n"), "sweep.max_steps", 20);
+    }
+}

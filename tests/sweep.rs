@@ -781,6 +781,7 @@ fn pendulum_report(name: &str, t_end: f64, reference: &'static str) -> sweep::Sw
         tolerances: vec![1e-5, 1e-6],
         repeats: 1,
         jobs: 1,
+        max_steps: None,
         figure_tol: 1e-6,
         pairs: vec![
             pair("radau5", "rcd1", None),

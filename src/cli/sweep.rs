@@ -68,9 +68,12 @@ pub struct SweepArgs {
     #[arg(long, value_name = "DIR", num_args = 0..=1,
           default_missing_value = "scenes/extremes")]
     pub extremes: Option<PathBuf>,
-    /// Step limit of each run of the stability map.
-    #[arg(long, default_value_t = crate::stability::MAP_MAX_STEPS)]
-    pub max_steps: usize,
+    /// Steps (accepted + rejected) each run may take before it stops with
+    /// a step-limit failure. Sweep: overrides the scene's `[sweep]
+    /// max_steps` (default: the library's, 20 000 000). Stability map:
+    /// default 5 000 000.
+    #[arg(long)]
+    pub max_steps: Option<usize>,
 }
 
 impl Default for SweepArgs {
@@ -88,7 +91,7 @@ impl Default for SweepArgs {
             strict_init: false,
             quiet: false,
             extremes: None,
-            max_steps: crate::stability::MAP_MAX_STEPS,
+            max_steps: None,
         }
     }
 }
@@ -121,6 +124,9 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
             super::run::check_tol(*t, "--tols")?;
         }
     }
+    if args.max_steps == Some(0) {
+        return Err(Failure::input("--max-steps 0: at least one step is needed"));
+    }
     if let Some(dir) = &args.extremes {
         return extremes(args, dir);
     }
@@ -148,6 +154,9 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
         InitMode::Project
     };
     opts.progress = !args.quiet;
+    if args.max_steps.is_some() {
+        opts.max_steps = args.max_steps;
+    }
     let dir = args
         .out
         .clone()
@@ -192,9 +201,6 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
 
 /// `dae sweep --extremes [DIR]`: the stability map.
 fn extremes(args: &SweepArgs, cases: &std::path::Path) -> Result<(String, i32), Failure> {
-    if args.max_steps == 0 {
-        return Err(Failure::input("--max-steps 0: at least one step is needed"));
-    }
     if args.formulations.is_some() {
         return Err(Failure::input(
             "--formulations: the stability map runs every formulation of each case",
@@ -210,7 +216,7 @@ fn extremes(args: &SweepArgs, cases: &std::path::Path) -> Result<(String, i32), 
     }
     let opts = stability::MapOptions {
         jobs: args.jobs.max(1),
-        max_steps: args.max_steps,
+        max_steps: args.max_steps.unwrap_or(crate::stability::MAP_MAX_STEPS),
         solvers: args.solvers.clone(),
         tolerances: args.tols.clone(),
         progress: !args.quiet,

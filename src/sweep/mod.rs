@@ -105,7 +105,7 @@ impl SweepOptions {
             jobs: 1,
             init_mode: InitMode::Project,
             progress: true,
-            max_steps: None,
+            max_steps: scene.sweep.max_steps,
             figures: true,
         }
     }
@@ -249,6 +249,8 @@ pub struct SweepReport {
     pub repeats: usize,
     /// Threads of the accuracy pass.
     pub jobs: usize,
+    /// Bound on each run's steps (`None`: the library's).
+    pub max_steps: Option<usize>,
     /// Tolerance of the solution, error and residual figures.
     pub figure_tol: f64,
     /// Every pair, applicable or not.
@@ -277,7 +279,7 @@ impl SweepReport {
     pub fn scale_line(&self) -> String {
         format!(
             "{} solver(s) × {} formulation(s) × {} tolerance(s): {} runs in {:.1} s (tsim = median of up to {} timed \
-             integration(s), fewer once they took {} s; {})",
+             integration(s), fewer once they took {} s; {}{})",
             self.solvers.len(),
             self.formulations.len(),
             self.tolerances.len(),
@@ -289,7 +291,9 @@ impl SweepReport {
                 format!("accuracy pass on {} threads, timing pass sequential", self.jobs)
             } else {
                 "one sequential pass".to_string()
-            }
+            },
+            self.max_steps
+                .map_or_else(String::new, |n| format!("; at most {n} steps per run"))
         )
     }
 
@@ -597,6 +601,7 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
         tolerances: opts.tolerances.clone(),
         repeats: ctx.repeats,
         jobs: opts.jobs.max(1),
+        max_steps: opts.max_steps,
         figure_tol: fig_tol,
         pairs,
         runs,
@@ -707,7 +712,7 @@ fn parallel(
 ///
 /// ```text
 /// { "scene":   {name, origin, model, t0, t_end, checks, reference},
-///   "sweep":   {solvers, formulations, tolerances, repeats, jobs, figure_tol, wall_s, pairs: [...]},
+///   "sweep":   {solvers, formulations, tolerances, repeats, jobs, max_steps, figure_tol, wall_s, pairs: [...]},
 ///   "runs":    [ RunRecord fields (as `dae run` prints them) + "tsim_runs": [...] ],
 ///   "success": {legend, formulations, rows: [{solver, cells: [{formulation, mark, ok, runs, reason?}]}]},
 ///   "pareto":  {error: "err", definition, rows: [{solver, formulation, tol, tsim_s, err}]},
@@ -747,6 +752,7 @@ struct SweepDoc<'a> {
     tolerances: &'a [f64],
     repeats: usize,
     jobs: usize,
+    max_steps: Option<usize>,
     figure_tol: f64,
     wall_s: f64,
     pairs: &'a [Pair],
@@ -769,6 +775,7 @@ impl<'a> ResultsDoc<'a> {
                 tolerances: &report.tolerances,
                 repeats: report.repeats,
                 jobs: report.jobs,
+                max_steps: report.max_steps,
                 figure_tol: report.figure_tol,
                 wall_s: report.wall_s,
                 pairs: &report.pairs,
