@@ -160,34 +160,52 @@ impl<'a> Eliminated<'a> {
         adapter.update(y0).then_some(adapter)
     }
 
-    /// `L(y) = E_C E_D⁻¹`; false if `E_D` is singular.
-    fn update(&self, y: &[f64]) -> bool {
+    /// `E(y)` and the factors of `E_Dᵀ`; false if `E_D` is singular.
+    fn factor(&self, y: &[f64]) -> bool {
         let w = &mut *self.work.borrow_mut();
         self.inner.leading(y, &mut w.e);
         let (dr, dc) = (&self.dyn_rows, &self.dyn_cols);
-        // Lᵀ solves E_Dᵀ Lᵀ = E_Cᵀ: factor E_Dᵀ.
-        if w.lu.factor_from(|i, j| w.e[(dr[j], dc[i])]).is_err() {
+        // Lᵀ solves E_Dᵀ Lᵀ = E_Cᵀ: factor E_Dᵀ (E_D x = b is its
+        // transposed solve).
+        w.lu.factor_from(|i, j| w.e[(dr[j], dc[i])]).is_ok()
+    }
+
+    /// `L(y) = E_C E_D⁻¹`; false if `E_D` is singular.
+    fn update(&self, y: &[f64]) -> bool {
+        if !self.factor(y) {
             return false;
         }
+        let w = &mut *self.work.borrow_mut();
+        let dc = &self.dyn_cols;
         for (r, &i) in self.rows.iter().enumerate() {
             for (c, &j) in dc.iter().enumerate() {
                 w.col[c] = w.e[(i, j)];
             }
             w.lu.solve(&mut w.col);
-            for c in 0..dr.len() {
+            for c in 0..self.dyn_rows.len() {
                 w.l[(r, c)] = w.col[c];
             }
         }
         true
     }
 
-    /// `v[rows] −= L(y) v[dyn_rows]`; NaN everywhere if `E_D(y)` is
+    /// `v[rows] −= L(y) v[dyn_rows]`, as `E_C (E_D⁻¹ v[dyn_rows])`: one
+    /// solve instead of one per row of `L`. NaN everywhere if `E_D(y)` is
     /// singular (the solvers then retry with a smaller step).
     fn transform(&self, y: &[f64], v: &mut [f64]) {
-        if self.update(y) {
-            self.combine(v);
-        } else {
+        if !self.factor(y) {
             v.fill(f64::NAN);
+            return;
+        }
+        let w = &mut *self.work.borrow_mut();
+        let (dr, dc) = (&self.dyn_rows, &self.dyn_cols);
+        for (c, &d) in dr.iter().enumerate() {
+            w.col[c] = v[d];
+        }
+        w.lu.solve_transposed(&mut w.col);
+        for &i in &self.rows {
+            let s: f64 = dc.iter().zip(&w.col).map(|(&j, x)| w.e[(i, j)] * x).sum();
+            v[i] -= s;
         }
     }
 
@@ -219,21 +237,7 @@ impl<'a> Eliminated<'a> {
         *j -= &w.lam;
     }
 
-    /// `v[rows] −= L v[dyn_rows]` for a vector of length `M`.
-    fn combine(&self, v: &mut [f64]) {
-        let w = self.work.borrow();
-        for (r, &i) in self.rows.iter().enumerate() {
-            let s: f64 = self
-                .dyn_rows
-                .iter()
-                .enumerate()
-                .map(|(c, &d)| w.l[(r, c)] * v[d])
-                .sum();
-            v[i] -= s;
-        }
-    }
-
-    /// The same for the rows of an `M × N` matrix.
+    /// `a[rows, :] −= L a[dyn_rows, :]` for an `M × N` matrix.
     fn combine_rows(&self, a: &mut DMatrix<f64>) {
         let w = self.work.borrow();
         for j in 0..a.ncols() {

@@ -107,6 +107,28 @@ impl DenseLu {
     pub(crate) fn solve(&self, b: &mut [f64]) {
         solve_in_place(self.a.as_slice(), &self.piv, b, self.pivoting);
     }
+
+    /// Solve `Aᵀ x = b` in place with the same factors: `Aᵀ = Uᵀ Lᵀ P`, so
+    /// `Uᵀ w = b` forward, `Lᵀ z = w` backward, then the interchanges
+    /// undone in reverse order.
+    pub(crate) fn solve_transposed(&self, b: &mut [f64]) {
+        let n = self.piv.len();
+        let a = self.a.as_slice();
+        debug_assert!(b.len() == n);
+        for k in 0..n {
+            let col = &a[k * n..k * n + k];
+            let s: f64 = col.iter().zip(&b[..k]).map(|(u, w)| u * w).sum();
+            b[k] = (b[k] - s) / a[k * n + k];
+        }
+        for k in (0..n).rev() {
+            let col = &a[k * n + k + 1..(k + 1) * n];
+            let s: f64 = col.iter().zip(&b[k + 1..n]).map(|(l, z)| l * z).sum();
+            b[k] -= s;
+        }
+        for k in (0..n).rev() {
+            b.swap(k, self.piv[k]);
+        }
+    }
 }
 
 /// LU factors with partial pivoting of a complex `N × N` matrix kept as
@@ -387,7 +409,7 @@ mod tests {
 
     #[test]
     fn lu_solves_real_and_complex_systems() {
-        for n in [1, 4, 5, 13] {
+        for n in [1, 2, 3, 4, 5, 6, 13, 14] {
             for pivoting in [Pivoting::Checked, Pivoting::Linpack] {
                 let mut lu = DenseLu::new(n, pivoting);
                 lu.factor_from(entry).unwrap();
@@ -398,6 +420,14 @@ mod tests {
                 lu.solve(&mut b);
                 for (u, v) in b.iter().zip(&x) {
                     assert!((u - v).abs() < 1e-11, "n = {n}: {u} vs {v}");
+                }
+                // The transposed system with the same factors.
+                let mut bt: Vec<f64> = (0..n)
+                    .map(|i| (0..n).map(|j| entry(j, i) * x[j]).sum())
+                    .collect();
+                lu.solve_transposed(&mut bt);
+                for (u, v) in bt.iter().zip(&x) {
+                    assert!((u - v).abs() < 1e-11, "n = {n}, transposed: {u} vs {v}");
                 }
 
                 let centry =
