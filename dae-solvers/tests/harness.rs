@@ -151,6 +151,22 @@ fn cases() -> Vec<Case> {
         2.0,
         Consistent(dp_start),
     ));
+    // A constant mass matrix whose acceleration row keeps `der(vu)` (the
+    // cart pendulum of `scenes/`): rcd0 is integrated through the
+    // elimination of `core/eliminate.rs`, by the constant-`E` solvers too.
+    let cart = dae_core::interp::InterpretedModel::from_str(include_str!(
+        "../../scenes/cart_pendulum.dae"
+    ))
+    .expect("the cart pendulum derives")
+    .system("rcd0")
+    .expect("its rcd0");
+    cases.push(case(
+        "cart_pendulum_rcd0",
+        cart,
+        0.0,
+        2.0,
+        Consistent(vec![0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+    ));
     cases.push(case(
         "idec_ori1",
         Sys(Idec::new()),
