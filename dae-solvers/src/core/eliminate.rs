@@ -64,16 +64,15 @@ pub(crate) struct Eliminated<'a> {
 struct Work {
     /// `E(y)` of the inner system.
     e: DMatrix<f64>,
-    /// `E_D` factored.
+    /// `E_Dᵀ` factored (once in the constant presentation, where `E_D` is
+    /// constant; at every evaluation otherwise).
     lu: DenseLu,
     /// `L`, one row per transformed row (`rows.len() × dyn_rows.len()`).
     l: DMatrix<f64>,
     /// Scratch of length `dyn_rows.len()`.
     col: Vec<f64>,
-    /// The constant presentation's `E_D`, factored once (empty otherwise),
-    /// and its scratch: `f` (length M), `z` with `E_D z = f_D` (length N)
-    /// and `∂(E z)/∂y` (M × N).
-    lu_d: DenseLu,
+    /// The constant presentation's scratch (empty otherwise): `f` (length
+    /// M), `z` with `E_D z = f_D` (length N) and `∂(E z)/∂y` (M × N).
     f: Vec<f64>,
     z: Vec<f64>,
     lam: DMatrix<f64>,
@@ -135,7 +134,6 @@ impl<'a> Eliminated<'a> {
                 lu: DenseLu::new(k, Pivoting::Checked),
                 l: DMatrix::zeros(rows.len(), k),
                 col: vec![0.0; k],
-                lu_d: DenseLu::new(if constant { k } else { 0 }, Pivoting::Checked),
                 f: vec![0.0; if constant { m } else { 0 }],
                 z: vec![0.0; if constant { n } else { 0 }],
                 lam: if constant {
@@ -152,21 +150,25 @@ impl<'a> Eliminated<'a> {
                 ..info.clone()
             }),
         };
-        if constant {
-            let w = &mut *adapter.work.borrow_mut();
-            let (dr, dc) = (&adapter.dyn_rows, &adapter.dyn_cols);
-            w.lu_d.factor_from(|i, c| w.e[(dr[i], dc[c])]).ok()?;
+        // The constant presentation factors `E_D` here, once.
+        if constant && !adapter.factor_e_d() {
+            return None;
         }
         adapter.update(y0).then_some(adapter)
     }
 
-    /// `E(y)` and the factors of `E_Dᵀ`; false if `E_D` is singular.
+    /// `E(y)` and the factors of `E_Dᵀ` (kept from the start in the
+    /// constant presentation); false if `E_D` is singular.
     fn factor(&self, y: &[f64]) -> bool {
+        self.inner.leading(y, &mut self.work.borrow_mut().e);
+        self.constant.is_some() || self.factor_e_d()
+    }
+
+    /// Factor `E_Dᵀ` from the `E` in the work space: `Lᵀ` solves
+    /// `E_Dᵀ Lᵀ = E_Cᵀ`, and `E_D x = b` is its transposed solve.
+    fn factor_e_d(&self) -> bool {
         let w = &mut *self.work.borrow_mut();
-        self.inner.leading(y, &mut w.e);
         let (dr, dc) = (&self.dyn_rows, &self.dyn_cols);
-        // Lᵀ solves E_Dᵀ Lᵀ = E_Cᵀ: factor E_Dᵀ (E_D x = b is its
-        // transposed solve).
         w.lu.factor_from(|i, j| w.e[(dr[j], dc[i])]).is_ok()
     }
 
@@ -228,7 +230,7 @@ impl<'a> Eliminated<'a> {
         for (c, &i) in dr.iter().enumerate() {
             w.col[c] = w.f[i];
         }
-        w.lu_d.solve(&mut w.col);
+        w.lu.solve_transposed(&mut w.col);
         w.z.fill(0.0);
         for (c, &k) in dc.iter().enumerate() {
             w.z[k] = w.col[c];
