@@ -414,20 +414,23 @@ mod tests {
                 let mut lu = DenseLu::new(n, pivoting);
                 lu.factor_from(entry).unwrap();
                 let x: Vec<f64> = (0..n).map(|i| i as f64 - 1.5).collect();
-                let mut b: Vec<f64> = (0..n)
-                    .map(|i| (0..n).map(|j| entry(i, j) * x[j]).sum())
-                    .collect();
-                lu.solve(&mut b);
-                for (u, v) in b.iter().zip(&x) {
-                    assert!((u - v).abs() < 1e-11, "n = {n}: {u} vs {v}");
-                }
-                // The transposed system with the same factors.
-                let mut bt: Vec<f64> = (0..n)
-                    .map(|i| (0..n).map(|j| entry(j, i) * x[j]).sum())
-                    .collect();
-                lu.solve_transposed(&mut bt);
-                for (u, v) in bt.iter().zip(&x) {
-                    assert!((u - v).abs() < 1e-11, "n = {n}, transposed: {u} vs {v}");
+                // `A x` (or `Aᵀ x`), solved back with the factors of `A`.
+                for transposed in [false, true] {
+                    let a = |i, j| if transposed { entry(j, i) } else { entry(i, j) };
+                    let mut b: Vec<f64> = (0..n)
+                        .map(|i| (0..n).map(|j| a(i, j) * x[j]).sum())
+                        .collect();
+                    if transposed {
+                        lu.solve_transposed(&mut b);
+                    } else {
+                        lu.solve(&mut b);
+                    }
+                    for (u, v) in b.iter().zip(&x) {
+                        assert!(
+                            (u - v).abs() < 1e-11,
+                            "n = {n}, transposed {transposed}: {u} vs {v}"
+                        );
+                    }
                 }
 
                 let centry =
