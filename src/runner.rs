@@ -142,9 +142,9 @@ pub struct RunRecord {
     pub err_sum: Option<f64>,
     /// Euclidean norm of the same errors: the square root of the sum over
     /// those times of the squared errors of every unknown the reference
-    /// gives. On S02 this is the reading of the paper's ERR that Fortran
-    /// DASSL/ODASSL reproduce (BENCHMARKS.md §3c); `err_sum` is SPEC's
-    /// stricter reading.
+    /// gives. On S02 this is the reading of the paper's ERR under which the
+    /// classic codes' measured errors reproduce it (BENCHMARKS.md §3c);
+    /// `err_sum` is SPEC's stricter reading.
     pub err_l2: Option<f64>,
     /// Max over those times of the errors of the algebraic unknowns the
     /// reference gives (the multipliers of a mechanical system); `null`

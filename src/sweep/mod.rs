@@ -322,8 +322,8 @@ pub struct Summary {
     pub targets: Vec<pareto::Target>,
     /// Comparison with the paper under `err_sum` (scenes S01 and S02 only).
     pub paper: Option<paper::Comparison>,
-    /// The same under `err_l2`, the reading of the paper's ERR that the
-    /// Fortran codes reproduce.
+    /// The same under `err_l2`, the reading of the paper's ERR under which
+    /// the classic codes' measured errors reproduce it.
     pub paper_l2: Option<paper::Comparison>,
     /// The Fortran reference lines of the work-precision diagram (scenes
     /// S01 and S02 only; `None` also when the shipped data cannot be read,
