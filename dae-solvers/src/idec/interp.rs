@@ -120,6 +120,79 @@ pub(super) fn weights(m: usize, theta: f64) -> [f64; MAX_DEGREE + 1] {
     w
 }
 
+/// Interval ends that [`Ends`] interpolates the algebraic unknowns
+/// through: four, a cubic (measured on the pendulum, `rcd0` and `ggl1`: a
+/// quadratic is up to 1.4× worse, degrees 4 and 5 are no better).
+pub(super) const ENDS: usize = 4;
+
+/// The algebraic unknowns at the last [`ENDS`] accepted interval ends, for
+/// dense output with error control.
+///
+/// Restarted intervals leave the algebraic unknowns at the interior nodes
+/// further off (the module documentation, "Known limitation") than at the
+/// interval ends, where the error control measures them: the interior
+/// nodes' polynomial put the pendulum's `λ` between the ends 114× (`rcd0`)
+/// and 4× (`ggl1`, `rcd1`) further from the exact solution than at the ends
+/// (tol 1e-8, t ∈ [0, 5]). The algebraic unknowns' dense output is
+/// therefore the polynomial through the accepted ends, in Lagrange form on
+/// their (unequal) times.
+pub(super) struct Ends {
+    /// Which unknowns are algebraic.
+    algebraic: Vec<usize>,
+    /// Times of the stored ends, oldest first (`len() ≤ ENDS`).
+    t: Vec<f64>,
+    /// Their algebraic values, `algebraic.len()` per end, oldest first.
+    values: Vec<f64>,
+}
+
+impl Ends {
+    /// The history of `y0` at `t0`, for the unknowns `algebraic`.
+    pub(super) fn new(algebraic: Vec<usize>, t0: f64, y0: &[f64]) -> Self {
+        let mut ends = Ends {
+            algebraic,
+            t: Vec::with_capacity(ENDS),
+            values: Vec::new(),
+        };
+        ends.values.reserve(ENDS * ends.algebraic.len());
+        ends.push(t0, y0);
+        ends
+    }
+
+    /// Record the accepted value `y` at the end `t`, dropping the oldest
+    /// end once [`ENDS`] are held.
+    pub(super) fn push(&mut self, t: f64, y: &[f64]) {
+        let k = self.algebraic.len();
+        if self.t.len() == ENDS {
+            self.t.remove(0);
+            self.values.drain(..k);
+        }
+        self.t.push(t);
+        self.values.extend(self.algebraic.iter().map(|&i| y[i]));
+    }
+
+    /// Overwrite the algebraic entries of `out` with the polynomial through
+    /// the stored ends at `tau` (between the last two; a constant when only
+    /// the start is held).
+    pub(super) fn interpolate(&self, tau: f64, out: &mut [f64]) {
+        let k = self.algebraic.len();
+        for &i in &self.algebraic {
+            out[i] = 0.0;
+        }
+        for (a, &ta) in self.t.iter().enumerate() {
+            let w: f64 = self
+                .t
+                .iter()
+                .enumerate()
+                .filter(|&(b, _)| b != a)
+                .map(|(_, &tb)| (tau - tb) / (ta - tb))
+                .product();
+            for (&i, v) in self.algebraic.iter().zip(&self.values[a * k..(a + 1) * k]) {
+                out[i] += w * v;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -172,6 +245,31 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The ends' polynomial reproduces a cubic on unequal times from the
+    /// fourth end on, touches only the algebraic unknowns, and keeps the
+    /// newest four.
+    #[test]
+    fn ends_interpolate_the_algebraic_unknowns() {
+        let cubic = |t: f64| 2.0 - t + 0.5 * t * t - 3.0 * t.powi(3);
+        let y = |t: f64| [10.0 + t, cubic(t), -1.0, 7.0 * t];
+        let mut ends = Ends::new(vec![1, 3], 0.0, &y(0.0));
+        let mut out = [f64::NAN, f64::NAN, 5.0, f64::NAN];
+        // The start alone: constant.
+        ends.interpolate(0.1, &mut out);
+        assert_eq!(out[1], cubic(0.0));
+        assert_eq!(out[3], 0.0);
+        for t in [0.1, 0.25, 0.3, 0.7, 0.75] {
+            ends.push(t, &y(t));
+        }
+        assert_eq!(ends.t, [0.25, 0.3, 0.7, 0.75]);
+        for tau in [0.7, 0.72, 0.75] {
+            ends.interpolate(tau, &mut out);
+            assert!((out[1] - cubic(tau)).abs() < 1e-12, "τ {tau}");
+            assert!((out[3] - 7.0 * tau).abs() < 1e-12, "τ {tau}");
+        }
+        assert!(out[0].is_nan() && out[2] == 5.0);
     }
 
     /// `two_sum` returns the rounding error of the sum exactly, whichever

@@ -2,7 +2,7 @@
 //! [`Method::step`], constant steps (the seed's scheme) or error-controlled
 //! ones.
 
-use super::interp::weights;
+use super::interp::{weights, Ends};
 use super::sweep::Sweep;
 use super::{Idec, FAC, H0_DEFAULT, RATIO_MAX, RATIO_MIN};
 use crate::core::control::{self, Budget, Failure};
@@ -10,7 +10,7 @@ use crate::core::driver::Method;
 use crate::core::weights::Weights;
 use crate::linalg::all_finite;
 use crate::{Options, Problem, SolveError, Stats};
-use dae_core::system::DaeSystem;
+use dae_core::system::{DaeSystem, VarKind};
 
 /// State of one IDeC integration.
 pub(super) struct Integrator<'a> {
@@ -45,6 +45,9 @@ pub(super) struct Integrator<'a> {
     t_prev: f64,
     h_prev: f64,
     dense_nodes: Vec<f64>,
+    /// With error control: the algebraic unknowns at the last accepted
+    /// interval ends, their dense output ([`Ends`]).
+    ends: Option<Ends>,
     /// Scratch for the error estimate.
     diff: Vec<f64>,
     /// The step `E − hJ` is factorised for (none after a new Jacobian).
@@ -73,6 +76,9 @@ impl Method for Integrator<'_> {
             for (o, v) in out.iter_mut().zip(node) {
                 *o += wl * v;
             }
+        }
+        if let Some(ends) = &self.ends {
+            ends.interpolate(tau, out);
         }
     }
     fn finished(&self) -> bool {
@@ -151,6 +157,13 @@ impl<'a> Integrator<'a> {
             t_prev: problem.t0,
             h_prev: h,
             dense_nodes: vec![0.0; (m + 1) * n],
+            ends: options.fixed_step.is_none().then(|| {
+                let algebraic = (info.variables.iter().enumerate())
+                    .filter(|(_, v)| v.kind == VarKind::Algebraic)
+                    .map(|(i, _)| i)
+                    .collect();
+                Ends::new(algebraic, problem.t0, problem.y0)
+            }),
             diff: vec![0.0; n],
             factored: None,
             last: false,
@@ -236,6 +249,9 @@ impl<'a> Integrator<'a> {
         } else {
             t + self.m as f64 * h
         };
+        if let Some(ends) = &mut self.ends {
+            ends.push(self.t, &self.y);
+        }
         self.done = self.last;
     }
 
