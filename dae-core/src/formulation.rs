@@ -185,6 +185,80 @@ pub fn provided(model: &Model, an: &Analysis) -> Result<Vec<&'static str>, syn::
     errors.finish(out)
 }
 
+/// For each unknown of `model`, how many more differentiations of the
+/// formulation (which keeps `levels[c]` of chain `c`) it takes before the
+/// unknown is determined: for the algebraic unknown that chain `c`
+/// determines (`an.matching`), the differentiations chain `c` still needs to
+/// reach its top level, or those of any chain whose unknown its top level
+/// involves, whichever is more (the closure over that dependency graph, which
+/// is the block-triangular order of the top-level system); zero for the
+/// differential unknowns.
+///
+/// The first appearance of an unknown in a chain (see [`build`]) misses
+/// multipliers that enter only through other algebraic equations: in the
+/// IVP Test Set's form of Andrews' squeezer, `0 = M(q) a − f + Gᵀλ` are
+/// seven constraints of top level 0 holding `a` and `λ`, and `a` appears at
+/// level 2 of `g(q) = 0`. `λ` is determined with `a`, by both, so in `ori2`
+/// it has index 3 like `a` (the Test Set's `andrews`: the 13 accelerations
+/// and multipliers of index 3), not 1.
+fn differentiations_to_determine(
+    model: &Model,
+    an: &Analysis,
+    levels: &[Vec<usize>],
+) -> Vec<usize> {
+    let chains = &an.chains;
+    let mut owner = vec![usize::MAX; model.vars.len()];
+    for (c, &v) in an.matching.iter().enumerate() {
+        if v < owner.len() {
+            owner[v] = c;
+        }
+    }
+    // Chain `c`'s top level waits for the chains whose unknowns it holds.
+    let needs: Vec<Vec<usize>> = chains
+        .iter()
+        .map(|chain| {
+            let top = &chain.levels[chain.top()];
+            (model.n_diff..model.vars.len())
+                .filter(|&v| owner[v] != usize::MAX && model.involves(top, Sym::Var(v as u32)))
+                .map(|v| owner[v])
+                .collect()
+        })
+        .collect();
+    let mut depth: Vec<usize> = chains
+        .iter()
+        .zip(levels)
+        .map(|(chain, ls)| {
+            chain
+                .top()
+                .saturating_sub(ls.iter().copied().max().unwrap_or(0))
+        })
+        .collect();
+    // Longest wait along the dependencies; every pass either raises a depth
+    // or ends, and depths are bounded by the largest, so this terminates.
+    loop {
+        let mut changed = false;
+        for c in 0..chains.len() {
+            let wait = needs[c].iter().map(|&d| depth[d]).max().unwrap_or(0);
+            if wait > depth[c] {
+                depth[c] = wait;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    (0..model.vars.len())
+        .map(|v| {
+            if owner[v] == usize::MAX {
+                0
+            } else {
+                depth[owner[v]]
+            }
+        })
+        .collect()
+}
+
 /// Build formulation `name` (must be applicable).
 pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, String> {
     applicable(model, an, name)?;
@@ -210,13 +284,14 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         })
         .collect();
 
+    let through = differentiations_to_determine(model, an, &levels);
     let mut vars: Vec<VarInfo> = model
         .vars
         .iter()
         .enumerate()
         .map(|(j, v)| {
             let s = Sym::Var(j as u32);
-            let index = an
+            let first_appearance = an
                 .chains
                 .iter()
                 .zip(&levels)
@@ -227,6 +302,7 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
                 })
                 .max()
                 .unwrap_or(0);
+            let index = first_appearance.max(through[j]);
             VarInfo {
                 name: v.name.clone(),
                 kind: v.kind,

@@ -156,6 +156,60 @@ fn structural_numbers_match_spec_table() {
     );
 }
 
+/// A multiplier that enters only through other algebraic equations is
+/// determined with the unknowns of those equations: the pendulum written as
+/// the IVP Test Set writes Andrews' squeezer, accelerations as algebraic
+/// unknowns and `m a = f − Gᵀλ` as constraints, has `λ` of index 3 in
+/// `ori2` like the accelerations (it has no chain of its own that reaches
+/// it), and 1 in `rcd0`. Andrews' squeezer itself: its 7
+/// accelerations and 6 multipliers are of index 3 in `ori2`, as in the Test
+/// Set.
+#[test]
+fn multipliers_behind_algebraic_accelerations_take_their_index() {
+    const ACCELERATIONS: &str = "
+        pub P {
+            parameters { m = 1.0, g = 9.81 }
+            differential { x, y, v, w }
+            algebraic { ax, ay, lambda }
+            equations {
+                der(x) = v;
+                der(y) = w;
+                der(v) = ax;
+                der(w) = ay;
+                0 = m * ax + 2 * x * lambda;
+                0 = m * ay + 2 * y * lambda + m * g;
+                0 = x^2 + y^2 - 1;
+            }
+            formulations { ori2, rcd0 }
+        }";
+    let d = derive(ACCELERATIONS);
+    let indices = |name: &str| -> Vec<u8> {
+        let f = d.formulation(name).unwrap();
+        f.vars.iter().map(|v| v.index).collect()
+    };
+    assert_eq!(indices("ori2"), [1, 1, 2, 2, 3, 3, 3]);
+    assert_eq!(indices("rcd0"), [1; 7]);
+    let andrews = derive(include_str!("../../scenes/andrews.dae"));
+    let ori2 = andrews.formulation("ori2").unwrap();
+    let index_of = |prefix: &str| -> Vec<u8> {
+        let vars = ori2.vars.iter().filter(|v| v.name.starts_with(prefix));
+        vars.map(|v| v.index).collect()
+    };
+    assert_eq!(index_of("lam"), [3; 6]);
+    assert_eq!(ori2.vars.iter().filter(|v| v.index == 3).count(), 13);
+    // The plain pendulum is unchanged: λ of index 3 from its own chain.
+    assert_eq!(
+        derive(PENDULUM)
+            .formulation("ori2")
+            .unwrap()
+            .vars
+            .iter()
+            .map(|v| v.index)
+            .collect::<Vec<_>>(),
+        [1, 1, 2, 2, 3]
+    );
+}
+
 #[test]
 fn double_pendulum_hidden_constraints_match_hand_derivation() {
     let d = derive(DOUBLE);
