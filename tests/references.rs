@@ -328,3 +328,29 @@ fn andrews_against_the_ivp_test_set() {
         "{files:?}"
     );
 }
+
+/// Andrews' squeezer in rcd0 at tolerances where the Newton increments of
+/// the Radau solvers stop at the arithmetic's floor, 0.03–0.34 of the
+/// tolerance at 1e-9 whatever the step (`core::newton`'s round-off floor):
+/// with the floor at 1e-2 radau5 failed at t = 0.011 (1e-9) and t = 5.6e-5
+/// (1e-10), odradau at 1e-10, all `newton_failure`. Both now reach t = 0.03
+/// with 9.57 significant digits, the arithmetic's limit here (10.1 at 1e-6).
+#[test]
+fn andrews_rcd0_at_the_newton_round_off_floor() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let scene = Scene::load(dir.join("andrews.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let inputs = inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
+    for solver in ["radau5", "odradau"] {
+        for tol in [1e-9, 1e-10] {
+            let spec = inputs.spec(&scene, solver, "rcd0", tol);
+            let record = runner::run(&spec).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(
+                record.status, "ok",
+                "{solver} at {tol:e}: {:?}",
+                record.error
+            );
+            let scd = record.scd.expect("scd");
+            assert!(scd > 9.0, "{solver} at {tol:e}: scd {scd}");
+        }
+    }
+}
