@@ -33,6 +33,14 @@
 //! grid (a Nordsieck-style rescaling) — the constant-step formulas then
 //! apply unchanged.
 //!
+//! **Restart from a stale value** (not in Cash's code): when the error test
+//! keeps rejecting order-one attempts and the estimate stops falling with
+//! the step, the estimate measures the last accepted value, whose algebraic
+//! unknowns miss their equations. The attempt is then accepted and the
+//! method starts afresh from it, at most once every 20 steps
+//! (`step::Integrator::restart`; on Andrews' squeezer in rcd0 at 1e-5 this
+//! turned `step_size_too_small` at t = 0.021 into a run to the end).
+//!
 //! **Error estimate and order selection** (see [`control`](self)): the local
 //! error of order `p` is `|C_p| ‖y_{n+1} − P_p(t_{n+1})‖` with the predictor
 //! of degree `p`, `≈ C_p h^(p+1) y^(p+1)`; the neighbouring orders are
