@@ -361,7 +361,8 @@ fn andrews_rcd0_at_the_newton_round_off_floor() {
 /// order-one error estimate then stayed at 2.48 for every step from 1e-6
 /// down to 3e-17 and the run stopped (`step_size_too_small` at t = 0.021).
 /// mebdf now restarts from its order-one attempt once the estimate stops
-/// falling with the step (`mebdf::step`, `restart`).
+/// falling with the step (`mebdf::step`, `restart`). And at 1e-9, where
+/// its Newton iteration meets the arithmetic's floor.
 #[test]
 fn mebdf_restarts_when_its_estimate_stops_falling_with_the_step() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
@@ -374,4 +375,13 @@ fn mebdf_restarts_when_its_estimate_stops_falling_with_the_step() {
     // at 1e-4, 1.4e-4 at 1e-6); measured 1.3e-3 (2.89 digits).
     let scd = record.scd.expect("scd");
     assert!(scd > 2.0, "scd {scd}");
+    // At 1e-9 the stage increments stagnate at 1e-4 … 1e-3 of the
+    // tolerance (round-off), which DASSL's rule took for divergence at every
+    // step size (`newton_failure`); mebdf's Newton floor takes it for
+    // convergence. Measured 6.52 digits.
+    let record =
+        runner::run(&inputs.spec(&scene, "mebdf", "rcd0", 1e-9)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(record.status, "ok", "1e-9: {:?}", record.error);
+    let scd = record.scd.expect("scd");
+    assert!(scd > 6.0, "1e-9: scd {scd}");
 }

@@ -22,7 +22,9 @@
 //!   `ROUND_OFF_FLOOR`), and no early exit below that floor, where slow
 //!   contraction may be noise;
 //! - DASSL: `θ_k = (‖Δ_k‖/‖Δ_1‖)^(1/(k−1))`, divergence at `θ > 0.9`, and
-//!   convergence as soon as `‖Δ_k‖ ≤ 100 ε ‖y‖`.
+//!   convergence as soon as `‖Δ_k‖ ≤ 100 ε ‖y‖`; a method may add a
+//!   round-off floor (`dassl_floor`, zero in DASSL and `bdf`): `θ > 0.9`
+//!   at an increment below it is convergence, not divergence.
 //!
 //! `η` persists from one iteration to the next (a method may carry it
 //! across steps, as both codes do).
@@ -110,6 +112,9 @@ pub(crate) struct Contraction {
     /// Increments of at most this norm that no longer contract are
     /// round-off ([`ROUND_OFF_FLOOR`] unless a method sets its own).
     pub(crate) floor: f64,
+    /// DASSL rule: increments of at most this norm that have stopped
+    /// contracting are round-off (0: never, DASSL's own rule).
+    pub(crate) dassl_floor: f64,
 }
 
 impl Contraction {
@@ -128,6 +133,7 @@ impl Contraction {
             theta_first: 0.0,
             eta,
             floor: ROUND_OFF_FLOOR,
+            dassl_floor: 0.0,
         }
     }
 
@@ -200,6 +206,9 @@ impl Contraction {
                     self.reference = norm;
                 } else {
                     self.theta = (norm / self.reference).powf(1.0 / (k - 1) as f64);
+                    if self.theta > 0.9 && norm <= self.dassl_floor {
+                        return Verdict::Converged;
+                    }
                     if self.theta > 0.9 {
                         return Verdict::Diverged;
                     }
@@ -249,6 +258,24 @@ mod tests {
         // Round-off: DASSL accepts a negligible first increment at once.
         let mut c = Contraction::new(Rule::Dassl, 4, 0.33, 100.0);
         assert_eq!(c.observe(1e-20, 1e-14), Verdict::Converged);
+    }
+
+    #[test]
+    fn dassl_rule_accepts_stagnation_below_its_floor_only_when_given_one() {
+        // DASSL's own rule (and bdf's): growth is divergence, however small.
+        let mut c = Contraction::new(Rule::Dassl, 5, 0.01, 100.0);
+        assert_eq!(c.observe(1e-3, 1e-9), Verdict::Continue);
+        assert_eq!(c.observe(2e-3, 1e-9), Verdict::Diverged);
+        // With a floor (mebdf): below it, round-off, converged; above it,
+        // still divergence.
+        let mut c = Contraction::new(Rule::Dassl, 5, 0.01, 100.0);
+        c.dassl_floor = 1e-2;
+        assert_eq!(c.observe(1e-3, 1e-9), Verdict::Continue);
+        assert_eq!(c.observe(2e-3, 1e-9), Verdict::Converged);
+        let mut c = Contraction::new(Rule::Dassl, 5, 0.01, 100.0);
+        c.dassl_floor = 1e-2;
+        assert_eq!(c.observe(0.3, 1e-9), Verdict::Continue);
+        assert_eq!(c.observe(0.6, 1e-9), Verdict::Diverged);
     }
 
     #[test]
