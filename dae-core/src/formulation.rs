@@ -248,14 +248,9 @@ fn differentiations_to_determine(
             break;
         }
     }
-    (0..model.vars.len())
-        .map(|v| {
-            if owner[v] == usize::MAX {
-                0
-            } else {
-                depth[owner[v]]
-            }
-        })
+    owner
+        .iter()
+        .map(|&c| if c == usize::MAX { 0 } else { depth[c] })
         .collect()
 }
 

@@ -22,9 +22,9 @@
 //!   `ROUND_OFF_FLOOR`), and no early exit below that floor, where slow
 //!   contraction may be noise;
 //! - DASSL: `θ_k = (‖Δ_k‖/‖Δ_1‖)^(1/(k−1))`, divergence at `θ > 0.9`, and
-//!   convergence as soon as `‖Δ_k‖ ≤ 100 ε ‖y‖`; a method may add a
-//!   round-off floor (`dassl_floor`, zero in DASSL and `bdf`): `θ > 0.9`
-//!   at an increment below it is convergence, not divergence.
+//!   convergence as soon as `‖Δ_k‖ ≤ 100 ε ‖y‖`; a method may give it a
+//!   round-off floor (`floor`, zero in DASSL and `bdf`): `θ > 0.9` at an
+//!   increment below it is convergence, not divergence.
 //!
 //! `η` persists from one iteration to the next (a method may carry it
 //! across steps, as both codes do).
@@ -110,11 +110,9 @@ pub(crate) struct Contraction {
     /// `η = θ/(1 − θ)`, carried between iterations.
     pub(crate) eta: f64,
     /// Increments of at most this norm that no longer contract are
-    /// round-off ([`ROUND_OFF_FLOOR`] unless a method sets its own).
+    /// round-off: [`ROUND_OFF_FLOOR`] for the RADAU5 rule, 0 (never, DASSL's
+    /// own rule) for the DASSL rule, unless a method sets its own.
     pub(crate) floor: f64,
-    /// DASSL rule: increments of at most this norm that have stopped
-    /// contracting are round-off (0: never, DASSL's own rule).
-    pub(crate) dassl_floor: f64,
 }
 
 impl Contraction {
@@ -132,8 +130,10 @@ impl Contraction {
             theta: 0.0,
             theta_first: 0.0,
             eta,
-            floor: ROUND_OFF_FLOOR,
-            dassl_floor: 0.0,
+            floor: match rule {
+                Rule::Radau5 { .. } => ROUND_OFF_FLOOR,
+                Rule::Dassl => 0.0,
+            },
         }
     }
 
@@ -206,11 +206,12 @@ impl Contraction {
                     self.reference = norm;
                 } else {
                     self.theta = (norm / self.reference).powf(1.0 / (k - 1) as f64);
-                    if self.theta > 0.9 && norm <= self.dassl_floor {
-                        return Verdict::Converged;
-                    }
                     if self.theta > 0.9 {
-                        return Verdict::Diverged;
+                        return if norm <= self.floor {
+                            Verdict::Converged
+                        } else {
+                            Verdict::Diverged
+                        };
                     }
                     self.eta = self.theta / (1.0 - self.theta);
                 }
@@ -269,11 +270,11 @@ mod tests {
         // With a floor (mebdf): below it, round-off, converged; above it,
         // still divergence.
         let mut c = Contraction::new(Rule::Dassl, 5, 0.01, 100.0);
-        c.dassl_floor = 1e-2;
+        c.floor = 1e-2;
         assert_eq!(c.observe(1e-3, 1e-9), Verdict::Continue);
         assert_eq!(c.observe(2e-3, 1e-9), Verdict::Converged);
         let mut c = Contraction::new(Rule::Dassl, 5, 0.01, 100.0);
-        c.dassl_floor = 1e-2;
+        c.floor = 1e-2;
         assert_eq!(c.observe(0.3, 1e-9), Verdict::Continue);
         assert_eq!(c.observe(0.6, 1e-9), Verdict::Diverged);
     }

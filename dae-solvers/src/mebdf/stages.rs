@@ -228,7 +228,7 @@ impl Integrator<'_> {
             MAX_ITER
         };
         let mut monitor = Contraction::new(Rule::Dassl, maxit, KAPPA, self.eta.max(ETA_MIN));
-        monitor.dassl_floor = ROUND_OFF_FLOOR;
+        monitor.floor = ROUND_OFF_FLOOR;
         loop {
             self.lu.solve(&mut self.delta);
             self.stats.newton_iterations += 1;
