@@ -17,10 +17,13 @@
 use crate::models::{self, ModelError};
 use crate::reference::data::{Reference, UseError};
 use crate::reference::{PendulumExact, ReferenceError};
-use crate::runner::RunSpec;
-use crate::scene::{Location, ReferenceSpec, Scene, SceneError};
+use crate::runner::{Named, RunSpec, RunTolerances};
+use crate::scene::{Location, ReferenceSpec, Scene, SceneError, TolSpec};
 use dae_core::system::{Model, ParameterError};
+use dae_solvers::core::policy::preferred_formulations;
 use dae_solvers::init::InitMode;
+use dae_solvers::Solver;
+use serde::Serialize;
 
 /// What every run of a scene shares.
 pub struct Inputs {
@@ -68,12 +71,181 @@ impl Inputs {
             solver,
             formulation,
             tol,
+            tolerances: None,
+            record_steps: false,
             init_mode: InitMode::Project,
             samples: &[],
             repeats: 1,
             max_steps: None,
         }
     }
+}
+
+/// The tolerance of `dae run` when neither the command line nor the scene
+/// gives one: `RTOL = ATOL = 1e-8`.
+pub const DEFAULT_TOL: f64 = 1e-8;
+
+/// The tolerances of `dae run` on `scene` with the command line's `rtol`
+/// and `atol` (`--tol T` gives both). For each unknown and each kind the
+/// value is, first found: the scene's per-unknown entry (`[tolerance] atol
+/// = { lambda = 1e-6 }`), the command line, the scene's number, then
+/// [`DEFAULT_TOL`]. A per-unknown entry is the most specific statement, so
+/// it stays when the command line changes the others.
+///
+/// ```
+/// use dae::inputs::run_tolerances;
+/// use dae::scene::Scene;
+///
+/// let text = "name = \"t\"\nmodel = \"pendulum\"\n[initial]\nx = 1\n[time]\nend = 1\n\
+///             [tolerance]\nrtol = 1e-6\natol = { lambda = 1e-4 }\n";
+/// let scene = Scene::parse(text, "t.toml", None).unwrap();
+/// let t = run_tolerances(&scene, None, None);
+/// assert_eq!((t.rtol, t.atol, t.atol_for("lambda")), (1e-6, 1e-8, 1e-4));
+/// let t = run_tolerances(&scene, Some(1e-9), Some(1e-12));
+/// assert_eq!((t.rtol, t.atol, t.atol_for("lambda")), (1e-9, 1e-12, 1e-4));
+/// ```
+pub fn run_tolerances(scene: &Scene, rtol: Option<f64>, atol: Option<f64>) -> RunTolerances {
+    let resolve = |flag: Option<f64>, spec: &Option<TolSpec>| {
+        let (uniform, named) = match spec {
+            Some(TolSpec::Uniform(v)) => (Some(*v), Named::default()),
+            Some(TolSpec::PerUnknown(list)) => (
+                None,
+                Named(list.iter().map(|e| (e.name.clone(), e.value)).collect()),
+            ),
+            None => (None, Named::default()),
+        };
+        (flag.or(uniform).unwrap_or(DEFAULT_TOL), named)
+    };
+    let (rtol, rtol_of) = resolve(rtol, &scene.tolerance.rtol);
+    let (atol, atol_of) = resolve(atol, &scene.tolerance.atol);
+    RunTolerances {
+        rtol,
+        atol,
+        rtol_of,
+        atol_of,
+    }
+}
+
+/// How `dae run` came to integrate the formulation it did (the `dae run`
+/// JSON's `formulation_choice`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "by", rename_all = "snake_case")]
+pub enum FormulationChoice {
+    /// Named with `--formulation`.
+    Flag,
+    /// The first of the solver's preferred formulations
+    /// ([`preferred_formulations`]) that the scene lists, the model
+    /// provides and the solver accepts.
+    Policy {
+        /// The solver's order, best first.
+        preference: Vec<&'static str>,
+        /// The better ones passed over, and why.
+        skipped: Vec<Skipped>,
+    },
+    /// None of the preferred ones would do: the scene's first formulation
+    /// (in its `[sweep] formulations` order) that the model provides and
+    /// the solver accepts.
+    Scene {
+        /// The preferred ones passed over, and why.
+        skipped: Vec<Skipped>,
+    },
+}
+
+/// A formulation passed over by the default choice.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Skipped {
+    /// Its name.
+    pub formulation: String,
+    /// Why: not in the scene's list, not provided by the model, or refused
+    /// by the solver.
+    pub why: String,
+}
+
+/// No formulation of the scene can be integrated by the solver.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "no formulation of the scene can be integrated by `{solver}`: {}",
+    skipped.iter().map(|s| format!("{} ({})", s.formulation, s.why)).collect::<Vec<_>>().join("; ")
+)]
+pub struct NoFormulation {
+    /// The solver.
+    pub solver: String,
+    /// Every formulation tried, and why it would not do.
+    pub skipped: Vec<Skipped>,
+}
+
+/// The formulation `dae run` integrates with `solver` when none is named:
+/// the first of the solver's [`preferred_formulations`] that the scene's
+/// `[sweep] formulations` list (every formulation unless the scene
+/// restricts them), the model provides and the solver accepts; failing
+/// that, the first in the scene's order that the model provides and the
+/// solver accepts. The order is decided, with the measurements behind it,
+/// in [`preferred_formulations`].
+///
+/// ```
+/// use dae::inputs::{choose_formulation, inputs, FormulationChoice};
+/// use dae::scene::Scene;
+///
+/// let scene = Scene::builtin("s01").unwrap();
+/// let inputs = inputs(&scene).unwrap();
+/// let radau5 = dae::dae_solvers::solver_by_name("radau5").unwrap();
+/// let (name, why) = choose_formulation(&*inputs.model, &scene, &*radau5).unwrap();
+/// assert_eq!(name, "ggl1");
+/// assert!(matches!(why, FormulationChoice::Policy { .. }));
+/// ```
+pub fn choose_formulation(
+    model: &dyn Model,
+    scene: &Scene,
+    solver: &dyn Solver,
+) -> Result<(String, FormulationChoice), NoFormulation> {
+    let preference: Vec<&'static str> = preferred_formulations(solver.name())
+        .unwrap_or_default()
+        .to_vec();
+    let mut skipped = Vec::new();
+    let usable = |f: &str| -> Result<(), String> {
+        let sys = model.formulation(f).map_err(|e| e.to_string())?;
+        solver.accepts(sys.info()).map_err(|e| e.to_string())
+    };
+    for f in &preference {
+        if !scene.sweep.formulations.iter().any(|s| s == f) {
+            skipped.push(Skipped {
+                formulation: f.to_string(),
+                why: "not in the scene's [sweep] formulations".into(),
+            });
+            continue;
+        }
+        match usable(f) {
+            Ok(()) => {
+                return Ok((
+                    f.to_string(),
+                    FormulationChoice::Policy {
+                        preference,
+                        skipped,
+                    },
+                ))
+            }
+            Err(why) => skipped.push(Skipped {
+                formulation: f.to_string(),
+                why,
+            }),
+        }
+    }
+    for f in &scene.sweep.formulations {
+        if preference.contains(&f.as_str()) {
+            continue;
+        }
+        match usable(f) {
+            Ok(()) => return Ok((f.clone(), FormulationChoice::Scene { skipped })),
+            Err(why) => skipped.push(Skipped {
+                formulation: f.clone(),
+                why,
+            }),
+        }
+    }
+    Err(NoFormulation {
+        solver: solver.name().to_string(),
+        skipped,
+    })
 }
 
 /// Why a scene's inputs could not be built.

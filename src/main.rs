@@ -47,7 +47,11 @@ fn main() {
         Some(Command::Derive { model, format }) => cli::derive::run(&model, format),
         Some(Command::Run(args)) => match cli::run::run(&args) {
             Ok((out, code)) => {
-                print!("{out}");
+                // A closed stdout (`dae run | head -1`) is not a failure
+                // of the run: the exit code stays the run's.
+                let mut stdout = std::io::stdout().lock();
+                let _ = stdout.write_all(out.as_bytes());
+                let _ = stdout.flush();
                 std::process::exit(code);
             }
             Err(f) => Err(f),

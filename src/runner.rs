@@ -7,7 +7,8 @@ use crate::reference::data::{Reference, Scaling, UseError};
 use dae_core::selector::SelectorKind;
 use dae_core::system::{DaeSystem, Model, VarKind};
 use dae_solvers::init::{self, InitMode, InitOptions};
-use dae_solvers::{Options, Problem, SolveError, Stats};
+use dae_solvers::options::{check_relative, Tol, ToleranceIssue};
+use dae_solvers::{Options, Problem, SolveError, Stats, Tolerances};
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 use std::time::Instant;
@@ -36,8 +37,14 @@ pub struct RunSpec<'a> {
     pub formulation: &'a str,
     /// Tolerance (`RTOL = ATOL`), in `[100 ε, 1)`
     /// ([`dae_solvers::options::check_uniform`]; [`RunError::Tolerance`]
-    /// otherwise).
+    /// otherwise). Not used when [`RunSpec::tolerances`] is given.
     pub tol: f64,
+    /// Separate and per-unknown tolerances (`dae run --rtol/--atol`, a
+    /// scene's `[tolerance]`), instead of the uniform [`RunSpec::tol`].
+    pub tolerances: Option<&'a RunTolerances>,
+    /// Keep every accepted step in [`Trajectory::steps`] (`dae run
+    /// --trajectory`).
+    pub record_steps: bool,
     /// Project inconsistent initial values (default) or refuse them.
     pub init_mode: InitMode,
     /// Extra output times for figures (solution sampled there too).
@@ -251,11 +258,186 @@ pub const ACCURATE_FACTOR: f64 = 100.0;
 /// [`Accuracy`]).
 pub const SUSPECT_FACTOR: f64 = 1e4;
 
-/// What initialisation changed, in short.
+/// What initialisation changed, in short: initial values the scene did not
+/// give, and given values moved onto the constraints. Present in a record
+/// only when there is something to say.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct InitSummary {
-    /// Differential values moved onto the constraints.
+    /// Differential values moved onto the constraints: the values after
+    /// the projection, by name.
     pub projected: Named,
+    /// The same moves with the value given: `from` → `to`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub changes: Vec<InitChange>,
+    /// Differential unknowns given no initial value: started from 0 (then
+    /// projected, if 0 was inconsistent).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub defaulted: Vec<String>,
+}
+
+/// One initial value moved by the projection.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InitChange {
+    /// The unknown.
+    pub name: String,
+    /// Its value before the projection (given, or 0 if not given).
+    pub from: f64,
+    /// Its value after.
+    pub to: f64,
+}
+
+/// The tolerances of one run by unknown name: a value of each kind for
+/// every unknown, and per-unknown values that replace it for the unknowns
+/// they name (`dae run --rtol/--atol`, a scene's `[tolerance]`). The error
+/// weight of unknown `i` is `1 / (atol_i + rtol_i |y_i|)`
+/// ([`dae_solvers::Tolerances`]); unknowns a formulation adds (GGL's
+/// multipliers) take the uniform values.
+///
+/// ```
+/// use dae::runner::{Named, RunTolerances};
+///
+/// let tol = RunTolerances {
+///     atol_of: Named(vec![("lambda".into(), 1e-6)]),
+///     ..RunTolerances::uniform(1e-8)
+/// };
+/// assert!(!tol.is_uniform() && tol.check().is_ok());
+/// assert_eq!(tol.atol_for("lambda"), 1e-6);
+/// assert_eq!(tol.atol_for("x"), 1e-8);
+/// assert!(RunTolerances { rtol: 2.0, ..RunTolerances::uniform(1e-8) }.check().is_err());
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunTolerances {
+    /// Relative tolerance of every unknown not in `rtol_of`: `0` or in
+    /// `[100 ε, 1)` ([`dae_solvers::options::check_relative`]).
+    pub rtol: f64,
+    /// Absolute tolerance of every unknown not in `atol_of`: finite, `≥ 0`.
+    pub atol: f64,
+    /// Relative tolerances by unknown name.
+    pub rtol_of: Named,
+    /// Absolute tolerances by unknown name.
+    pub atol_of: Named,
+}
+
+impl RunTolerances {
+    /// `RTOL = ATOL = tol` for every unknown.
+    pub fn uniform(tol: f64) -> Self {
+        RunTolerances {
+            rtol: tol,
+            atol: tol,
+            rtol_of: Named::default(),
+            atol_of: Named::default(),
+        }
+    }
+
+    /// Whether every unknown has `RTOL = ATOL` = the same value.
+    pub fn is_uniform(&self) -> bool {
+        self.rtol == self.atol && self.rtol_of.0.is_empty() && self.atol_of.0.is_empty()
+    }
+
+    /// Relative tolerance of unknown `name`.
+    pub fn rtol_for(&self, name: &str) -> f64 {
+        self.rtol_of.get(name).unwrap_or(self.rtol)
+    }
+
+    /// Absolute tolerance of unknown `name`.
+    pub fn atol_for(&self, name: &str) -> f64 {
+        self.atol_of.get(name).unwrap_or(self.atol)
+    }
+
+    /// Every value by the library's rule ([`dae_solvers::Options`]): a
+    /// relative tolerance `0` or in `[100 ε, 1)`, an absolute one finite
+    /// and not negative; and the uniform pair not both 0.
+    pub fn check(&self) -> Result<(), RunError> {
+        let bad = |kind: &'static str, unknown: Option<&str>, value: f64, issue| {
+            RunError::ToleranceValue {
+                kind,
+                unknown: unknown.map(str::to_string),
+                value,
+                issue,
+            }
+        };
+        let absolute = |v: f64| {
+            if !v.is_finite() {
+                Err(ToleranceIssue::NotFinite)
+            } else if v < 0.0 {
+                Err(ToleranceIssue::Negative)
+            } else {
+                Ok(())
+            }
+        };
+        check_relative(self.rtol).map_err(|i| bad("rtol", None, self.rtol, i))?;
+        absolute(self.atol).map_err(|i| bad("atol", None, self.atol, i))?;
+        for (name, v) in &self.rtol_of.0 {
+            check_relative(*v).map_err(|i| bad("rtol", Some(name), *v, i))?;
+        }
+        for (name, v) in &self.atol_of.0 {
+            absolute(*v).map_err(|i| bad("atol", Some(name), *v, i))?;
+        }
+        if self.rtol == 0.0 && self.atol == 0.0 {
+            return Err(bad("atol", None, 0.0, ToleranceIssue::Zero));
+        }
+        Ok(())
+    }
+
+    /// The library's per-component tolerances for a formulation's
+    /// unknowns; a name the formulation lacks is
+    /// [`RunError::UnknownVariable`], an unknown left with `rtol = atol =
+    /// 0` is [`RunError::ToleranceValue`].
+    pub fn for_system(
+        &self,
+        info: &dae_core::system::FormulationInfo,
+    ) -> Result<Tolerances, RunError> {
+        for (name, _) in self.rtol_of.0.iter().chain(&self.atol_of.0) {
+            if info.variable(name).is_none() {
+                return Err(RunError::UnknownVariable(name.clone()));
+            }
+        }
+        let rtol: Vec<f64> = info
+            .variables
+            .iter()
+            .map(|v| self.rtol_for(&v.name))
+            .collect();
+        let atol: Vec<f64> = info
+            .variables
+            .iter()
+            .map(|v| self.atol_for(&v.name))
+            .collect();
+        if let Some((v, _)) = info
+            .variables
+            .iter()
+            .zip(rtol.iter().zip(&atol))
+            .find(|(_, (r, a))| **r + **a <= 0.0)
+        {
+            return Err(RunError::ToleranceValue {
+                kind: "atol",
+                unknown: Some(v.name.clone()),
+                value: 0.0,
+                issue: ToleranceIssue::Zero,
+            });
+        }
+        Ok(Tolerances {
+            rtol: Tol::PerComponent(rtol),
+            atol: Tol::PerComponent(atol),
+        })
+    }
+
+    /// The tolerance the accuracy verdict holds a run to ([`Accuracy`]):
+    /// the loosest of the relative and absolute tolerances of the
+    /// differential unknowns (what [`RunRecord::err`] measures) — with
+    /// `RTOL = ATOL = tol`, `tol`.
+    pub fn verdict_tol(&self, info: &dae_core::system::FormulationInfo) -> f64 {
+        let loosest = info
+            .variables
+            .iter()
+            .filter(|v| v.kind == VarKind::Differential)
+            .map(|v| self.rtol_for(&v.name).max(self.atol_for(&v.name)))
+            .fold(0.0f64, f64::max);
+        if loosest > 0.0 {
+            loosest
+        } else {
+            self.rtol.max(self.atol)
+        }
+    }
 }
 
 /// Sampled solution with errors, residuals and drift per sample.
@@ -276,6 +458,9 @@ pub struct Trajectory {
     pub residuals: Vec<Vec<f64>>,
     /// Drift of the first invariant at each sample.
     pub drift: Vec<f64>,
+    /// Every accepted step `(t, y)`, from the consistent start at `t0`,
+    /// when [`RunSpec::record_steps`] asks for them (empty otherwise).
+    pub steps: Vec<(f64, Vec<f64>)>,
 }
 
 /// Why a run could not even start (bad input): exit code 2.
@@ -308,9 +493,26 @@ pub enum RunError {
         /// Reason.
         why: String,
     },
-    /// An `[initial]` name that is not an unknown.
-    #[error("`{0}` in [initial] is not an unknown of the model")]
+    /// An `[initial]` or per-unknown tolerance name that is not an
+    /// unknown.
+    #[error("`{0}` is not an unknown of the model")]
     UnknownVariable(String),
+    /// A separate or per-unknown tolerance outside the library's rule
+    /// ([`RunTolerances::check`]).
+    #[error(
+        "{kind}{} = {value:e} {issue}",
+        unknown.as_ref().map_or_else(String::new, |u| format!(" of `{u}`"))
+    )]
+    ToleranceValue {
+        /// `rtol` or `atol`.
+        kind: &'static str,
+        /// The unknown it is given for (`None`: every unknown).
+        unknown: Option<String>,
+        /// The value.
+        value: f64,
+        /// What is wrong with it.
+        issue: ToleranceIssue,
+    },
     /// A reference that cannot serve this run.
     #[error("reference: {0}")]
     Reference(#[from] UseError),
@@ -343,10 +545,15 @@ pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
 fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> {
     let solver = dae_solvers::solver_by_name(spec.solver)
         .ok_or_else(|| RunError::UnknownSolver(spec.solver.into()))?;
-    dae_solvers::options::check_uniform(spec.tol).map_err(|issue| RunError::Tolerance {
-        tol: spec.tol,
-        issue,
-    })?;
+    match spec.tolerances {
+        Some(t) => t.check()?,
+        None => {
+            dae_solvers::options::check_uniform(spec.tol).map_err(|issue| RunError::Tolerance {
+                tol: spec.tol,
+                issue,
+            })?
+        }
+    }
     if let Some(r) = spec.reference {
         let info = spec.model.model_info();
         let unknowns: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
@@ -362,6 +569,10 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
             formulation: spec.formulation.into(),
             why: why.to_string(),
         })?;
+    let (tolerances, tol) = match spec.tolerances {
+        Some(t) => (t.for_system(&info)?, t.verdict_tol(&info)),
+        None => (Tolerances::uniform(spec.tol), spec.tol),
+    };
     let n = info.unknowns();
     let mut y0 = vec![0.0; n];
     for (name, v) in spec.initial {
@@ -370,11 +581,21 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
             .ok_or_else(|| RunError::UnknownVariable(name.clone()))?;
         y0[i] = *v;
     }
+    // Differential unknowns of the model the scene gives no value: 0.
+    let defaulted: Vec<String> = spec
+        .model
+        .model_info()
+        .variables
+        .iter()
+        .filter(|v| v.kind == VarKind::Differential)
+        .filter(|v| !spec.initial.iter().any(|(name, _)| *name == v.name))
+        .map(|v| v.name.clone())
+        .collect();
     let mut record = RunRecord {
         scene: spec.scene.to_string(),
         solver: spec.solver.to_string(),
         formulation: spec.formulation.to_string(),
-        tol: spec.tol,
+        tol,
         status: "ok",
         error: None,
         t_end: spec.t0,
@@ -412,16 +633,23 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         Ok(c) => c,
         Err(e) => return Ok(fail(record, e)),
     };
-    if consistent.report.projected {
+    let changes = if consistent.report.projected {
+        consistent.report.changes.as_slice()
+    } else {
+        &[]
+    };
+    if !changes.is_empty() || !defaulted.is_empty() {
         record.init = Some(InitSummary {
-            projected: Named(
-                consistent
-                    .report
-                    .changes
-                    .iter()
-                    .map(|c| (c.name.clone(), c.after))
-                    .collect(),
-            ),
+            projected: Named(changes.iter().map(|c| (c.name.clone(), c.after)).collect()),
+            changes: changes
+                .iter()
+                .map(|c| InitChange {
+                    name: c.name.clone(),
+                    from: c.before,
+                    to: c.after,
+                })
+                .collect(),
+            defaulted,
         });
     }
     let y0 = consistent.y;
@@ -435,10 +663,12 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         .collect();
     output_times.sort_by(f64::total_cmp);
     output_times.dedup();
-    let defaults = Options::with_tol(spec.tol);
+    let defaults = Options::default();
     let options = Options {
+        tol: tolerances,
         output_times,
         max_steps: spec.max_steps.unwrap_or(defaults.max_steps),
+        record_steps: spec.record_steps,
         ..defaults
     };
     let problem = Problem {
@@ -482,7 +712,16 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
                 .collect(),
         );
     }
+    if spec.record_steps {
+        let first = sol.steps.first().map(|(t, _)| *t);
+        if !matches!(first, Some(t) if t <= spec.t0) {
+            record.trajectory.steps.push((spec.t0, y0.clone()));
+        }
+    }
     measure(spec, &*sys, &y0, &sol, &mut record);
+    if spec.record_steps {
+        record.trajectory.steps.extend(sol.steps);
+    }
     Ok(record)
 }
 
@@ -732,7 +971,7 @@ fn verdict(
     worst_t: f64,
     inv_scale: &[f64],
 ) -> (Accuracy, String) {
-    let tol = spec.tol;
+    let tol = record.tol;
     if spec.reference.is_some() {
         let bound = ACCURATE_FACTOR * tol;
         // NaN compares false: a NaN error is not accurate.

@@ -23,7 +23,22 @@
 //! formulations = ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0"]
 //! tolerances = [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
 //! max_steps = 2000000         # optional: steps (accepted + rejected) per run
+//! [tolerance]                 # optional, `dae run` only (the sweep takes its list)
+//! rtol = 1e-8                 # every unknown; default 1e-8
+//! atol = { x = 1e-10, lambda = 1e-6 }   # or per unknown (the others: 1e-8)
 //! ```
+//!
+//! # Tolerances of `dae run`
+//!
+//! `[tolerance]` gives `rtol` and `atol`, each one number for every unknown
+//! or a table `{ name = value, … }` by unknown name. For each unknown and
+//! each kind the value is, first found: its entry in the scene's table,
+//! the command line's `--rtol`/`--atol` (`--tol T` is both), the scene's
+//! number, `1e-8`. Relative tolerances are `0` or in `[100 ε, 1)`,
+//! absolute ones finite and not negative; a name that is not an unknown of
+//! the model is an error with its line (and a suggestion when one is close).
+//! `dae sweep` ignores the section: it sweeps `[sweep] tolerances`, each
+//! `RTOL = ATOL`.
 //!
 //! Everything that can be checked without the model is checked when the
 //! scene is parsed, and every problem is a [`SceneError`] that names the
@@ -109,6 +124,69 @@ pub const MAX_REFERENCE_BYTES: u64 = 256 << 20;
 
 /// Closed forms a reference of kind `exact` may name.
 pub const CLOSED_FORMS: [&str; 1] = ["pendulum"];
+
+/// The known name closest to `given`, if one is close enough to be a typo:
+/// at most one edit (insertion, deletion, substitution, or transposition
+/// of neighbours) for names of up to four characters, two for longer ones,
+/// never as many as half of `given`. Ties go to the first in `known`.
+/// Case is ignored.
+///
+/// ```
+/// use dae::scene::did_you_mean;
+///
+/// let solvers = ["radau5", "bdf", "odradau", "gauss"];
+/// assert_eq!(did_you_mean("radua5", &solvers), Some("radau5"));
+/// assert_eq!(did_you_mean("BDF", &solvers), Some("bdf"));
+/// assert_eq!(did_you_mean("euler", &solvers), None);
+/// assert_eq!(did_you_mean("ggl", &["ggl1", "rcd1"]), Some("ggl1"));
+/// ```
+pub fn did_you_mean<'a>(given: &str, known: &[&'a str]) -> Option<&'a str> {
+    let given = given.to_lowercase();
+    let len = given.chars().count();
+    let limit = if len <= 4 { 1 } else { 2 };
+    let mut best: Option<(usize, &'a str)> = None;
+    for &k in known {
+        let d = edit_distance(&given, &k.to_lowercase());
+        if d <= limit && 2 * d < len.max(2) && !matches!(best, Some((b, _)) if b <= d) {
+            best = Some((d, k));
+        }
+    }
+    best.map(|(_, k)| k)
+}
+
+/// Optimal-string-alignment distance: Levenshtein's insertions, deletions
+/// and substitutions, and transpositions of neighbouring characters, each
+/// costing one.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    // Three rows of the dynamic programme: i-2, i-1, i.
+    let mut before: Vec<usize> = vec![0; b.len() + 1];
+    let mut previous: Vec<usize> = (0..=b.len()).collect();
+    let mut current = vec![0; b.len() + 1];
+    for i in 1..=a.len() {
+        current[0] = i;
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut d = (previous[j] + 1)
+                .min(current[j - 1] + 1)
+                .min(previous[j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                d = d.min(before[j - 2] + 1);
+            }
+            current[j] = d;
+        }
+        std::mem::swap(&mut before, &mut previous);
+        std::mem::swap(&mut previous, &mut current);
+    }
+    previous[b.len()]
+}
+
+/// `; did you mean `NAME`?` for an error message, or nothing.
+fn hint<S: AsRef<str>>(name: &str, known: &[S]) -> String {
+    let known: Vec<&str> = known.iter().map(AsRef::as_ref).collect();
+    did_you_mean(name, &known).map_or_else(String::new, |s| format!("; did you mean `{s}`?"))
+}
 
 /// A place in a scene: the file (or `<built-in NAME>`, or the origin given to
 /// [`Scene::parse`]) and a 1-based line and column (in characters).
@@ -308,7 +386,11 @@ pub enum SceneError {
         kind: String,
     },
     /// A solver not in [`KNOWN_SOLVERS`].
-    #[error("{at}: `sweep.solvers`: unknown solver \"{name}\" (known: {})", KNOWN_SOLVERS.join(", "))]
+    #[error(
+        "{at}: `sweep.solvers`: unknown solver \"{name}\"{} (known: {})",
+        hint(name, KNOWN_SOLVERS),
+        KNOWN_SOLVERS.join(", ")
+    )]
     UnknownSolver {
         /// Where.
         at: Location,
@@ -317,7 +399,8 @@ pub enum SceneError {
     },
     /// A formulation not in [`KNOWN_FORMULATIONS`].
     #[error(
-        "{at}: `sweep.formulations`: unknown formulation \"{name}\" (known: {})",
+        "{at}: `sweep.formulations`: unknown formulation \"{name}\"{} (known: {})",
+        hint(name, KNOWN_FORMULATIONS),
         KNOWN_FORMULATIONS.join(", ")
     )]
     UnknownFormulation {
@@ -364,18 +447,29 @@ pub enum SceneError {
         /// The resolved path.
         path: PathBuf,
     },
-    /// An `[initial]` entry the model does not have.
-    #[error("{at}: `initial.{name}`: the model has no variable `{name}` (variables: {})", known.join(", "))]
+    /// An `[initial]` or per-unknown `[tolerance]` entry the model does
+    /// not have.
+    #[error(
+        "{at}: `{section}.{name}`: the model has no variable `{name}`{} (variables: {})",
+        hint(name, known),
+        known.join(", ")
+    )]
     UnknownVariable {
         /// Where.
         at: Location,
+        /// `initial`, `tolerance.rtol` or `tolerance.atol`.
+        section: &'static str,
         /// The name given.
         name: String,
         /// The model's variables.
         known: Vec<String>,
     },
     /// A `[parameters]` entry the model does not have.
-    #[error("{at}: `parameters.{name}`: the model has no parameter `{name}` (parameters: {})", known.join(", "))]
+    #[error(
+        "{at}: `parameters.{name}`: the model has no parameter `{name}`{} (parameters: {})",
+        hint(name, known),
+        known.join(", ")
+    )]
     UnknownParameter {
         /// Where.
         at: Location,
@@ -384,6 +478,48 @@ pub enum SceneError {
         /// The model's parameters.
         known: Vec<String>,
     },
+    /// A `[tolerance]` value outside the library's rule: a relative
+    /// tolerance `0` or in `[100 ε, 1)`, an absolute one finite and not
+    /// negative.
+    #[error("{at}: `{field}` = {value:e} {issue}")]
+    InvalidToleranceValue {
+        /// Where.
+        at: Location,
+        /// `tolerance.rtol`, `tolerance.atol.x`, …
+        field: String,
+        /// The value.
+        value: f64,
+        /// What is wrong with it.
+        issue: dae_solvers::options::ToleranceIssue,
+    },
+}
+
+impl SceneError {
+    /// For a name that is not known (a solver, formulation, variable or
+    /// parameter), the known name closest to it ([`did_you_mean`]), which
+    /// the message suggests.
+    ///
+    /// ```
+    /// use dae::scene::Scene;
+    ///
+    /// let text = "name = \"t\"\nmodel = \"pendulum\"\n[initial]\nx = 1\n[time]\nend = 1\n\
+    ///             [sweep]\nsolvers = [\"radua5\"]\n";
+    /// let err = Scene::parse(text, "t.toml", None).unwrap_err();
+    /// assert_eq!(err.suggestion().as_deref(), Some("radau5"));
+    /// assert!(err.to_string().contains("did you mean `radau5`?"));
+    /// ```
+    pub fn suggestion(&self) -> Option<String> {
+        let (name, known): (&str, Vec<&str>) = match self {
+            SceneError::UnknownSolver { name, .. } => (name, KNOWN_SOLVERS.to_vec()),
+            SceneError::UnknownFormulation { name, .. } => (name, KNOWN_FORMULATIONS.to_vec()),
+            SceneError::UnknownVariable { name, known, .. }
+            | SceneError::UnknownParameter { name, known, .. } => {
+                (name, known.iter().map(String::as_str).collect())
+            }
+            _ => return None,
+        };
+        did_you_mean(name, &known).map(str::to_string)
+    }
 }
 
 /// Which model a scene integrates.
@@ -502,6 +638,28 @@ impl Default for Sweep {
     }
 }
 
+/// One kind of tolerance in a scene's `[tolerance]`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum TolSpec {
+    /// One value for every unknown.
+    Uniform(f64),
+    /// Values by unknown name (with their places); the unknowns not named
+    /// take the command line's or the default value.
+    PerUnknown(Vec<NamedValue>),
+}
+
+/// A scene's `[tolerance]`: what `dae run` integrates with (see the
+/// [module documentation](self#tolerances-of-dae-run)). Both `None` when
+/// the scene has no such section.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ToleranceSpec {
+    /// Relative tolerance.
+    pub rtol: Option<TolSpec>,
+    /// Absolute tolerance.
+    pub atol: Option<TolSpec>,
+}
+
 /// A parsed and validated scene.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Scene {
@@ -522,6 +680,9 @@ pub struct Scene {
     pub reference: ReferenceSpec,
     /// Sweep grid.
     pub sweep: Sweep,
+    /// Tolerances of `dae run` (`[tolerance]`; the sweep uses
+    /// [`Sweep::tolerances`]).
+    pub tolerance: ToleranceSpec,
     /// Where `model`, `time`, `time.start`, `time.end` and `reference.kind`
     /// are in the text, for problems found after parsing ([`Scene::locate`]).
     /// Entries are `(field, line, column)`; the file is [`Scene::origin`].
@@ -665,9 +826,10 @@ impl Scene {
             .map(|p| p.value)
     }
 
-    /// Check the names in `[initial]` against the model's `variables` and
-    /// those in `[parameters]` against its `parameters`; the first unknown
-    /// one is reported with its line.
+    /// Check the names in `[initial]` and in `[tolerance]`'s per-unknown
+    /// tables against the model's `variables` and those in `[parameters]`
+    /// against its `parameters`; the first unknown one is reported with
+    /// its line and, when a known name is close, a suggestion.
     ///
     /// ```
     /// let s = dae::scene::Scene::builtin("s01").unwrap();
@@ -686,13 +848,27 @@ impl Scene {
                 });
             }
         }
-        for entry in &self.initial {
-            if !variables.contains(&entry.name.as_str()) {
-                return Err(SceneError::UnknownVariable {
-                    at: self.location(entry),
-                    name: entry.name.clone(),
-                    known: known(variables),
-                });
+        fn per_unknown(spec: &Option<TolSpec>) -> &[NamedValue] {
+            match spec {
+                Some(TolSpec::PerUnknown(list)) => list,
+                _ => &[],
+            }
+        }
+        let sections = [
+            ("initial", self.initial.as_slice()),
+            ("tolerance.rtol", per_unknown(&self.tolerance.rtol)),
+            ("tolerance.atol", per_unknown(&self.tolerance.atol)),
+        ];
+        for (section, entries) in sections {
+            for entry in entries {
+                if !variables.contains(&entry.name.as_str()) {
+                    return Err(SceneError::UnknownVariable {
+                        at: self.location(entry),
+                        section,
+                        name: entry.name.clone(),
+                        known: known(variables),
+                    });
+                }
             }
         }
         Ok(())
@@ -764,6 +940,45 @@ struct RawScene {
     time: Option<Spanned<RawTime>>,
     reference: Option<Spanned<RawReference>>,
     sweep: Option<RawSweep>,
+    tolerance: Option<RawTolerance>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTolerance {
+    rtol: Option<Spanned<RawTol>>,
+    atol: Option<Spanned<RawTol>>,
+}
+
+/// `rtol`/`atol`: a number, or a table of `name = number`.
+enum RawTol {
+    Uniform(f64),
+    PerUnknown(RawNamed),
+}
+
+impl<'de> Deserialize<'de> for RawTol {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct TolVisitor;
+        impl<'de> Visitor<'de> for TolVisitor {
+            type Value = RawTol;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number, or a table of `unknown = number` entries")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<RawTol, E> {
+                Ok(RawTol::Uniform(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<RawTol, E> {
+                Ok(RawTol::Uniform(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<RawTol, E> {
+                Ok(RawTol::Uniform(v as f64))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<RawTol, A::Error> {
+                Ok(RawTol::PerUnknown(RawNamed(named_entries(map)?)))
+            }
+        }
+        deserializer.deserialize_any(TolVisitor)
+    }
 }
 
 #[derive(Deserialize)]
@@ -830,17 +1045,25 @@ impl<'de> Deserialize<'de> for RawNamed {
             fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 f.write_str("a table of `name = number` entries")
             }
-            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<RawNamed, A::Error> {
-                let mut entries = Vec::new();
-                while let Some(key) = map.next_key::<Spanned<String>>()? {
-                    let value = map.next_value::<Spanned<f64>>()?;
-                    entries.push((key, value));
-                }
-                Ok(RawNamed(entries))
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<RawNamed, A::Error> {
+                Ok(RawNamed(named_entries(map)?))
             }
         }
         deserializer.deserialize_map(NamedVisitor)
     }
+}
+
+/// `name = number` entries with their spans.
+type Entries = Vec<(Spanned<String>, Spanned<f64>)>;
+
+/// The `name = number` entries of a table, in file order, with spans.
+fn named_entries<'de, A: MapAccess<'de>>(mut map: A) -> Result<Entries, A::Error> {
+    let mut entries = Vec::new();
+    while let Some(key) = map.next_key::<Spanned<String>>()? {
+        let value = map.next_value::<Spanned<f64>>()?;
+        entries.push((key, value));
+    }
+    Ok(entries)
 }
 
 /// The scene text with its origin, for locating errors.
@@ -1042,6 +1265,13 @@ impl Source<'_> {
             None => Sweep::default(),
             Some(s) => self.sweep(s)?,
         };
+        let tolerance = match raw.tolerance {
+            None => ToleranceSpec::default(),
+            Some(t) => ToleranceSpec {
+                rtol: self.tol_spec("tolerance.rtol", t.rtol)?,
+                atol: self.tol_spec("tolerance.atol", t.atol)?,
+            },
+        };
         Ok(Scene {
             origin: self.origin.to_string(),
             name: name.into_inner(),
@@ -1051,8 +1281,74 @@ impl Source<'_> {
             time,
             reference,
             sweep,
+            tolerance,
             places,
         })
+    }
+
+    /// `tolerance.rtol` or `tolerance.atol`: each value by the library's
+    /// rule for its kind; no name twice; a table not empty.
+    fn tol_spec(
+        &self,
+        field: &str,
+        raw: Option<Spanned<RawTol>>,
+    ) -> Result<Option<TolSpec>, SceneError> {
+        let Some(raw) = raw else { return Ok(None) };
+        let span = raw.span();
+        let relative = field.ends_with("rtol");
+        let check = |field: String, value: f64, at: Location| {
+            let rule = if relative {
+                dae_solvers::options::check_relative(value)
+            } else if !value.is_finite() {
+                Err(dae_solvers::options::ToleranceIssue::NotFinite)
+            } else if value < 0.0 {
+                Err(dae_solvers::options::ToleranceIssue::Negative)
+            } else {
+                Ok(())
+            };
+            rule.map_err(|issue| SceneError::InvalidToleranceValue {
+                at,
+                field,
+                value,
+                issue,
+            })
+        };
+        Ok(Some(match raw.into_inner() {
+            RawTol::Uniform(v) => {
+                check(field.to_string(), v, self.at(&span))?;
+                TolSpec::Uniform(v)
+            }
+            RawTol::PerUnknown(entries) => {
+                let mut out: Vec<NamedValue> = Vec::with_capacity(entries.0.len());
+                for (key, value) in entries.0 {
+                    let name = key.get_ref().clone();
+                    let at = self.at(&key.span());
+                    check(format!("{field}.{name}"), *value.get_ref(), at.clone())?;
+                    if out.iter().any(|e| e.name == name) {
+                        return Err(SceneError::Duplicate {
+                            at,
+                            field: field.into(),
+                            name,
+                        });
+                    }
+                    out.push(NamedValue {
+                        name,
+                        value: *value.get_ref(),
+                        line: at.line,
+                        column: at.column,
+                    });
+                }
+                if out.is_empty() {
+                    return Err(SceneError::InvalidValue {
+                        at: self.at(&span),
+                        field: field.into(),
+                        reason: "is an empty table: name at least one unknown, or give a number"
+                            .into(),
+                    });
+                }
+                TolSpec::PerUnknown(out)
+            }
+        }))
     }
 
     /// `[reference]`: its kind and, for `values` and `trajectory`, the

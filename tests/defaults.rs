@@ -70,6 +70,8 @@ fn bdf_defaults_equal_the_runner_on_the_spherical_pendulum_ggl1() {
         solver: "bdf",
         formulation: "ggl1",
         tol: TOL,
+        tolerances: None,
+        record_steps: false,
         init_mode: InitMode::Project,
         samples: &[],
         repeats: 1,

@@ -297,10 +297,13 @@ fn dae_run_with_the_overdetermined_solvers() {
 }
 
 #[test]
-fn dae_run_picks_the_first_formulation_the_solver_accepts() {
-    // S01 lists ori2, rcd1, rcd0, …: odradau refuses ori2 (c-level 2),
-    // odbdf refuses ori2 and rcd1 (c-level above 0).
-    for (solver, expected) in [("odradau", "rcd1"), ("odbdf", "rcd0")] {
+fn dae_run_picks_the_solvers_preferred_formulation() {
+    // Without --formulation, the first of the solver's preferred ones
+    // (dae_solvers::core::policy::preferred_formulations): for both
+    // least-squares solvers the overdetermined ovd0, which keeps every
+    // constraint level (it used to be the scene's first they accept:
+    // rcd1 and rcd0).
+    for (solver, expected) in [("odradau", "ovd0"), ("odbdf", "ovd0")] {
         let o = dae(&["run", "s01", "--solver", solver, "--tol", "1e-5"]);
         assert_eq!(o.status.code(), Some(0), "{solver}");
         assert_eq!(json(&o)["formulation"], expected, "{solver}");

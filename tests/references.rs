@@ -206,7 +206,7 @@ fn refusals_name_the_field_and_place() {
     for (file, expected) in [
         ("missing.csv", "cannot read"),
         ("folder.csv", "not a regular file"),
-        ("bad.csv", "line 3: column 2: `x1` is not a number"),
+        ("bad.csv", "line 3: column `x`: `x1` is not a number"),
     ] {
         let reference = format!("kind = \"trajectory\"\nfile = \"{file}\"");
         let msg = parse_err(&reference, Some(dir.path())).to_string();

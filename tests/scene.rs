@@ -598,3 +598,103 @@ fn sweep_max_steps() {
         expect_err(&format!("{BASE}max_steps = {bad}\n"), "sweep.max_steps", 20);
     }
 }
+
+/// A mistyped solver or formulation gets the closest known name.
+#[test]
+fn unknown_names_suggest_the_closest_known_one() {
+    let err = expect_err(
+        &with_line(17, "solvers = [\"radua5\"]"),
+        "sweep.solvers",
+        17,
+    );
+    assert!(
+        matches!(err, SceneError::UnknownSolver { .. })
+            && err.suggestion().as_deref() == Some("radau5"),
+        "{err}"
+    );
+    assert!(err.to_string().contains("did you mean `radau5`?"), "{err}");
+    let err = expect_err(
+        &with_line(18, "formulations = [\"ggl\"]"),
+        "sweep.formulations",
+        18,
+    );
+    assert!(err.to_string().contains("did you mean `ggl1`?"), "{err}");
+    // Nothing close: the list only.
+    let err = expect_err(&with_line(17, "solvers = [\"dassl\"]"), "sweep.solvers", 17);
+    assert!(!err.to_string().contains("did you mean"), "{err}");
+    // Variables and parameters too.
+    let s = parse(&with_line(4, "gravity = 9.81")).unwrap();
+    let err = s
+        .check_names(&["x", "y", "v", "w"], &["m", "l", "gravty"])
+        .unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with("t.toml:4:1: `parameters.gravity`: the model has no parameter `gravity`; did you mean `gravty`?"),
+        "{err}"
+    );
+    // A one-letter name is never "close": every other one is one edit away.
+    let s = parse(BASE).unwrap();
+    let err = s
+        .check_names(&["x", "yy", "v", "w"], &["m", "l", "g"])
+        .unwrap_err();
+    assert!(!err.to_string().contains("did you mean"), "{err}");
+    let err = s
+        .check_names(&["x", "y", "v", "w"], &["m", "len", "g"])
+        .unwrap_err();
+    assert!(!err.to_string().contains("did you mean"), "{err}");
+}
+
+/// `[tolerance]`: numbers or per-unknown tables, each value by the
+/// library's rule, located when refused; names checked against the model.
+#[test]
+fn tolerance_section() {
+    use dae::scene::TolSpec;
+    let s = parse(BASE).unwrap();
+    assert_eq!(
+        (s.tolerance.rtol.clone(), s.tolerance.atol.clone()),
+        (None, None)
+    );
+    let s = parse(&format!(
+        "{BASE}[tolerance]\nrtol = 1e-6\natol = {{ x = 1e-9, lamda = 0 }}\n"
+    ))
+    .unwrap();
+    assert_eq!(s.tolerance.rtol, Some(TolSpec::Uniform(1e-6)));
+    let Some(TolSpec::PerUnknown(list)) = &s.tolerance.atol else {
+        panic!("{:?}", s.tolerance.atol)
+    };
+    let named: Vec<(&str, f64, usize, usize)> = list
+        .iter()
+        .map(|e| (e.name.as_str(), e.value, e.line, e.column))
+        .collect();
+    assert_eq!(named, [("x", 1e-9, 22, 10), ("lamda", 0.0, 22, 20)]);
+    let vars = ["x", "y", "v", "w", "lambda"];
+    let err = s.check_names(&vars, &["m", "l", "g"]).unwrap_err();
+    assert!(
+        matches!(err, SceneError::UnknownVariable { section, .. } if section == "tolerance.atol"),
+        "{err}"
+    );
+    assert!(
+        err.to_string().starts_with(
+            "t.toml:22:20: `tolerance.atol.lamda`: the model has no variable `lamda`; did you mean `lambda`?"
+        ),
+        "{err}"
+    );
+    // Integers are numbers.
+    let s = parse(&format!("{BASE}[tolerance]\natol = 0\nrtol = 1e-8\n")).unwrap();
+    assert_eq!(s.tolerance.atol, Some(TolSpec::Uniform(0.0)));
+    for (line, field) in [
+        ("rtol = 1e-16", "tolerance.rtol"),
+        ("rtol = 1.0", "tolerance.rtol"),
+        ("rtol = -1e-6", "tolerance.rtol"),
+        ("atol = -1e-6", "tolerance.atol"),
+        ("atol = nan", "tolerance.atol"),
+        ("atol = { x = -1.0 }", "tolerance.atol.x"),
+        ("rtol = { x = 2.0 }", "tolerance.rtol.x"),
+        ("atol = { x = 1e-6, x = 1e-7 }", "duplicate key"),
+        ("atol = {}", "tolerance.atol"),
+        ("atol = \"small\"", "tolerance.atol"),
+        ("tol = 1e-8", "tolerance.tol"),
+    ] {
+        expect_err(&format!("{BASE}[tolerance]\n{line}\n"), field, 21);
+    }
+}

@@ -1,11 +1,21 @@
-//! `dae run [SCENE] [--solver NAME] [--formulation NAME] [--tol T] [--format json|text]`.
+//! `dae run [SCENE] [--solver NAME] [--formulation NAME] [--tol T | --rtol R
+//! --atol A] [--trajectory FILE.csv] [--format json|text] [--strict-init]`.
+//!
+//! Exit codes ([`super::Failure`]): 0 for a run that reached the end of its
+//! horizon (accurate or not: the output says which); 2 for bad input — the
+//! flags, the scene, the model, a formulation the solver cannot take,
+//! initial values `--strict-init` refuses, a `--trajectory` file that
+//! cannot be written — with a message on stderr and nothing on stdout; 3
+//! for a solver that stopped before the end, with the run record on stdout.
 
 use super::Failure;
-use crate::inputs::inputs;
-use crate::runner::{self, RunRecord, RunSpec};
-use crate::scene::Scene;
+use crate::inputs::{choose_formulation, inputs, run_tolerances, FormulationChoice};
+use crate::runner::{self, RunRecord, RunSpec, RunTolerances};
+use crate::scene::{did_you_mean, Scene, KNOWN_FORMULATIONS, KNOWN_SOLVERS};
 use dae_solvers::init::InitMode;
+use serde::Serialize;
 use std::fmt::Write;
+use std::path::{Path, PathBuf};
 
 /// Output format of `dae run`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -25,19 +35,37 @@ pub struct RunArgs {
     /// Solver (default: the scene's first).
     #[arg(long)]
     pub solver: Option<String>,
-    /// Formulation (default: the scene's first that the solver accepts).
+    /// Formulation (default: the solver's preferred one that the model
+    /// provides, see `dae_solvers::core::policy::preferred_formulations`;
+    /// the output says which and why).
     #[arg(long)]
     pub formulation: Option<String>,
-    /// Tolerance, RTOL = ATOL (default 1e-8), in [2.2e-14, 1) like scene
-    /// tolerances.
-    #[arg(long, default_value_t = 1e-8, allow_negative_numbers = true)]
-    pub tol: f64,
+    /// Tolerance RTOL = ATOL for every unknown, in [2.2e-14, 1) like scene
+    /// tolerances: the same as `--rtol T --atol T`, and refused beside
+    /// either. Default: the scene's `[tolerance]`, else 1e-8.
+    #[arg(long, allow_negative_numbers = true, conflicts_with_all = ["rtol", "atol"])]
+    pub tol: Option<f64>,
+    /// Relative tolerance of every unknown (0, or in [2.2e-14, 1)); a
+    /// scene's per-unknown `[tolerance] rtol` entries stay.
+    #[arg(long, allow_negative_numbers = true)]
+    pub rtol: Option<f64>,
+    /// Absolute tolerance of every unknown (finite, ≥ 0); a scene's
+    /// per-unknown `[tolerance] atol` entries stay.
+    #[arg(long, allow_negative_numbers = true)]
+    pub atol: Option<f64>,
     /// Output format.
     #[arg(long, value_enum, default_value = "json")]
     pub format: Format,
-    /// Refuse inconsistent initial values instead of projecting them.
+    /// Refuse inconsistent initial values (exit code 2) instead of
+    /// projecting them.
     #[arg(long)]
     pub strict_init: bool,
+    /// Write every accepted step as CSV: a header `t,<unknown>,…` (the
+    /// formulation's unknowns), then one row per step from the consistent
+    /// start. Written whole or not at all (a temporary file in the same
+    /// directory, renamed into place); not written when the solver fails.
+    #[arg(long, value_name = "FILE.csv")]
+    pub trajectory: Option<PathBuf>,
 }
 
 /// Check a tolerance given on the command line: the rule of the library
@@ -52,57 +80,172 @@ pub fn check_tol(tol: f64, flag: &str) -> Result<(), Failure> {
     })
 }
 
+/// `unknown {what} `{name}`; did you mean `…`? (known: …)`.
+fn unknown_name(flag: &str, what: &str, name: &str, known: &[&str]) -> Failure {
+    let hint =
+        did_you_mean(name, known).map_or_else(String::new, |s| format!("; did you mean `{s}`?"));
+    Failure::input(format!(
+        "{flag} {name}: unknown {what} `{name}`{hint} (known: {})",
+        known.join(", ")
+    ))
+}
+
+/// What `dae run` prints in JSON: the run record, and what `dae run`
+/// decided around it.
+#[derive(Serialize)]
+struct Output<'a> {
+    #[serde(flatten)]
+    record: &'a RunRecord,
+    /// How the formulation was chosen.
+    formulation_choice: &'a FormulationChoice,
+    /// Separate or per-unknown tolerances (absent for `RTOL = ATOL = tol`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tolerances: Option<&'a RunTolerances>,
+    /// The `--trajectory` file written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    trajectory_file: Option<TrajectoryFile>,
+}
+
+/// The `--trajectory` file: where, and how many rows.
+#[derive(Serialize)]
+struct TrajectoryFile {
+    path: String,
+    rows: usize,
+}
+
 /// Run one scene; `Ok((output, exit code))`.
 pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
-    check_tol(args.tol, "--tol")?;
+    for (flag, value) in [("--tol", args.tol), ("--rtol", args.rtol)] {
+        match value {
+            // A relative tolerance may be 0 only beside a positive --atol.
+            Some(v) if flag == "--rtol" && v == 0.0 => {}
+            Some(v) => check_tol(v, flag)?,
+            None => {}
+        }
+    }
+    if let Some(a) = args.atol {
+        if !a.is_finite() || a < 0.0 {
+            return Err(Failure::input(format!(
+                "--atol {a:e}: an absolute tolerance must be finite and not negative"
+            )));
+        }
+    }
+    if let Some(s) = &args.solver {
+        if !KNOWN_SOLVERS.contains(&s.as_str()) {
+            return Err(unknown_name("--solver", "solver", s, KNOWN_SOLVERS));
+        }
+    }
+    if let Some(f) = &args.formulation {
+        if !KNOWN_FORMULATIONS.contains(&f.as_str()) {
+            return Err(unknown_name(
+                "--formulation",
+                "formulation",
+                f,
+                KNOWN_FORMULATIONS,
+            ));
+        }
+    }
     let scene = Scene::load(&args.scene).map_err(|e| Failure::input(e.to_string()))?;
     let inputs = inputs(&scene).map_err(|e| Failure::input(e.to_string()))?;
-    let model = &inputs.model;
     let solver = args
         .solver
         .clone()
         .or_else(|| scene.sweep.solvers.first().cloned())
         .unwrap_or_else(|| "radau5".into());
     let Some(s) = dae_solvers::solver_by_name(&solver) else {
-        return Err(Failure::input(format!(
-            "--solver {solver}: unknown solver (known: {})",
-            dae_solvers::SOLVER_NAMES.join(", ")
-        )));
+        return Err(unknown_name("--solver", "solver", &solver, KNOWN_SOLVERS));
     };
-    let formulation = match &args.formulation {
-        Some(f) => f.clone(),
-        None => scene
-            .sweep
-            .formulations
-            .iter()
-            .find(|f| {
-                model
-                    .formulation(f)
-                    .is_ok_and(|sys| s.accepts(sys.info()).is_ok())
-            })
-            .cloned()
-            .ok_or_else(|| {
-                Failure::input(format!(
-                    "no formulation of the scene is accepted by `{solver}`"
-                ))
-            })?,
+    let (formulation, choice) = match &args.formulation {
+        Some(f) => (f.clone(), FormulationChoice::Flag),
+        None => choose_formulation(&*inputs.model, &scene, &*s)
+            .map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?,
     };
+    let (rtol, atol) = match args.tol {
+        Some(t) => (Some(t), Some(t)),
+        None => (args.rtol, args.atol),
+    };
+    let tolerances = run_tolerances(&scene, rtol, atol);
+    tolerances
+        .check()
+        .map_err(|e| Failure::input(format!("{}: tolerances: {e}", scene.origin)))?;
+    let uniform = tolerances.is_uniform();
     let spec = RunSpec {
         init_mode: if args.strict_init {
             InitMode::Strict
         } else {
             InitMode::Project
         },
-        ..inputs.spec(&scene, &solver, &formulation, args.tol)
+        tolerances: (!uniform).then_some(&tolerances),
+        record_steps: args.trajectory.is_some(),
+        ..inputs.spec(&scene, &solver, &formulation, tolerances.rtol)
     };
     let record =
         runner::run(&spec).map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?;
+    if let Some(e) = &record.error {
+        // Initial values --strict-init refuses are bad input, not a
+        // failure of the solver.
+        if e.kind == "inconsistent_initial_values" {
+            return Err(Failure::input(format!(
+                "{}: {} (--strict-init refuses them; without it they are projected onto the \
+                 constraints and reported)",
+                scene.origin, e.message
+            )));
+        }
+    }
     let code = if record.status == "ok" { 0 } else { 3 };
+    let trajectory_file = match (&args.trajectory, code) {
+        (Some(path), 0) => {
+            let rows = write_trajectory(path, &record)?;
+            Some(TrajectoryFile {
+                path: path.display().to_string(),
+                rows,
+            })
+        }
+        _ => None,
+    };
+    let output = Output {
+        record: &record,
+        formulation_choice: &choice,
+        tolerances: (!uniform).then_some(&tolerances),
+        trajectory_file,
+    };
     let out = match args.format {
-        Format::Json => serde_json::to_string_pretty(&record).unwrap_or_default() + "\n",
-        Format::Text => text(&record),
+        Format::Json => {
+            serde_json::to_string_pretty(&output)
+                .map_err(|e| Failure::input(format!("cannot render the run as JSON: {e}")))?
+                + "\n"
+        }
+        Format::Text => text_output(&output),
     };
     Ok((out, code))
+}
+
+/// Write the accepted steps of `record` to `path` as CSV, atomically;
+/// the number of rows.
+fn write_trajectory(path: &Path, record: &RunRecord) -> Result<usize, Failure> {
+    let traj = &record.trajectory;
+    let fail = |e: std::io::Error| {
+        Failure::input(format!(
+            "--trajectory {}: cannot write the file: {e}",
+            path.display()
+        ))
+    };
+    if path.is_dir() {
+        return Err(fail(std::io::Error::other("it is a directory")));
+    }
+    crate::sweep::write::atomic_write_with(path, |w| {
+        let mut csv = csv::Writer::from_writer(w);
+        let header = std::iter::once("t").chain(traj.names.iter().map(String::as_str));
+        csv.write_record(header)?;
+        for (t, y) in &traj.steps {
+            // `{:e}` is the shortest text that reads back to the same f64.
+            let row = std::iter::once(format!("{t:e}")).chain(y.iter().map(|v| format!("{v:e}")));
+            csv.write_record(row)?;
+        }
+        csv.flush()
+    })
+    .map_err(fail)?;
+    Ok(traj.steps.len())
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -132,6 +275,27 @@ pub fn text(r: &RunRecord) -> String {
             a.as_str().to_string()
         };
         let _ = writeln!(s, "  accuracy: {label} ({note})");
+    }
+    if let Some(init) = &r.init {
+        if !init.defaulted.is_empty() {
+            let _ = writeln!(
+                s,
+                "  initial values: not given, started from 0: {}",
+                init.defaulted.join(", ")
+            );
+        }
+        if !init.changes.is_empty() {
+            let moves: Vec<String> = init
+                .changes
+                .iter()
+                .map(|c| format!("{} {:e} -> {:e}", c.name, c.from, c.to))
+                .collect();
+            let _ = writeln!(
+                s,
+                "  initial values: projected onto the constraints: {}",
+                moves.join(", ")
+            );
+        }
     }
     let _ = writeln!(s, "  t_end {}  tsim {:.3e} s", r.t_end, r.tsim_s);
     let vals: Vec<String> = r
@@ -168,5 +332,63 @@ pub fn text(r: &RunRecord) -> String {
     for (k, v) in &r.invariant_drift.0 {
         let _ = writeln!(s, "  drift of {k}: {v:.3e}");
     }
+    s
+}
+
+/// [`text`], with what `dae run` decided: the formulation's choice, the
+/// tolerances when they are not one `tol`, the trajectory file.
+fn text_output(o: &Output<'_>) -> String {
+    let r = o.record;
+    let mut s = text(r);
+    let mut extra = String::new();
+    match o.formulation_choice {
+        FormulationChoice::Flag => {}
+        FormulationChoice::Policy { preference, .. } => {
+            let _ = writeln!(
+                extra,
+                "  formulation {}: the default for {} (its preference: {}; --formulation to choose)",
+                r.formulation,
+                r.solver,
+                preference.join(" > ")
+            );
+        }
+        FormulationChoice::Scene { .. } => {
+            let _ = writeln!(
+                extra,
+                "  formulation {}: the scene's first that {} takes (none of its preferred ones \
+                 would do; --formulation to choose)",
+                r.formulation, r.solver
+            );
+        }
+    }
+    if let Some(t) = o.tolerances {
+        let per = |named: &runner::Named| {
+            if named.0.is_empty() {
+                String::new()
+            } else {
+                let v: Vec<String> = named.0.iter().map(|(k, v)| format!("{k} {v:e}")).collect();
+                format!(" ({})", v.join(", "))
+            }
+        };
+        let _ = writeln!(
+            extra,
+            "  tolerances: rtol {:e}{}  atol {:e}{}  (the verdict's tol is the loosest of the \
+             differential unknowns')",
+            t.rtol,
+            per(&t.rtol_of),
+            t.atol,
+            per(&t.atol_of)
+        );
+    }
+    if let Some(f) = &o.trajectory_file {
+        let _ = writeln!(extra, "  trajectory: {} ({} rows)", f.path, f.rows);
+    }
+    // After the first line (and the error/accuracy lines that belong to it).
+    let at = s
+        .match_indices('\n')
+        .map(|(i, _)| i + 1)
+        .find(|&i| !(s[i..].starts_with("  error:") || s[i..].starts_with("  accuracy:")))
+        .unwrap_or(s.len());
+    s.insert_str(at, &extra);
     s
 }

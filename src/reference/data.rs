@@ -177,34 +177,68 @@ impl Table {
         Ok(())
     }
 
-    /// Read a CSV text: a header `t,name,…` (the first column must be
-    /// called `t`), then one row of numbers per time. Blank lines and lines
-    /// starting with `#` are skipped; cells may be padded with spaces.
+    /// Read a CSV text (RFC 4180, by the `csv` crate): a header
+    /// `t,name,…` (the first column must be called `t`), then one row of
+    /// numbers per time. Blank lines and lines starting with `#` are
+    /// skipped; cells may be padded with spaces. A refusal names the line
+    /// and, for a cell, its column.
+    ///
+    /// ```
+    /// use dae::reference::data::Table;
+    ///
+    /// let t = Table::from_csv("# a comment\nt, x\n0, 1\n\n1, 2\n").unwrap();
+    /// assert_eq!((t.times, t.rows), (vec![0.0, 1.0], vec![vec![1.0], vec![2.0]]));
+    /// let e = Table::from_csv("t,x\n0,1\n1,oops\n").unwrap_err();
+    /// assert_eq!(e.to_string(), "line 3: column `x`: `oops` is not a number");
+    /// ```
     pub fn from_csv(text: &str) -> Result<Table, TableError> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i + 1, l.trim()))
-            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-        let (header_line, header) = lines
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .comment(Some(b'#'))
+            .from_reader(text.as_bytes());
+        // Records with their 1-based lines, without blank or commented
+        // lines (the reader skips those starting with `#` only at the
+        // first byte; indented ones are skipped here).
+        let mut records = reader.records().filter_map(|record| {
+            let record = match record {
+                Ok(r) => r,
+                Err(e) => {
+                    let line = e.position().map_or(0, |p| p.line() as usize);
+                    return Some(Err(table_error(line, e.to_string())));
+                }
+            };
+            let line = record.position().map_or(0, |p| p.line() as usize);
+            let blank = record.iter().all(str::is_empty);
+            let comment = record.get(0).is_some_and(|c| c.starts_with('#'));
+            (!blank && !comment).then_some(Ok((line, record)))
+        });
+        let (header_line, header) = records
             .next()
-            .ok_or_else(|| table_error(0, "empty: expected a header `t,<unknown>,…`"))?;
-        let mut cells = header.split(',').map(str::trim);
-        if cells.next() != Some("t") {
+            .ok_or_else(|| table_error(0, "empty: expected a header `t,<unknown>,…`"))??;
+        if header.get(0) != Some("t") {
             return Err(table_error(
                 header_line,
                 "the first column must be `t` (header `t,<unknown>,…`)",
             ));
         }
-        let names: Vec<String> = cells.map(str::to_string).collect();
+        let names: Vec<String> = header.iter().skip(1).map(str::to_string).collect();
+        let column = |col: usize| match col {
+            0 => "`t`".to_string(),
+            c => names
+                .get(c - 1)
+                .map_or_else(|| format!("{}", c + 1), |n| format!("`{n}`")),
+        };
         let (mut times, mut rows, mut at) = (Vec::new(), Vec::new(), Vec::new());
-        for (line, text) in lines {
+        for record in records {
+            let (line, record) = record?;
             let mut values = Vec::with_capacity(names.len() + 1);
-            for (col, cell) in text.split(',').map(str::trim).enumerate() {
+            for (col, cell) in record.iter().enumerate() {
                 let v: f64 = cell.parse().map_err(|_| {
                     table_error(
                         line,
-                        format!("column {}: `{cell}` is not a number", col + 1),
+                        format!("column {}: `{cell}` is not a number", column(col)),
                     )
                 })?;
                 values.push(v);
@@ -465,7 +499,17 @@ mod tests {
     fn csv_errors_name_the_line() {
         let e = Table::from_csv("t,x\n0,1\n1,oops\n").unwrap_err();
         assert_eq!(e.line, 3, "{e}");
-        assert!(e.to_string().contains("`oops` is not a number"), "{e}");
+        assert!(
+            e.to_string().contains("column `x`: `oops` is not a number"),
+            "{e}"
+        );
+        // Lines are counted with the comments and blank lines skipped.
+        let e = Table::from_csv("# c\n\nt,x,y\n  # indented\n0,1,2\nzz,1,2\n").unwrap_err();
+        assert_eq!(e.line, 6, "{e}");
+        assert!(e.to_string().contains("column `t`: `zz`"), "{e}");
+        // Quoted cells are CSV, not split at their commas.
+        let t = Table::from_csv("t,\"x\"\n\"0\",\" 1 \"\n").unwrap();
+        assert_eq!((t.names, t.rows), (vec!["x".to_string()], vec![vec![1.0]]));
         let e = Table::from_csv("time,x\n0,1\n").unwrap_err();
         assert!(e.to_string().contains("first column must be `t`"), "{e}");
         let e = Table::from_csv("t,x\n1,1\n0.5,2\n").unwrap_err();
