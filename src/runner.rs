@@ -439,6 +439,9 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
     let options = Options {
         output_times,
         max_steps: spec.max_steps.unwrap_or(defaults.max_steps),
+        // The record needs the check times only: a sweep's long runs
+        // should not keep every step's dense output.
+        dense_output: false,
         ..defaults
     };
     let problem = Problem {
