@@ -167,8 +167,8 @@ impl<'a> Integrator<'a> {
     ///
     /// A time already passed is answered from the last step, or from the
     /// recorded dense output ([`Options::dense_output`]); without it, a
-    /// time before the last step is [`SolveError::OutOfReach`], as is any
-    /// time outside `[t₀, t_end]`.
+    /// time before the start of the last step is [`SolveError::OutOfReach`],
+    /// as is any time outside `[t₀, t_end]`.
     pub fn advance_to(&mut self, t: f64) -> Result<&[f64], SolveError> {
         let to = self.t_end;
         let reach = |from: f64| SolveError::OutOfReach { t, from, to };
@@ -182,13 +182,15 @@ impl<'a> Integrator<'a> {
             self.out.copy_from_slice(&self.y0);
         } else if t > self.t_prev {
             self.method.dense(t, &mut self.out);
+        } else if let Some(dense) = self.record.dense() {
+            dense
+                .at_into(t, &mut self.out)
+                .map_err(|_| reach(self.t0))?;
+        } else if t == self.t_prev {
+            // The start of the last step.
+            self.method.dense(t, &mut self.out);
         } else {
-            match self.record.dense() {
-                Some(dense) => dense
-                    .at_into(t, &mut self.out)
-                    .map_err(|_| reach(self.t0))?,
-                None => return Err(reach(self.t_prev)),
-            }
+            return Err(reach(self.t_prev));
         }
         Ok(&self.out)
     }

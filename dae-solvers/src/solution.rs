@@ -101,7 +101,27 @@ impl Solution {
         Ok(out)
     }
 
-    /// [`Solution::at`] into `out` (length N), without allocating.
+    /// [`Solution::at`] into `out` (length N), without allocating: for
+    /// sampling a trajectory in a loop.
+    ///
+    /// ```
+    /// use dae::dae_solvers::{init, radau5::Radau5, SolutionError};
+    /// use dae::models::builtin::Pendulum;
+    /// use dae::prelude::*;
+    ///
+    /// let sys = Pendulum::default().rcd0();
+    /// let start = init::consistent(&sys, 0.0, &[1.0, 0.0, 0.0, 0.0, 0.0], &Default::default())?;
+    /// let problem = Problem { system: &sys, t0: 0.0, y0: &start.y, t_end: 2.0 };
+    /// let sol = Radau5.solve(&problem, &Options::with_tol(1e-8))?;
+    /// let mut y = [0.0; 5];
+    /// for k in 0..=100 {
+    ///     sol.at_into(2.0 * k as f64 / 100.0, &mut y).unwrap();
+    ///     assert!((y[0] * y[0] + y[1] * y[1] - 1.0).abs() < 1e-6); // on the circle
+    /// }
+    /// let err = sol.at_into(1.0, &mut [0.0; 4]).unwrap_err();
+    /// assert_eq!(err, SolutionError::LengthMismatch { expected: 5, got: 4 });
+    /// # Ok::<(), SolveError>(())
+    /// ```
     pub fn at_into(&self, t: f64, out: &mut [f64]) -> Result<(), SolutionError> {
         let dense = self.dense.as_ref().ok_or(SolutionError::NoDenseOutput)?;
         dense.at_into(t, out)
