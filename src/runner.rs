@@ -669,6 +669,10 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         output_times,
         max_steps: spec.max_steps.unwrap_or(defaults.max_steps),
         record_steps: spec.record_steps,
+        // The record needs the check times (and, for --trajectory, the
+        // step points) only: a sweep's long runs should not keep every
+        // step's dense output.
+        dense_output: false,
         ..defaults
     };
     let problem = Problem {

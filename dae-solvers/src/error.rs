@@ -111,6 +111,18 @@ pub enum SolveError {
         /// What is wrong, naming the field.
         what: String,
     },
+    /// [`crate::Integrator::advance_to`] was asked for a time it cannot
+    /// report: outside the horizon, or before the last accepted step when
+    /// no dense output is recorded ([`crate::Options::dense_output`]).
+    #[error("t = {t:e} is out of reach: the integrator can report [{from:e}, {to:e}]")]
+    OutOfReach {
+        /// The time asked for.
+        t: f64,
+        /// The earliest time that can still be reported.
+        from: f64,
+        /// The end of the horizon.
+        to: f64,
+    },
 }
 
 impl SolveError {
@@ -126,6 +138,7 @@ impl SolveError {
             SolveError::NotApplicable(_) => "not_applicable",
             SolveError::ToleranceOutOfRange { .. } => "tolerance_out_of_range",
             SolveError::InvalidInput { .. } => "invalid_input",
+            SolveError::OutOfReach { .. } => "out_of_reach",
         }
     }
 
@@ -190,5 +203,68 @@ pub enum NotApplicable {
         index: u8,
         /// The highest index the solver takes.
         max: u8,
+    },
+}
+
+/// Why a [`crate::Solution`] cannot answer a question about its values:
+/// the typed failure of [`crate::Solution::at`] and of access by name.
+///
+/// ```
+/// use dae::dae_solvers::{init, radau5::Radau5, SolutionError};
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().rcd0();
+/// let start = init::consistent(&sys, 0.0, &[1.0, 0.0, 0.0, 0.0, 0.0], &Default::default())?;
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &start.y, t_end: 1.0 };
+/// let sol = Radau5.solve(&problem, &Options::with_tol(1e-6))?;
+/// assert!(matches!(sol.at(2.0), Err(SolutionError::OutsideHorizon { .. })));
+/// let err = sol.value(0.5, "lamda").unwrap_err();
+/// assert!(matches!(&err, SolutionError::UnknownName { suggestion: Some(s), .. } if s == "lambda"));
+/// assert!(err.to_string().contains("did you mean `lambda`?"));
+/// # Ok::<(), SolveError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum SolutionError {
+    /// The time lies outside the integrated horizon `[t0, t_end]`.
+    #[error("t = {t:e} is outside the horizon [{t0:e}, {t_end:e}]")]
+    OutsideHorizon {
+        /// The time asked for.
+        t: f64,
+        /// Start of the horizon.
+        t0: f64,
+        /// End of the horizon.
+        t_end: f64,
+    },
+    /// The solve ran with [`crate::Options::dense_output`] off, so only the
+    /// output times ([`crate::Solution::t`]) are known.
+    #[error(
+        "no dense output was recorded (Options::dense_output was off); \
+         only the output times are known"
+    )]
+    NoDenseOutput,
+    /// No unknown of the formulation has this name.
+    #[error(
+        "no unknown named `{name}`{}; the unknowns are {}",
+        suggestion.as_ref().map_or_else(String::new, |s| format!(" (did you mean `{s}`?)")),
+        known.join(", ")
+    )]
+    UnknownName {
+        /// The name asked for.
+        name: String,
+        /// The closest known name, when one is close.
+        suggestion: Option<String>,
+        /// Every unknown, in the formulation's order.
+        known: Vec<String>,
+    },
+    /// The output buffer of [`crate::Solution::at_into`] has the wrong
+    /// length.
+    #[error("output buffer has {got} components, the solution has {expected}")]
+    LengthMismatch {
+        /// Unknowns of the solution.
+        expected: usize,
+        /// Length of the buffer given.
+        got: usize,
     },
 }

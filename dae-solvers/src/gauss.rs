@@ -137,7 +137,7 @@ use crate::core::matrix::SquareStages;
 use crate::core::policy;
 use crate::radau5::collocate;
 use crate::radau5::tableau::Collocation;
-use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
+use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 
 /// Three-stage Gauss–Legendre collocation (see the
@@ -187,7 +187,11 @@ impl Solver for Gauss {
         policy::max_index(info, MAX_INDEX)
     }
 
-    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    fn integrator<'a>(
+        &self,
+        problem: &Problem<'a>,
+        options: &'a Options,
+    ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
         collocate::<SquareStages, GaussLegendre>(problem, options)
     }

@@ -24,8 +24,16 @@
 //! dynamics rows, numerically, at every evaluation), which is the same
 //! solution of a semi-explicit index-1 system. Every solver returns
 //! `Result<Solution, SolveError>` and never panics on a user's problem; no
-//! allocation happens inside the step loop. [`Solver::accepts`] says, typed,
+//! allocation happens inside the step loop but the records asked for (step
+//! points, the dense output: amortised pushes). [`Solver::accepts`] says, typed,
 //! why a solver cannot take a formulation.
+//!
+//! A [`Solution`] keeps the dense output of every accepted step
+//! ([`Options::dense_output`]): [`Solution::at`] answers at any time of the
+//! horizon, [`Solution::value`] and [`Solution::component`] by the
+//! unknowns' names. [`Solver::integrator`] is the same integration step by
+//! step ([`Integrator::step`], [`Integrator::advance_to`]); `solve` is that
+//! stepper run to the end.
 
 #![warn(missing_docs)]
 
@@ -35,6 +43,7 @@ pub mod error;
 pub mod gauss;
 pub mod idec;
 pub mod init;
+pub mod integrator;
 mod linalg;
 pub mod mebdf;
 pub mod odbdf;
@@ -44,10 +53,11 @@ pub mod radau5;
 pub mod solution;
 pub mod stats;
 
-pub use error::{NotApplicable, SolveError};
+pub use error::{NotApplicable, SolutionError, SolveError};
 pub use init::{consistent, initial_derivative, InitMode, InitOptions};
+pub use integrator::{Integrator, StepOutcome};
 pub use options::{Options, Tolerances};
-pub use solution::Solution;
+pub use solution::{DenseOutput, Solution};
 pub use stats::Stats;
 
 use dae_core::system::{DaeSystem, FormulationInfo};
@@ -127,9 +137,29 @@ pub trait Solver {
     /// `Ok` when the solver can integrate this formulation at all; otherwise
     /// the typed reason, e.g. [`NotApplicable::Overdetermined`].
     fn accepts(&self, info: &FormulationInfo) -> Result<(), NotApplicable>;
+    /// The integration of `problem` as a stepper, started at `t0` (the
+    /// checks done, the first step chosen): advance it one accepted step at
+    /// a time or up to a time, read `t`, `y` and the statistics between
+    /// steps (see [`Integrator`]). Running it to the end is
+    /// [`Solver::solve`].
+    ///
+    /// Every solver supports it, also with a constant step
+    /// ([`Options::fixed_step`]), where bdf, odbdf and mebdf step through
+    /// their adaptive start-up run first.
+    fn integrator<'a>(
+        &self,
+        problem: &Problem<'a>,
+        options: &'a Options,
+    ) -> Result<Integrator<'a>, SolveError>;
+
     /// Integrate from `t0` to `t_end`, reporting the solution at
-    /// `options.output_times` (dense output, not step-size clipping).
-    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError>;
+    /// `options.output_times` (dense output, not step-size clipping), and
+    /// keeping the dense output of every step for [`Solution::at`] when
+    /// [`Options::dense_output`] is on. This is [`Solver::integrator`] run
+    /// to the end ([`Integrator::finish`]).
+    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+        self.integrator(problem, options)?.finish()
+    }
 }
 
 /// All solvers of this crate, by name.

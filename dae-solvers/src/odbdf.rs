@@ -57,7 +57,7 @@
 
 use crate::core::policy;
 use crate::linalg::ConstrainedLstsq;
-use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
+use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 
 /// BDF orders 1–5 with a least-squares corrector (see the
@@ -76,8 +76,12 @@ impl Solver for OdBdf {
         policy::overdetermined(info, MAX_C_LEVEL)
     }
 
-    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    fn integrator<'a>(
+        &self,
+        problem: &Problem<'a>,
+        options: &'a Options,
+    ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        crate::bdf::integrate::<ConstrainedLstsq>(problem, options)
+        crate::bdf::integrator::<ConstrainedLstsq>(problem, options)
     }
 }

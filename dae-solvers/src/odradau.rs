@@ -66,7 +66,7 @@
 
 use crate::core::matrix::ProjectedStages;
 use crate::core::policy;
-use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
+use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 
 /// Radau IIA 5 with projected least-squares stage equations (see the
@@ -85,8 +85,12 @@ impl Solver for OdRadau {
         policy::overdetermined(info, MAX_C_LEVEL)
     }
 
-    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    fn integrator<'a>(
+        &self,
+        problem: &Problem<'a>,
+        options: &'a Options,
+    ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        crate::radau5::integrate::<ProjectedStages>(problem, options)
+        crate::radau5::integrator::<ProjectedStages>(problem, options)
     }
 }

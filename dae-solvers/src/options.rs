@@ -255,6 +255,18 @@ pub struct Options {
     pub output_times: Vec<f64>,
     /// Record every accepted step in [`crate::Solution::steps`].
     pub record_steps: bool,
+    /// Keep the dense output of every accepted step, so that
+    /// [`crate::Solution::at`] answers at any time of the horizon after the
+    /// solve (and [`crate::Integrator::advance_to`] at any earlier time).
+    ///
+    /// On by default: a user expects `solution.at(t)` to work, as it does
+    /// in DifferentialEquations.jl (`sol(t)`) and diffsol. It costs
+    /// `(d + 1) · N + 1` doubles per accepted step (`d` ≤ 8 the degree of
+    /// the method's dense polynomial, see [`crate::solution::DenseOutput`])
+    /// and `d` dense evaluations per step (no residual evaluations, no
+    /// change in the steps taken). Long runs that need only the output
+    /// times — the sweep, the benchmarks — switch it off.
+    pub dense_output: bool,
     /// BDF-type methods only: include index-2 (and higher) unknowns in the
     /// error test. `None` (the default) leaves the decision to the
     /// formulation, in [`crate::core::policy::bdf_error_test`]: they are
@@ -287,6 +299,7 @@ impl Default for Options {
             max_steps: 20_000_000,
             output_times: Vec::new(),
             record_steps: false,
+            dense_output: true,
             index2_in_error_test: None,
             fixed_step: None,
             fixed_order: None,

@@ -98,7 +98,7 @@ impl<L: Corrector> Integrator<'_, L> {
     /// Evaluate `G = ∂(E(y) y')/∂y − ∂f/∂y + c_J E(y)` at the predictor and
     /// factor it in place.
     fn form_iteration_matrix(&mut self) -> Result<(), Fail> {
-        let sys = self.sys;
+        let sys = &*self.sys;
         sys.rhs_jacobian(self.t, &self.y, self.lu.matrix_mut());
         sys.leading(&self.y, &mut self.lead);
         if !self.constant_leading {

@@ -155,7 +155,8 @@
 //! All buffers — history, iteration matrix and its in-place LU
 //! factorisation, output rows — are allocated before the step loop; the loop
 //! itself does not allocate, except to record every step when
-//! [`Options::record_steps`] asks for it.
+//! [`Options::record_steps`] asks for it and to keep the dense output when
+//! [`Options::dense_output`] does.
 
 mod corrector;
 mod history;
@@ -166,7 +167,7 @@ mod step;
 use crate::core::matrix::{Corrector, SquareLu};
 use crate::core::policy;
 use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
-use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver, Stats};
+use crate::{NotApplicable, Options, Problem, SolveError, Solver, Stats};
 use dae_core::system::FormulationInfo;
 use run::Run;
 
@@ -202,9 +203,13 @@ impl Solver for Bdf {
         policy::square(info)
     }
 
-    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    fn integrator<'a>(
+        &self,
+        problem: &Problem<'a>,
+        options: &'a Options,
+    ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        integrate::<SquareLu>(problem, options)
+        integrator::<SquareLu>(problem, options)
     }
 }
 
@@ -215,26 +220,16 @@ const NCOL: usize = MAX_ORDER + 2;
 /// Unit round-off.
 const EPS: f64 = f64::EPSILON;
 
-/// Integrate `problem` with the BDF method, the corrector solved by `L`
-/// (square LU, or least squares for [`crate::odbdf`]); the caller has
-/// checked that the solver accepts the formulation.
-pub(crate) fn integrate<L: Corrector>(
-    problem: &Problem<'_>,
-    options: &Options,
-) -> Result<Solution, SolveError> {
+/// The stepper of the BDF method on `problem`, the corrector solved by
+/// `L` (square LU, or least squares for [`crate::odbdf`]), started at
+/// `t₀`; the caller has checked that the solver accepts the formulation.
+pub(crate) fn integrator<'a, L: Corrector + 'a>(
+    problem: &Problem<'a>,
+    options: &'a Options,
+) -> Result<crate::Integrator<'a>, SolveError> {
     problem.check(problem.system.info().unknowns(), options)?;
     options.check_orders(MAX_ORDER, "the BDF methods (bdf, odbdf)")?;
-    crate::core::eliminate::with_algebraic_rows(problem, |problem| {
-        integrate_checked::<L>(problem, options)
-    })
-}
-
-/// [`integrate`] after the checks.
-fn integrate_checked<L: Corrector>(
-    problem: &Problem<'_>,
-    options: &Options,
-) -> Result<Solution, SolveError> {
-    let sys = problem.system;
+    let sys = crate::core::eliminate::algebraic_rows(problem);
     let info = sys.info();
     let t0 = problem.t0;
 
@@ -242,22 +237,23 @@ fn integrate_checked<L: Corrector>(
     let in_test = policy::bdf_error_test(info, options);
 
     let mut spent = Stats::default();
-    let yp0 = initial_derivative_with(sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
+    let yp0 = initial_derivative_with(&*sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
     spent.residual_evals += 1; // its f(t0, y0)
-    check_residuals(sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
+    check_residuals(&*sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
 
     let run = Run {
         sys,
         options,
-        in_test: &in_test,
+        in_test,
         t0,
         t_end: problem.t_end,
         y0: problem.y0,
-        yp0: &yp0,
+        yp0,
         spent,
     };
-    match options.fixed_step {
-        Some(h) => run.fixed::<L>(h),
+    let method = match options.fixed_step {
+        Some(h) => run.fixed::<L>(h)?,
         None => run.adaptive::<L>(),
-    }
+    };
+    Ok(crate::Integrator::new(method, problem, options))
 }

@@ -1,23 +1,24 @@
 //! The runs of an integration: one error-controlled run, or — with a
 //! constant step — the adaptive start-up run that computes the `k − 1`
-//! starting values and the constant-step run of order `k` it feeds, both
-//! handed to the driver.
+//! starting values and the constant-step run of order `k` it feeds, as one
+//! [`Method`] for the driver ([`Startup`]).
 
 use super::step::{Config, Integrator};
 use super::MAX_ORDER;
+use crate::core::control;
+use crate::core::driver::{Method, Startup};
+use crate::core::eliminate::Formulation;
 use crate::core::matrix::Corrector;
-use crate::core::{control, driver};
-use crate::{Options, Solution, SolveError, Stats};
-use dae_core::system::DaeSystem;
+use crate::{Options, SolveError, Stats};
 
-/// Everything a run needs, and what the driver is asked to do with it.
+/// Everything a run needs.
 pub(super) struct Run<'a> {
     /// The formulation.
-    pub(super) sys: &'a dyn DaeSystem,
+    pub(super) sys: Formulation<'a>,
     /// The caller's options.
     pub(super) options: &'a Options,
     /// Components in the error test and the Newton norm.
-    pub(super) in_test: &'a [bool],
+    pub(super) in_test: Vec<bool>,
     /// Start of the horizon.
     pub(super) t0: f64,
     /// End of the horizon.
@@ -25,7 +26,7 @@ pub(super) struct Run<'a> {
     /// Consistent initial values.
     pub(super) y0: &'a [f64],
     /// The initial derivative.
-    pub(super) yp0: &'a [f64],
+    pub(super) yp0: Vec<f64>,
     /// Work before the first step (the initial derivative and the
     /// consistency check), counted with the first run.
     pub(super) spent: Stats,
@@ -35,13 +36,14 @@ impl<'a> Run<'a> {
     /// An integrator with settings `cfg` whose work counters start at
     /// `stats`.
     fn integrator<L: Corrector>(&self, cfg: Config, stats: Stats) -> Integrator<'a, L> {
-        let mut integ = Integrator::<L>::new(self.sys, &self.options.tol, self.in_test, cfg);
+        let mut integ =
+            Integrator::<L>::new(self.sys.clone(), &self.options.tol, &self.in_test, cfg);
         integ.stats = stats;
         integ
     }
 
-    /// Error-controlled integration over `[t0, t_end]`.
-    pub(super) fn adaptive<L: Corrector>(&self) -> Result<Solution, SolveError> {
+    /// Error-controlled integration over `[t0, t_end]`, started.
+    pub(super) fn adaptive<L: Corrector + 'a>(&self) -> Box<dyn Method + 'a> {
         let opts = self.options;
         let span = self.t_end - self.t0;
         let (max_order, fixed_order) = match opts.fixed_order {
@@ -61,36 +63,40 @@ impl<'a> Run<'a> {
         let h0 = match opts.h0 {
             // Clipped before φ_2 = h y'₀ is formed, which could overflow.
             Some(h) => h.min(cfg.hmax).min(span),
-            None => integ.initial_step(self.y0, self.yp0),
+            None => integ.initial_step(self.y0, &self.yp0),
         };
-        integ.start(self.t0, self.y0, self.yp0, h0);
-        driver::solve(&mut integ, opts, self.t0, self.t_end)
+        integ.start(self.t0, self.y0, &self.yp0, h0);
+        Box::new(integ)
     }
 
-    /// Constant step size, order `k`, no error control; the `k−1` starting
-    /// values come from an adaptive run at the caller's tolerances, which
-    /// the driver runs first ([`driver::solve_with_startup`]).
-    pub(super) fn fixed<L: Corrector>(&self, h_request: f64) -> Result<Solution, SolveError> {
+    /// Constant step size, order `k`, no error control, started; the
+    /// `k−1` starting values come from an adaptive run at the caller's
+    /// tolerances, which runs first ([`Startup`]).
+    pub(super) fn fixed<L: Corrector + 'a>(
+        self,
+        h_request: f64,
+    ) -> Result<Box<dyn Method + 'a>, SolveError> {
         let opts = self.options;
-        let span = self.t_end - self.t0;
+        let (t0, t_end) = (self.t0, self.t_end);
+        let span = t_end - t0;
         let k = opts.fixed_order.unwrap_or(opts.max_order);
-        let (nsteps, h) = control::constant_grid(span, h_request, opts.max_steps, self.t0)?;
-        let grid = |j: usize| {
+        let (nsteps, h) = control::constant_grid(span, h_request, opts.max_steps, t0)?;
+        let grid = move |j: usize| {
             if j == nsteps {
-                self.t_end
+                t_end
             } else {
-                self.t0 + j as f64 * h
+                t0 + j as f64 * h
             }
         };
         // The constant-step run, within what is left of the step budget
         // after the work `spent` before it.
-        let constant = |spent: Stats| Config {
+        let constant = move |spent: Stats| Config {
             max_order: k,
             fixed_order: true,
             fixed_step: true,
             hmax: h,
             max_steps: opts.max_steps.saturating_sub(spent.steps + spent.rejected),
-            t_end: self.t_end,
+            t_end,
             span,
         };
 
@@ -99,8 +105,8 @@ impl<'a> Run<'a> {
         if m == 0 {
             // Order one starts from y₀ and y'₀ alone.
             let mut integ = self.integrator::<L>(constant(self.spent), self.spent);
-            integ.start(self.t0, self.y0, self.yp0, h);
-            return driver::solve(&mut integ, opts, self.t0, self.t_end);
+            integ.start(self.t0, self.y0, &self.yp0, h);
+            return Ok(Box::new(integ));
         }
         let cfg = Config {
             max_order: MAX_ORDER,
@@ -112,9 +118,9 @@ impl<'a> Run<'a> {
             span,
         };
         let mut startup = self.integrator::<L>(cfg, self.spent);
-        let h0 = startup.initial_step(self.y0, self.yp0).min(h);
-        startup.start(self.t0, self.y0, self.yp0, h0);
-        let build = |startup: &Integrator<'a, L>, values: &[Vec<f64>]| {
+        let h0 = startup.initial_step(self.y0, &self.yp0).min(h);
+        startup.start(self.t0, self.y0, &self.yp0, h0);
+        let build = move |startup: &Integrator<'a, L>, values: &[Vec<f64>]| {
             if m == nsteps {
                 return None;
             }
@@ -126,13 +132,12 @@ impl<'a> Run<'a> {
             integ.start_from_history(grid(k - 1), &history, h);
             Some(integ)
         };
-        driver::solve_with_startup(
-            &mut startup,
+        // Both runs' dense output is of degree at most MAX_ORDER.
+        Ok(Box::new(Startup::new(
+            startup,
             (1..=m).map(grid),
             build,
-            opts,
-            self.t0,
-            self.t_end,
-        )
+            MAX_ORDER,
+        )))
     }
 }

@@ -7,11 +7,11 @@ use super::order::ErrorTest;
 use super::NCOL;
 use crate::core::control::{self, Budget, Failure as Fail};
 use crate::core::driver::Method;
+use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, Rows};
 use crate::core::weights::Weights;
 use crate::options::Tolerances;
 use crate::{SolveError, Stats};
-use dae_core::system::DaeSystem;
 use nalgebra::DMatrix;
 
 /// Settings of one integrator (the order in this method's count).
@@ -29,7 +29,7 @@ enum Failure {
 /// State and workspace of the DASSL step (`N` unknowns, `M ≥ N` rows).
 pub(super) struct Integrator<'a, L> {
     /// The formulation.
-    pub(super) sys: &'a dyn DaeSystem,
+    pub(super) sys: Formulation<'a>,
     /// Settings of this run.
     pub(super) cfg: Config,
     /// Unknowns `N`.
@@ -117,6 +117,10 @@ impl<L: Corrector> Method for Integrator<'_, L> {
     fn dense(&self, tau: f64, out: &mut [f64]) {
         self.interpolate(tau, out)
     }
+    fn dense_degree(&self) -> usize {
+        // DDATRP's polynomial through the last `kold + 1` values.
+        self.cfg.max_order
+    }
     fn finished(&self) -> bool {
         self.t >= self.cfg.t_end
     }
@@ -131,7 +135,7 @@ impl<L: Corrector> Method for Integrator<'_, L> {
 impl<'a, L: Corrector> Integrator<'a, L> {
     /// Allocate every buffer of the step loop.
     pub(super) fn new(
-        sys: &'a dyn DaeSystem,
+        sys: Formulation<'a>,
         tol: &Tolerances,
         in_test: &[bool],
         cfg: Config,
@@ -139,7 +143,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
         let info = sys.info();
         let (m, n) = (info.equations(), info.unknowns());
         Integrator {
-            sys,
+            sys: sys.clone(),
             cfg,
             n,
             constant_leading: info.constant_leading,

@@ -4,18 +4,22 @@
 //! given), and [`Method::step`] advances by one *accepted* step, retrying
 //! with smaller steps (or lower orders) inside, within the budgets of
 //! [`super::control`]; it knows its dense output on the last step. The
-//! driver does the rest, the same for every method: it steps until the
-//! method reaches `t_end`, fills the output grid of [`super::output`] by
-//! dense output as each step covers its times, records the step points when
-//! asked, and assembles the [`Solution`] with the method's statistics.
+//! driver does the rest, the same for every method: the public stepper
+//! [`crate::Integrator`] steps it, and after every accepted step [`Record`]
+//! fills the output grid of [`super::output`] by dense output as the step
+//! covers its times, records the step points when asked, and keeps the
+//! step's dense output when asked; at the end it assembles the
+//! [`Solution`] with the method's statistics. [`crate::Solver::solve`] is
+//! that stepper run to `t_end`.
 //!
 //! A method that needs starting values from another run — BDF with a
 //! constant step takes its first `k − 1` values from an adaptive run — is
-//! two runs of one integration: [`solve_with_startup`] runs the start-up
-//! method, hands its values at the times the second run asks for to the
-//! function that builds that run, and reports both as one solution.
+//! two runs of one integration: [`Startup`] is one [`Method`] made of the
+//! start-up method and the run that its values at the handover times
+//! build, so the stepper and the records see one integration.
 
 use super::output::OutputGrid;
+use crate::solution::DenseOutput;
 use crate::{Options, Solution, SolveError, Stats};
 
 /// One method family's stepping, as the driver sees it.
@@ -28,6 +32,9 @@ pub(crate) trait Method {
     /// Dense output of the last accepted step at `tau` (inside it) into
     /// `out`.
     fn dense(&self, tau: f64, out: &mut [f64]);
+    /// An upper bound of the degree of the dense output polynomial of
+    /// every step of this run (what [`DenseOutput`] samples).
+    fn dense_degree(&self) -> usize;
     /// Whether the end of the horizon has been reached.
     fn finished(&self) -> bool;
     /// Take one accepted step (failures retried inside; a typed error when
@@ -35,11 +42,16 @@ pub(crate) trait Method {
     fn step(&mut self) -> Result<(), SolveError>;
     /// Work counters so far.
     fn stats(&self) -> Stats;
+    /// The step points ([`Options::record_steps`]) the step just accepted
+    /// adds: `(t, y)` of the step, unless the method says otherwise.
+    fn step_points(&self, push: &mut dyn FnMut(f64, &[f64])) {
+        push(self.t(), self.y());
+    }
 }
 
 /// Step `method` to the end, calling `after_step` after every accepted
 /// step.
-pub(crate) fn drive<M: Method>(
+pub(crate) fn drive<M: Method + ?Sized>(
     method: &mut M,
     mut after_step: impl FnMut(&M),
 ) -> Result<(), SolveError> {
@@ -50,97 +62,165 @@ pub(crate) fn drive<M: Method>(
     Ok(())
 }
 
-/// What the driver reports of an integration: the output grid and, when
-/// [`Options::record_steps`] asks for them, the step points.
-struct Report {
+/// What the driver keeps of an integration: the output grid, the step
+/// points when [`Options::record_steps`] asks for them, and the dense
+/// output when [`Options::dense_output`] does.
+pub(crate) struct Record {
     grid: OutputGrid,
     steps: Vec<(f64, Vec<f64>)>,
-    record: bool,
+    record_steps: bool,
+    dense: Option<DenseOutput>,
 }
 
-impl Report {
+impl Record {
     /// The output grid of `options` on `[t0, t_end]`, reporting `y0` at the
-    /// times not after `t0`.
-    fn new(options: &Options, t0: f64, t_end: f64, y0: &[f64]) -> Self {
+    /// times not after `t0`; dense output of degree `degree` if asked.
+    pub(crate) fn new(options: &Options, t0: f64, t_end: f64, y0: &[f64], degree: usize) -> Self {
         let mut grid = OutputGrid::new(&options.output_times, t0, t_end, y0.len());
         grid.start(t0, y0);
-        Report {
+        Record {
             grid,
             steps: Vec::new(),
-            record: options.record_steps,
+            record_steps: options.record_steps,
+            dense: options
+                .dense_output
+                .then(|| DenseOutput::new(degree, t0, y0)),
         }
     }
 
-    /// Fill the output grid up to the time of `method` by its dense output.
-    fn fill<M: Method>(&mut self, method: &M) {
+    /// After an accepted step of `method`: fill the output grid up to its
+    /// time by its dense output, record the step points if asked, keep the
+    /// step's dense output if asked.
+    pub(crate) fn after_step<M: Method + ?Sized>(&mut self, method: &M) {
         self.grid
             .emit(method.t(), |tau, out| method.dense(tau, out));
-    }
-
-    /// After an accepted step of `method`: fill the grid, and record the
-    /// step point if asked.
-    fn step<M: Method>(&mut self, method: &M) {
-        self.fill(method);
-        if self.record {
-            self.steps.push((method.t(), method.y().to_vec()));
+        if self.record_steps {
+            let steps = &mut self.steps;
+            method.step_points(&mut |t, y| steps.push((t, y.to_vec())));
+        }
+        if let Some(dense) = &mut self.dense {
+            dense.push(method.t(), method.y(), |tau, out| method.dense(tau, out));
         }
     }
 
-    /// The [`Solution`] with the work counters `stats`.
-    fn finish(self, stats: Stats) -> Solution {
+    /// The dense output kept so far.
+    pub(crate) fn dense(&self) -> Option<&DenseOutput> {
+        self.dense.as_ref()
+    }
+
+    /// The [`Solution`] with the work counters `stats` and the names of the
+    /// unknowns.
+    pub(crate) fn finish(self, stats: Stats, names: Vec<String>) -> Solution {
         let (t, y) = self.grid.finish();
         Solution {
             t,
             y,
             steps: self.steps,
             stats,
+            names,
+            dense: self.dense,
         }
     }
 }
 
-/// Run `method` from `t0` (its current values) to `t_end` with the output
-/// rule of [`OutputGrid`] and [`Options::record_steps`], and return the
-/// [`Solution`].
-pub(crate) fn solve<M: Method>(
-    method: &mut M,
-    options: &Options,
-    t0: f64,
-    t_end: f64,
-) -> Result<Solution, SolveError> {
-    let mut report = Report::new(options, t0, t_end, method.y());
-    drive(method, |m| report.step(m))?;
-    Ok(report.finish(method.stats()))
+/// Two runs of one integration as one [`Method`]: `startup` from `t₀` (its
+/// current values) to its end, then the method `build` makes of it and of
+/// its values at the `handover` times (ascending, in the start-up run's
+/// horizon) on to `t_end` — or nothing, when the start-up run has covered
+/// the horizon. Each run's steps are steps of the integration (output grid,
+/// dense output); the step points recorded for the start-up run are the
+/// handover points, not its own steps; the work counters are summed.
+pub(crate) struct Startup<A, B, F> {
+    startup: A,
+    handover: OutputGrid,
+    build: Option<F>,
+    run: Option<B>,
+    /// The run has taken a step: its dense output is the last step's.
+    run_started: bool,
+    degree: usize,
 }
 
-/// Run `startup` from `t0` (its current values) to its end, then the
-/// method `build` makes of it and of its values at the `handover` times
-/// (ascending, in the start-up run's horizon) on to `t_end` — or nothing,
-/// when the start-up run has covered the horizon — as one integration.
-/// Each run fills the output grid where it steps; the step points recorded
-/// for the start-up run are the handover points, not its own steps; the
-/// work counters are summed.
-pub(crate) fn solve_with_startup<A: Method, B: Method>(
-    startup: &mut A,
-    handover: impl IntoIterator<Item = f64>,
-    build: impl FnOnce(&A, &[Vec<f64>]) -> Option<B>,
-    options: &Options,
-    t0: f64,
-    t_end: f64,
-) -> Result<Solution, SolveError> {
-    let mut report = Report::new(options, t0, t_end, startup.y());
-    let mut start = OutputGrid::at(startup.y().len(), handover);
-    drive(startup, |m| {
-        start.emit(m.t(), |tau, out| m.dense(tau, out));
-        report.fill(m);
-    })?;
-    if report.record {
-        let points = start.times().iter().zip(start.values());
-        report.steps.extend(points.map(|(t, y)| (*t, y.clone())));
+impl<A: Method, B: Method, F: FnOnce(&A, &[Vec<f64>]) -> Option<B>> Startup<A, B, F> {
+    /// The integration of `startup`, then of what `build` makes of it; the
+    /// dense output of both is of degree at most `degree`.
+    pub(crate) fn new(
+        startup: A,
+        handover: impl IntoIterator<Item = f64>,
+        build: F,
+        degree: usize,
+    ) -> Self {
+        let n = startup.y().len();
+        Startup {
+            handover: OutputGrid::at(n, handover),
+            startup,
+            build: Some(build),
+            run: None,
+            run_started: false,
+            degree,
+        }
     }
-    let mut stats = startup.stats();
-    if let Some(mut run) = build(startup, start.values()) {
-        drive(&mut run, |m| report.step(m))?;
-        stats += run.stats();
+
+    /// The method whose last step is the integration's last step.
+    fn current(&self) -> &dyn Method {
+        match &self.run {
+            Some(run) if self.run_started => run,
+            _ => &self.startup,
+        }
     }
-    Ok(report.finish(stats))
+}
+
+impl<A: Method, B: Method, F: FnOnce(&A, &[Vec<f64>]) -> Option<B>> Method for Startup<A, B, F> {
+    fn t(&self) -> f64 {
+        self.current().t()
+    }
+    fn y(&self) -> &[f64] {
+        match &self.run {
+            Some(run) if self.run_started => run.y(),
+            _ => self.startup.y(),
+        }
+    }
+    fn dense(&self, tau: f64, out: &mut [f64]) {
+        self.current().dense(tau, out)
+    }
+    fn dense_degree(&self) -> usize {
+        self.degree
+    }
+    fn finished(&self) -> bool {
+        self.startup.finished() && self.build.is_none() && self.run.as_ref().is_none_or(B::finished)
+    }
+    fn step(&mut self) -> Result<(), SolveError> {
+        if let Some(run) = &mut self.run {
+            run.step()?;
+            self.run_started = true;
+            return Ok(());
+        }
+        let startup = &mut self.startup;
+        startup.step()?;
+        self.handover
+            .emit(startup.t(), |tau, out| startup.dense(tau, out));
+        if startup.finished() {
+            if let Some(build) = self.build.take() {
+                self.run = build(startup, self.handover.values());
+            }
+        }
+        Ok(())
+    }
+    fn stats(&self) -> Stats {
+        let mut stats = self.startup.stats();
+        if let Some(run) = &self.run {
+            stats += run.stats();
+        }
+        stats
+    }
+    fn step_points(&self, push: &mut dyn FnMut(f64, &[f64])) {
+        if self.run_started {
+            return self.current().step_points(push);
+        }
+        // The start-up run's last step: the handover points.
+        if self.startup.finished() {
+            for (t, y) in self.handover.times().iter().zip(self.handover.values()) {
+                push(*t, y);
+            }
+        }
+    }
 }

@@ -44,6 +44,8 @@ use crate::{NotApplicable, Problem, SolveError};
 use dae_core::system::{DaeSystem, FormulationInfo, RowKind};
 use nalgebra::DMatrix;
 use std::cell::RefCell;
+use std::ops::Deref;
+use std::rc::Rc;
 
 /// A formulation whose constraint rows with a non-zero row of `E` have been
 /// made algebraic (see the [module documentation](self)).
@@ -305,37 +307,45 @@ impl DaeSystem for Eliminated<'_> {
     }
 }
 
-/// Run `f` on `problem` with its derivative-carrying constraint rows made
-/// algebraic ([`Eliminated`]), or on `problem` itself when there are none.
-pub(crate) fn with_algebraic_rows<R>(
-    problem: &Problem<'_>,
-    f: impl FnOnce(&Problem<'_>) -> R,
-) -> R {
-    match Eliminated::new(problem.system, problem.y0) {
-        Some(e) => f(&Problem {
-            system: &e,
-            ..*problem
-        }),
-        None => f(problem),
+/// The formulation an integrator runs on: the caller's, or an
+/// [`Eliminated`] presentation of it that the integration owns (shared by
+/// the runs of one integration, e.g. a start-up run and the run it feeds).
+#[derive(Clone)]
+pub(crate) enum Formulation<'a> {
+    /// The caller's formulation.
+    Given(&'a dyn DaeSystem),
+    /// Its derivative-carrying constraint rows made algebraic.
+    Eliminated(Rc<Eliminated<'a>>),
+}
+
+impl<'a> Deref for Formulation<'a> {
+    type Target = dyn DaeSystem + 'a;
+    fn deref(&self) -> &Self::Target {
+        match self {
+            Formulation::Given(sys) => *sys,
+            Formulation::Eliminated(e) => &**e,
+        }
     }
 }
 
-/// Run `f` on `problem` with a constant `E`: on `problem` itself when its
-/// `E` is constant, else on its constant presentation
-/// ([`Eliminated::constant`]); [`NotApplicable::LeadingMatrixNotConstant`]
-/// when it has none.
-pub(crate) fn with_constant_leading<R>(
-    problem: &Problem<'_>,
-    f: impl FnOnce(&Problem<'_>) -> Result<R, SolveError>,
-) -> Result<R, SolveError> {
+/// `problem`'s formulation with its derivative-carrying constraint rows
+/// made algebraic ([`Eliminated`]), or itself when there are none.
+pub(crate) fn algebraic_rows<'a>(problem: &Problem<'a>) -> Formulation<'a> {
+    match Eliminated::new(problem.system, problem.y0) {
+        Some(e) => Formulation::Eliminated(Rc::new(e)),
+        None => Formulation::Given(problem.system),
+    }
+}
+
+/// `problem`'s formulation with a constant `E`: itself when its `E` is
+/// constant, else its constant presentation ([`Eliminated::constant`]);
+/// [`NotApplicable::LeadingMatrixNotConstant`] when it has none.
+pub(crate) fn constant_leading<'a>(problem: &Problem<'a>) -> Result<Formulation<'a>, SolveError> {
     if problem.system.info().constant_leading {
-        return f(problem);
+        return Ok(Formulation::Given(problem.system));
     }
     match Eliminated::constant(problem.system, problem.y0) {
-        Some(e) => f(&Problem {
-            system: &e,
-            ..*problem
-        }),
+        Some(e) => Ok(Formulation::Eliminated(Rc::new(e))),
         None => Err(NotApplicable::LeadingMatrixNotConstant.into()),
     }
 }

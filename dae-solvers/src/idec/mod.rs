@@ -200,8 +200,9 @@ mod sweep;
 
 pub use interp::MAX_DEGREE;
 
+use crate::core::eliminate::Formulation;
 use crate::core::{driver, policy};
-use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver};
+use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 use run::Integrator;
 
@@ -278,19 +279,22 @@ impl Idec {
         Ok(())
     }
 
-    /// Validate and build the integrator at `t₀`.
-    fn integrator<'a>(
+    /// Validate and build the integrator of `problem` on its formulation
+    /// `sys` (the problem's, or its constant-`E` presentation) at `t₀`.
+    fn start<'a>(
         &self,
-        problem: &Problem<'a>,
+        problem: &Problem<'_>,
+        sys: Formulation<'a>,
         options: &Options,
     ) -> Result<Integrator<'a>, SolveError> {
-        self.accepts(problem.system.info())?;
+        self.accepts(sys.info())?;
         // The scheme itself needs `E` constant: `solve` presents a constant
-        // mass matrix's rcd0 so (`with_constant_leading`); `levels` does not.
-        policy::constant_leading(problem.system.info())?;
-        problem.check(problem.system.info().unknowns(), options)?;
+        // mass matrix's rcd0 so (`eliminate::constant_leading`); `levels`
+        // does not.
+        policy::constant_leading(sys.info())?;
+        problem.check(sys.info().unknowns(), options)?;
         self.check(options)?;
-        Integrator::new(self, problem, options)
+        Integrator::new(self, sys, problem, options)
     }
 
     /// The seed's scheme with the constant Euler step `h` (Jacobian frozen
@@ -322,7 +326,7 @@ impl Idec {
             },
             ..defaults
         };
-        let mut integrator = self.integrator(problem, &options)?;
+        let mut integrator = self.start(problem, Formulation::Given(problem.system), &options)?;
         integrator.sweep.every_step = jacobian == Jacobian::EveryStep;
         driver::drive(&mut integrator, |_| {})?;
         Ok(integrator.levels())
@@ -340,11 +344,18 @@ impl Solver for Idec {
         policy::max_index(info, 2)
     }
 
-    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    fn integrator<'a>(
+        &self,
+        problem: &Problem<'a>,
+        options: &'a Options,
+    ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        crate::core::eliminate::with_constant_leading(problem, |problem| {
-            let mut integrator = self.integrator(problem, options)?;
-            driver::solve(&mut integrator, options, problem.t0, problem.t_end)
-        })
+        let sys = crate::core::eliminate::constant_leading(problem)?;
+        let integrator = self.start(problem, sys, options)?;
+        Ok(crate::Integrator::new(
+            Box::new(integrator),
+            problem,
+            options,
+        ))
     }
 }

@@ -7,14 +7,15 @@ use super::sweep::Sweep;
 use super::{Idec, FAC, H0_DEFAULT, RATIO_MAX, RATIO_MIN};
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
+use crate::core::eliminate::Formulation;
 use crate::core::weights::Weights;
 use crate::linalg::all_finite;
 use crate::{Options, Problem, SolveError, Stats};
-use dae_core::system::{DaeSystem, VarKind};
+use dae_core::system::VarKind;
 
 /// State of one IDeC integration.
 pub(super) struct Integrator<'a> {
-    sys: &'a dyn DaeSystem,
+    sys: Formulation<'a>,
     /// Unknowns `N`, degree `m`, corrections `J`.
     n: usize,
     m: usize,
@@ -81,6 +82,11 @@ impl Method for Integrator<'_> {
             ends.interpolate(tau, out);
         }
     }
+    fn dense_degree(&self) -> usize {
+        // Degree m on the interval's nodes; the algebraic unknowns' cubic
+        // through the last interval ends.
+        self.m.max(super::interp::ENDS - 1)
+    }
     fn finished(&self) -> bool {
         self.done
     }
@@ -100,10 +106,10 @@ impl<'a> Integrator<'a> {
     /// evaluated, buffers allocated, the first step chosen.
     pub(super) fn new(
         idec: &Idec,
-        problem: &Problem<'a>,
+        sys: Formulation<'a>,
+        problem: &Problem<'_>,
         options: &Options,
     ) -> Result<Self, SolveError> {
-        let sys = problem.system;
         let info = sys.info();
         let n = info.unknowns();
         let (m, corrections) = (idec.m, idec.j);
@@ -138,7 +144,7 @@ impl<'a> Integrator<'a> {
                 .max(100.0 * control::h_min(problem.t0, span)),
         };
         let mut it = Integrator {
-            sys,
+            sys: sys.clone(),
             n,
             m,
             corrections,
@@ -226,7 +232,7 @@ impl<'a> Integrator<'a> {
             self.factored = Some(h);
             self.stats.factorizations += 1;
         }
-        self.sweep.run(self.sys, &mut self.stats, t, h)
+        self.sweep.run(&*self.sys, &mut self.stats, t, h)
     }
 
     /// Record the interval just computed as accepted.

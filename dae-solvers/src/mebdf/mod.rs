@@ -131,7 +131,8 @@
 //! # Resources
 //!
 //! Every buffer is allocated before the step loop; the loop does not
-//! allocate, except to record steps when [`Options::record_steps`] asks.
+//! allocate, except to record steps when [`Options::record_steps`] asks
+//! and to keep the dense output when [`Options::dense_output`] does.
 
 mod coeffs;
 mod control;
@@ -139,9 +140,10 @@ mod history;
 mod stages;
 mod step;
 
-use crate::core::{control as limits, driver, policy};
+use crate::core::driver::{Method, Startup};
+use crate::core::{control as limits, policy};
 use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
-use crate::{NotApplicable, Options, Problem, Solution, SolveError, Solver, Stats};
+use crate::{NotApplicable, Options, Problem, SolveError, Solver, Stats};
 use dae_core::system::FormulationInfo;
 use step::{Config, Integrator};
 
@@ -159,18 +161,24 @@ impl Solver for Mebdf {
         policy::constant_leading_once_eliminated(info)
     }
 
-    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    fn integrator<'a>(
+        &self,
+        problem: &Problem<'a>,
+        options: &'a Options,
+    ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        crate::core::eliminate::with_constant_leading(problem, |problem| {
-            integrate(problem, options)
-        })
+        let method = start(problem, options)?;
+        Ok(crate::Integrator::new(method, problem, options))
     }
 }
 
-/// Integrate `problem` (accepted) with the options.
-fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
-    let sys = problem.system;
-    problem.check(sys.info().unknowns(), options)?;
+/// The integration of `problem` (accepted) with the options, started.
+fn start<'a>(
+    problem: &Problem<'a>,
+    options: &'a Options,
+) -> Result<Box<dyn Method + 'a>, SolveError> {
+    problem.check(problem.system.info().unknowns(), options)?;
+    let sys = crate::core::eliminate::constant_leading(problem)?;
     // The options count steps k: order k + 1 ≤ MAX_ORDER.
     options.check_orders(
         coeffs::MAX_ORDER - 1,
@@ -180,9 +188,9 @@ fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, Solve
     let span = t_end - t0;
 
     let mut spent = Stats::default();
-    let yp0 = initial_derivative_with(sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
+    let yp0 = initial_derivative_with(&*sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
     spent.residual_evals += 1;
-    check_residuals(sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
+    check_residuals(&*sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
 
     let steps = options.fixed_order.unwrap_or(options.max_order);
     let order = (steps + 1).min(coeffs::MAX_ORDER);
@@ -195,8 +203,8 @@ fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, Solve
         t_end,
         span,
     };
-    let integrator = |cfg: Config, stats: Stats| {
-        let mut integ = Integrator::new(sys, &options.tol, cfg);
+    let integrator = move |cfg: Config, stats: Stats| {
+        let mut integ = Integrator::new(sys.clone(), &options.tol, cfg);
         integ.stats = stats;
         integ
     };
@@ -207,12 +215,12 @@ fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, Solve
             None => integ.initial_step(problem.y0, &yp0),
         };
         integ.start(t0, problem.y0, &yp0, h0);
-        return driver::solve(&mut integ, options, t0, t_end);
+        return Ok(Box::new(integ));
     };
 
     // Constant step: k − 1 starting values from an adaptive run.
     let (nsteps, h) = limits::constant_grid(span, h_request, options.max_steps, t0)?;
-    let grid = |j: usize| {
+    let grid = move |j: usize| {
         if j == nsteps {
             t_end
         } else {
@@ -220,7 +228,7 @@ fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, Solve
         }
     };
     let k = order - 1;
-    let constant = |spent: Stats| Config {
+    let constant = move |spent: Stats| Config {
         max_order: order,
         fixed_order: true,
         fixed_step: true,
@@ -235,7 +243,7 @@ fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, Solve
         let mut integ = integrator(constant(spent), spent);
         integ.start(t0, problem.y0, &yp0, h);
         integ.p = order;
-        return driver::solve(&mut integ, options, t0, t_end);
+        return Ok(Box::new(integ));
     }
     let mut startup = integrator(
         Config {
@@ -248,16 +256,24 @@ fn integrate(problem: &Problem<'_>, options: &Options) -> Result<Solution, Solve
     );
     let h0 = startup.initial_step(problem.y0, &yp0).min(h);
     startup.start(t0, problem.y0, &yp0, h0);
-    let build = |startup: &Integrator<'_>, values: &[Vec<f64>]| {
+    let y0 = problem.y0;
+    let build = move |startup: &Integrator<'a>, values: &[Vec<f64>]| {
         if m == nsteps {
             return None;
         }
         let mut integ = integrator(constant(startup.stats), Stats::default());
         let mut history: Vec<&[f64]> = Vec::with_capacity(k);
-        history.push(problem.y0);
+        history.push(y0);
         history.extend(values.iter().map(|v| v.as_slice()));
         integ.start_from_values(grid(k - 1), &history, h, order);
         Some(integ)
     };
-    driver::solve_with_startup(&mut startup, (1..=m).map(grid), build, options, t0, t_end)
+    // Both runs' dense output is of degree at most the order bound.
+    let degree = order.max(coeffs::MAX_ORDER.min(6));
+    Ok(Box::new(Startup::new(
+        startup,
+        (1..=m).map(grid),
+        build,
+        degree,
+    )))
 }

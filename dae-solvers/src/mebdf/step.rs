@@ -7,12 +7,12 @@ use super::history::History;
 use super::stages::JacState;
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
+use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, SquareLu};
 use crate::core::weights::Weights;
 use crate::init::{initial_derivative_with, DerivativeRule};
 use crate::options::Tolerances;
 use crate::{SolveError, Stats};
-use dae_core::system::DaeSystem;
 use nalgebra::DMatrix;
 
 /// Settings of one integrator (the order in this method's count).
@@ -47,7 +47,7 @@ pub(super) enum Rejection {
 /// State and workspace of the MEBDF step (`N` unknowns).
 pub(super) struct Integrator<'a> {
     /// The formulation.
-    pub(super) sys: &'a dyn DaeSystem,
+    pub(super) sys: Formulation<'a>,
     /// Settings of this run.
     pub(super) cfg: Config,
     /// The formulas.
@@ -135,6 +135,10 @@ impl Method for Integrator<'_> {
     fn dense(&self, tau: f64, out: &mut [f64]) {
         self.hist.interpolate(self.t, tau, self.p_old.max(1), out)
     }
+    fn dense_degree(&self) -> usize {
+        // The polynomial of the last step's order through the last values.
+        self.cfg.max_order
+    }
     fn finished(&self) -> bool {
         self.t >= self.cfg.t_end
     }
@@ -149,7 +153,7 @@ impl Method for Integrator<'_> {
 impl<'a> Integrator<'a> {
     /// Allocate every buffer of the step loop; index-`k` unknowns are
     /// weighted by `h^(k−1)`.
-    pub(super) fn new(sys: &'a dyn DaeSystem, tol: &Tolerances, cfg: Config) -> Self {
+    pub(super) fn new(sys: Formulation<'a>, tol: &Tolerances, cfg: Config) -> Self {
         let info = sys.info();
         let n = info.unknowns();
         let index_power = info
@@ -162,7 +166,7 @@ impl<'a> Integrator<'a> {
         let mut lead = DMatrix::zeros(n, n);
         sys.leading(&vec![0.0; n], &mut lead);
         Integrator {
-            sys,
+            sys: sys.clone(),
             cfg,
             coef: Coefficients::new(),
             n,
@@ -333,7 +337,7 @@ impl<'a> Integrator<'a> {
             self.t + self.h
         };
         let y = self.y1.clone();
-        let yp = initial_derivative_with(self.sys, t, &y, &DerivativeRule::SOLVER)?;
+        let yp = initial_derivative_with(&*self.sys, t, &y, &DerivativeRule::SOLVER)?;
         self.stats.residual_evals += 1;
         self.stats.steps += 1;
         self.budget.accepted();

@@ -150,11 +150,10 @@ mod stages;
 mod step;
 pub(crate) mod tableau;
 
-use crate::core::driver;
 use crate::core::matrix::{SquareStages, StageSystems};
 use crate::core::policy;
 use crate::options::Options;
-use crate::{NotApplicable, Problem, Solution, SolveError, Solver};
+use crate::{NotApplicable, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 use step::Integrator;
 use tableau::{Collocation, RadauIIA};
@@ -192,34 +191,41 @@ impl Solver for Radau5 {
         policy::square(info)
     }
 
-    fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
+    fn integrator<'a>(
+        &self,
+        problem: &Problem<'a>,
+        options: &'a Options,
+    ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        integrate::<SquareStages>(problem, options)
+        integrator::<SquareStages>(problem, options)
     }
 }
 
-/// Integrate with Radau IIA 5, the stage systems solved by `S` (square LU,
+/// The stepper of Radau IIA 5, the stage systems solved by `S` (square LU,
 /// or least squares for [`crate::odradau`]); the caller has checked that
 /// the solver accepts the formulation.
-pub(crate) fn integrate<S: StageSystems>(
-    problem: &Problem<'_>,
-    options: &Options,
-) -> Result<Solution, SolveError> {
+pub(crate) fn integrator<'a, S: StageSystems + 'a>(
+    problem: &Problem<'a>,
+    options: &'a Options,
+) -> Result<crate::Integrator<'a>, SolveError> {
     collocate::<S, RadauIIA>(problem, options)
 }
 
-/// Integrate with the three-stage collocation method `K` (Radau IIA or
-/// Gauss–Legendre), the stage systems solved by `S`.
-pub(crate) fn collocate<S: StageSystems, K: Collocation>(
-    problem: &Problem<'_>,
-    options: &Options,
-) -> Result<Solution, SolveError> {
+/// The stepper of the three-stage collocation method `K` (Radau IIA or
+/// Gauss–Legendre), the stage systems solved by `S`, started at `t₀`.
+pub(crate) fn collocate<'a, S: StageSystems + 'a, K: Collocation>(
+    problem: &Problem<'a>,
+    options: &'a Options,
+) -> Result<crate::Integrator<'a>, SolveError> {
     problem.check(problem.system.info().unknowns(), options)?;
-    crate::core::eliminate::with_algebraic_rows(problem, |problem| {
-        let mut integrator = Integrator::<S, K>::new(problem, options);
-        integrator.start()?;
-        driver::solve(&mut integrator, options, problem.t0, problem.t_end)
-    })
+    let sys = crate::core::eliminate::algebraic_rows(problem);
+    let mut integrator = Integrator::<S, K>::new(sys, problem, options);
+    integrator.start()?;
+    Ok(crate::Integrator::new(
+        Box::new(integrator),
+        problem,
+        options,
+    ))
 }
 
 // ---------------------------------------------------------------------------

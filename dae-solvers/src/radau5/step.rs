@@ -8,12 +8,12 @@ use super::tableau::{dense, Collocation};
 use super::{smallest_tolerance, H0_DEFAULT, TIGHT_NEWTON, TIGHT_TOL, UROUND};
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
+use crate::core::eliminate::Formulation;
 use crate::core::matrix::StageSystems;
 use crate::core::newton::{Contraction, Rule};
 use crate::linalg::{all_finite, two_sum};
 use crate::options::Options;
 use crate::{Problem, SolveError, Stats};
-use dae_core::system::DaeSystem;
 
 /// The round-off floor of a Newton iteration run towards round-off, in
 /// units of round-off.
@@ -24,7 +24,7 @@ const ROUND_OFF: f64 = 1e3;
 /// step-size controller.
 pub(super) struct Integrator<'a, S, K> {
     /// The formulation.
-    pub(super) sys: &'a dyn DaeSystem,
+    pub(super) sys: Formulation<'a>,
     /// The caller's options.
     pub(super) options: &'a Options,
     /// Unknowns `N`.
@@ -75,6 +75,10 @@ impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
             out,
         )
     }
+    fn dense_degree(&self) -> usize {
+        // The collocation polynomial of three stages.
+        3
+    }
     fn finished(&self) -> bool {
         self.c.done
     }
@@ -87,10 +91,11 @@ impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
 }
 
 impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
-    /// The integrator of `problem` at `t₀`, its buffers allocated; nothing
-    /// is evaluated before [`Integrator::start`].
-    pub(super) fn new(problem: &Problem<'a>, options: &'a Options) -> Self {
-        let info = problem.system.info();
+    /// The integrator of `problem` on its formulation `sys` (the problem's,
+    /// or a presentation of it) at `t₀`, its buffers allocated; nothing is
+    /// evaluated before [`Integrator::start`].
+    pub(super) fn new(sys: Formulation<'a>, problem: &Problem<'_>, options: &'a Options) -> Self {
+        let info = sys.info();
         let (m, n) = (info.equations(), info.unknowns());
         let mut w = Work::<S>::new::<K>(info, options);
         w.y.copy_from_slice(problem.y0);
@@ -140,7 +145,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             newton.floor = ROUND_OFF * UROUND / r;
         }
         Integrator {
-            sys: problem.system,
+            sys: sys.clone(),
             options,
             n,
             m,
@@ -203,7 +208,8 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         let (t0, t_end) = (self.t0, self.t_end);
         let span = t_end - t0;
         self.evaluate_at_step_point(t0, true)?;
-        self.find_algebraic_rows(self.sys.info());
+        let sys = self.sys.clone();
+        self.find_algebraic_rows(sys.info());
         let c = &mut self.c;
         c.h = match c.fixed {
             Some(hf) => hf,

@@ -1,0 +1,207 @@
+//! The step-by-step form of an integration: [`Integrator`], from
+//! [`Solver::integrator`](crate::Solver::integrator).
+
+use crate::core::driver::{Method, Record};
+use crate::{Options, Problem, Solution, SolveError, Stats};
+
+/// What one call of [`Integrator::step`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StepOutcome {
+    /// One step was accepted; it ends at `t`, before `t_end`.
+    Accepted {
+        /// End of the step.
+        t: f64,
+    },
+    /// The integration is at `t_end`: the step just taken reached it, or
+    /// it had been reached before and nothing was done.
+    Finished {
+        /// `t_end`.
+        t: f64,
+    },
+}
+
+/// An integration in progress, advanced one accepted step at a time
+/// ([`Integrator::step`]) or up to a time ([`Integrator::advance_to`]) —
+/// the one-step mode of IDA and the `step!` of DifferentialEquations.jl.
+/// [`Solver::solve`](crate::Solver::solve) is this run to `t_end`: stepping
+/// to the end gives the same values and statistics, and
+/// [`Integrator::finish`] the same [`Solution`].
+///
+/// ```
+/// use dae::dae_solvers::{init, radau5::Radau5, StepOutcome};
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().rcd1();
+/// let start = init::consistent(&sys, 0.0, &[1.0, 0.0, 0.0, 0.0, 0.0], &Default::default())?;
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &start.y, t_end: 2.0 };
+/// let options = Options::with_tol(1e-8);
+/// let mut integ = Radau5.integrator(&problem, &options)?;
+/// // Up to a time: the dense output there, never a step past t_end.
+/// let x = integ.advance_to(1.0)?[0];
+/// assert!((x + 1.0).abs() < 1e-6); // half a period: x = −1
+/// assert!(integ.t() >= 1.0);
+/// // One step at a time.
+/// let mut steps = 0;
+/// while let StepOutcome::Accepted { t } = integ.step()? {
+///     assert!(t < 2.0);
+///     steps += 1;
+/// }
+/// assert_eq!(integ.t(), 2.0);
+/// let sol = integ.finish()?;
+/// assert_eq!(sol, Radau5.solve(&problem, &options)?); // the same integration
+/// assert!(steps < sol.stats.steps);
+/// # Ok::<(), SolveError>(())
+/// ```
+pub struct Integrator<'a> {
+    method: Box<dyn Method + 'a>,
+    record: Record,
+    names: Vec<String>,
+    t0: f64,
+    t_end: f64,
+    /// Initial values (reported at `t₀`).
+    y0: Vec<f64>,
+    /// Start of the last accepted step (`t₀` before the first).
+    t_prev: f64,
+    /// The error a step ended with: every later call returns it.
+    failed: Option<SolveError>,
+    /// The value [`Integrator::advance_to`] returns.
+    out: Vec<f64>,
+}
+
+impl<'a> Integrator<'a> {
+    /// The stepper of `method`, started at `problem`'s `t₀`, with the
+    /// output rules of `options`.
+    pub(crate) fn new(
+        method: Box<dyn Method + 'a>,
+        problem: &Problem<'_>,
+        options: &Options,
+    ) -> Self {
+        let y0 = method.y().to_vec();
+        let record = Record::new(
+            options,
+            problem.t0,
+            problem.t_end,
+            &y0,
+            method.dense_degree(),
+        );
+        let names = problem
+            .system
+            .info()
+            .variables
+            .iter()
+            .map(|v| v.name.clone())
+            .collect();
+        Integrator {
+            record,
+            names,
+            t0: problem.t0,
+            t_end: problem.t_end,
+            t_prev: problem.t0,
+            failed: None,
+            out: vec![0.0; y0.len()],
+            y0,
+            method,
+        }
+    }
+
+    /// Current time: `t₀`, then the end of the last accepted step.
+    pub fn t(&self) -> f64 {
+        self.method.t()
+    }
+
+    /// The solution at [`Integrator::t`].
+    pub fn y(&self) -> &[f64] {
+        self.method.y()
+    }
+
+    /// The horizon `[t₀, t_end]`.
+    pub fn horizon(&self) -> (f64, f64) {
+        (self.t0, self.t_end)
+    }
+
+    /// Names of the unknowns, in the order of [`Integrator::y`].
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Work counters so far.
+    pub fn stats(&self) -> Stats {
+        self.method.stats()
+    }
+
+    /// Whether `t_end` has been reached.
+    pub fn finished(&self) -> bool {
+        self.method.finished()
+    }
+
+    /// Take one accepted step (rejected attempts are retried inside, as in
+    /// [`Solver::solve`](crate::Solver::solve)). After `t_end` it does
+    /// nothing and says [`StepOutcome::Finished`]; after a failure it
+    /// returns the same error again.
+    pub fn step(&mut self) -> Result<StepOutcome, SolveError> {
+        if let Some(e) = &self.failed {
+            return Err(e.clone());
+        }
+        if !self.method.finished() {
+            let t_prev = self.method.t();
+            if let Err(e) = self.method.step() {
+                self.failed = Some(e.clone());
+                return Err(e);
+            }
+            self.t_prev = t_prev;
+            self.record.after_step(&*self.method);
+        }
+        let t = self.method.t();
+        Ok(if self.method.finished() {
+            StepOutcome::Finished { t }
+        } else {
+            StepOutcome::Accepted { t }
+        })
+    }
+
+    /// Step until the integration covers `t`, and return the solution at
+    /// `t` by the dense output of the step that covers it (the value
+    /// [`Solution::y`] has at an output time `t`). Steps are never
+    /// shortened for `t` and never go past `t_end`.
+    ///
+    /// A time already passed is answered from the last step, or from the
+    /// recorded dense output ([`Options::dense_output`]); without it, a
+    /// time before the start of the last step is [`SolveError::OutOfReach`],
+    /// as is any time outside `[t₀, t_end]`.
+    pub fn advance_to(&mut self, t: f64) -> Result<&[f64], SolveError> {
+        let to = self.t_end;
+        let reach = |from: f64| SolveError::OutOfReach { t, from, to };
+        if !(t >= self.t0 && t <= self.t_end) {
+            return Err(reach(self.t0));
+        }
+        while self.method.t() < t {
+            self.step()?;
+        }
+        if t == self.t0 {
+            self.out.copy_from_slice(&self.y0);
+        } else if t > self.t_prev {
+            self.method.dense(t, &mut self.out);
+        } else if let Some(dense) = self.record.dense() {
+            dense
+                .at_into(t, &mut self.out)
+                .map_err(|_| reach(self.t0))?;
+        } else if t == self.t_prev {
+            // The start of the last step.
+            self.method.dense(t, &mut self.out);
+        } else {
+            return Err(reach(self.t_prev));
+        }
+        Ok(&self.out)
+    }
+
+    /// Run to `t_end` and return the [`Solution`]: the output times of
+    /// [`Options::output_times`], the step points and dense output when
+    /// asked, and the work counters — what
+    /// [`Solver::solve`](crate::Solver::solve) returns.
+    pub fn finish(mut self) -> Result<Solution, SolveError> {
+        while let StepOutcome::Accepted { .. } = self.step()? {}
+        let stats = self.method.stats();
+        Ok(self.record.finish(stats, self.names))
+    }
+}
