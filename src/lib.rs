@@ -20,12 +20,25 @@ pub mod stability;
 pub mod sweep;
 
 /// Everything a user of the macro and the solvers needs.
+///
+/// ```
+/// use dae::prelude::*;
+///
+/// // Separate relative and absolute tolerances, one value per unknown
+/// // where it matters (the README's pendulum: x, y, v, w, λ).
+/// let tol = Tolerances {
+///     rtol: Tol::Scalar(1e-8),
+///     atol: Tol::PerComponent(vec![1e-10, 1e-10, 1e-9, 1e-9, 1e-6]),
+/// };
+/// let options = Options { tol, ..Options::default() };
+/// assert_eq!(options.tol.atol(4), 1e-6);
+/// ```
 pub mod prelude {
     pub use dae_core::system::{
         BoxedSystem, DaeSystem, FormulationInfo, Model, ModelInfo, RowKind, StaticSize, VarKind,
     };
     pub use dae_macros::dae;
-    pub use dae_solvers::{Options, Problem, Solution, SolveError, Solver, Stats, Tolerances};
+    pub use dae_solvers::{Options, Problem, Solution, SolveError, Solver, Stats, Tol, Tolerances};
 }
 
 /// Runtime support for macro-generated code. Not public API.

@@ -46,7 +46,7 @@ pub mod stats;
 
 pub use error::{NotApplicable, SolveError};
 pub use init::{consistent, initial_derivative, InitMode, InitOptions};
-pub use options::{Options, Tolerances};
+pub use options::{Options, Tol, Tolerances};
 pub use solution::Solution;
 pub use stats::Stats;
 
