@@ -1,5 +1,6 @@
 // The crate docs are the README, so its example is compiled and run as a doctest.
 #![doc = include_str!("../README.md")]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![warn(missing_docs)]
 
 extern crate self as dae;
@@ -8,15 +9,34 @@ pub use dae_core;
 pub use dae_macros::dae;
 pub use dae_solvers;
 
-pub mod cli;
+// The library (always built): the re-exports above, the prelude, the
+// built-in models and the exact pendulum.
 #[doc = include_str!("../docs/guide.md")]
 pub mod guide {}
-pub mod inputs;
 pub mod models;
 pub mod reference;
+
+// The command line and what only it needs (scene files, runs with their
+// verdicts, sweeps, tables and figures): the `cli` feature, on by default.
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
+pub mod cli;
+#[cfg(feature = "cli")]
+mod font;
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
+pub mod inputs;
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
 pub mod runner;
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
 pub mod scene;
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
 pub mod stability;
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
 pub mod sweep;
 
 /// Everything a user of the macro and the solvers needs.
