@@ -100,6 +100,8 @@ pub fn load(spec: &str) -> Result<Box<dyn Model + Send + Sync>, ModelError> {
 
 /// The runnable model a scene names: a built-in by name, a file by its
 /// path — also a file whose path reads like a built-in's name (`pendulum`).
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
 pub fn load_source(
     source: &crate::scene::ModelSource,
 ) -> Result<Box<dyn Model + Send + Sync>, ModelError> {

@@ -582,6 +582,7 @@ pub fn draw_heat_map<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     map: &StabilityMap,
 ) -> Result<(), PlotError> {
+    crate::font::register()?;
     root.fill(&WHITE).map_err(draw_err)?;
     let (rows, cols) = grid(map);
     let font = ("sans-serif", 12).into_font();

@@ -1,5 +1,5 @@
 //! The exact pendulum reference (`dae::reference`) against the 20-digit
-//! tables shipped in `tests/data/`, against the equations of motion, and on
+//! tables shipped in `data/`, against the equations of motion, and on
 //! bad input.
 
 use dae::reference::{
@@ -11,7 +11,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 #[allow(clippy::excessive_precision)] // the paper's digits, as written in the scene files
 const G: f64 = 13.750_371_637_329_454_4;
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data");
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data");
 
 /// One table row: the time as written, and `[x, y, v, w, λ]`.
 struct Row {

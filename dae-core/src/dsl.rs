@@ -524,14 +524,35 @@ fn parse_equations(tokens: &[TokenTree], errors: &mut Errors) -> Vec<Equation> {
             .filter(|(_, t)| matches!(t, TokenTree::Punct(p) if p.as_char() == '='))
             .map(|(k, _)| k)
             .collect();
-        if eqs.len() != 1 {
-            let span = eqs
-                .get(1)
-                .map(|&k| piece[k].span())
-                .unwrap_or(piece[0].span());
+        if eqs.len() >= 2 {
+            // Two `=` in one piece: most often a `;` left out between two
+            // equations. The first equation ends where two operands meet
+            // with no operator between them (`… = v  der(y) = …`).
+            match missing_separator(&piece[eqs[0] + 1..eqs[1]]) {
+                Some(last) => {
+                    let (what, span) = match last {
+                        TokenTree::Group(g) => ("(…)".to_string(), g.span_close()),
+                        other => (describe(other), other.span()),
+                    };
+                    errors.push(
+                        span,
+                        format!(
+                            "expected `;` after `{what}`: the next equation begins without one"
+                        ),
+                    );
+                }
+                None => errors.push(
+                    piece[eqs[1]].span(),
+                    "a second `=` in one equation: end each equation with `;` \
+                     (`coef * der(u) = rhs;` or `0 = constraint;`)",
+                ),
+            }
+            continue;
+        }
+        if eqs.is_empty() {
             errors.push(
-                span,
-                "an equation has exactly one `=`: `coef * der(u) = rhs` or `0 = constraint`",
+                piece[0].span(),
+                "an equation needs one `=`: `coef * der(u) = rhs` or `0 = constraint`",
             );
             continue;
         }
@@ -554,6 +575,24 @@ fn parse_equations(tokens: &[TokenTree], errors: &mut Errors) -> Vec<Equation> {
         }
     }
     out
+}
+
+/// Where an equation ends without its `;`: in `tokens`, the text between
+/// the first and the second `=` of a piece, the last token of the first
+/// equation — the last operand directly followed by another operand (an
+/// identifier, a literal, or a parenthesis that is not a call's argument
+/// list). `None` if no two operands meet (`… = a - b = …`).
+fn missing_separator(tokens: &[TokenTree]) -> Option<&TokenTree> {
+    let is_operand = |t: &TokenTree| match t {
+        TokenTree::Ident(_) | TokenTree::Literal(_) => true,
+        TokenTree::Group(g) => g.delimiter() == Delimiter::Parenthesis,
+        TokenTree::Punct(_) => false,
+    };
+    tokens.windows(2).rev().find_map(|pair| {
+        let (a, b) = (&pair[0], &pair[1]);
+        let call = matches!(a, TokenTree::Ident(_)) && matches!(b, TokenTree::Group(_));
+        (is_operand(a) && is_operand(b) && !call).then_some(a)
+    })
 }
 
 fn parse_invariants(tokens: &[TokenTree], errors: &mut Errors) -> Vec<InvariantDecl> {

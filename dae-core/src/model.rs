@@ -152,6 +152,43 @@ pub struct Model {
 /// Names of the elementary functions.
 pub const FUNCTIONS: [&str; 6] = ["sin", "cos", "tan", "exp", "ln", "sqrt"];
 
+/// What to say after "unknown function `name`": how to write a common
+/// function the language lacks, or the known function `name` is a typo of
+/// (one edit away: `sni`, `sqr`, `exq`), or nothing.
+///
+/// ```
+/// use dae_core::model::unknown_function_hint;
+/// assert_eq!(unknown_function_hint("sqr"), "; did you mean `sqrt`?");
+/// assert!(unknown_function_hint("atan2").contains("no inverse trigonometric"));
+/// assert!(unknown_function_hint("log").contains("`ln`"));
+/// assert_eq!(unknown_function_hint("frobnicate"), "");
+/// ```
+pub fn unknown_function_hint(name: &str) -> String {
+    let advice = match name {
+        "log" => Some("the natural logarithm is `ln`"),
+        "log10" => Some("write `ln(x) / ln(10)`"),
+        "log2" => Some("write `ln(x) / ln(2)`"),
+        "pow" => Some("powers are written `x^y`"),
+        "sinh" => Some("`sinh(x)` is `(exp(x) - exp(-x)) / 2`"),
+        "cosh" => Some("`cosh(x)` is `(exp(x) + exp(-x)) / 2`"),
+        "tanh" => Some("`tanh(x)` is `(exp(x) - exp(-x)) / (exp(x) + exp(-x))`"),
+        "asin" | "acos" | "atan" | "atan2" | "arcsin" | "arccos" | "arctan" => Some(
+            "there are no inverse trigonometric functions: write the model in \
+             coordinates, or make the angle an unknown",
+        ),
+        _ => None,
+    };
+    if let Some(advice) = advice {
+        return format!("; {advice}");
+    }
+    FUNCTIONS
+        .iter()
+        .chain(std::iter::once(&"der"))
+        .find(|known| strsim::damerau_levenshtein(name, known) == 1)
+        .map(|known| format!("; did you mean `{known}`?"))
+        .unwrap_or_default()
+}
+
 /// The name of time, which no parameter or unknown may take.
 pub const TIME: &str = "t";
 
@@ -980,6 +1017,22 @@ impl Scope<'_> {
         match ast {
             Ast::Num(..) | Ast::Ident(..) => self.lower(ast, errors),
             Ast::Call(name, span, args) => {
+                if !FUNCTIONS.contains(&name.as_str()) && name != "der" {
+                    // Unknown whatever its arguments (`atan2(u, w)`): name
+                    // it, still checking the arguments' own names.
+                    for arg in args {
+                        self.lower(arg, errors);
+                    }
+                    errors.push(
+                        *span,
+                        format!(
+                            "unknown function `{name}` (known: {}, der){}",
+                            FUNCTIONS.join(", "),
+                            unknown_function_hint(name)
+                        ),
+                    );
+                    return None;
+                }
                 if args.len() != 1 {
                     errors.push(
                         *span,
@@ -1032,16 +1085,8 @@ impl Scope<'_> {
                     "exp" => Func::Exp,
                     "ln" => Func::Ln,
                     "sqrt" => return Some(expr::sqrt(&arg)),
-                    _ => {
-                        errors.push(
-                            *span,
-                            format!(
-                                "unknown function `{name}` (known: {}, der)",
-                                FUNCTIONS.join(", ")
-                            ),
-                        );
-                        return None;
-                    }
+                    // Unknown names were refused above.
+                    _ => return None,
                 };
                 if arg.any_sym(&|s| matches!(s, Sym::Der(_))) {
                     errors.push(

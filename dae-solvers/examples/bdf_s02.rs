@@ -21,8 +21,8 @@ use dae_solvers::{Options, Problem, Solver};
 use std::collections::HashMap;
 use std::time::Instant;
 
-/// The rows of a CSV file in `shared/reference/`, split at commas, without
-/// comment lines (none when the file is missing).
+/// The rows of a CSV file in the repository's `data/`, split at commas,
+/// without comment lines (none when the file is missing).
 fn csv_rows(file: &str) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(reference_path(file)).unwrap_or_default();
     text.lines()

@@ -56,7 +56,7 @@ pub mod stats;
 pub use error::{NotApplicable, SolutionError, SolveError};
 pub use init::{consistent, initial_derivative, InitMode, InitOptions};
 pub use integrator::{Integrator, StepOutcome};
-pub use options::{Options, Tolerances};
+pub use options::{Options, Tol, Tolerances};
 pub use solution::{DenseOutput, Solution};
 pub use stats::Stats;
 

@@ -3,7 +3,25 @@
 use crate::error::SolveError;
 use serde::Serialize;
 
-/// A tolerance: one value for every component or one per component.
+/// A tolerance: one value for every component or one per component (the
+/// two halves of [`Tolerances`]).
+///
+/// ```
+/// use dae_solvers::{Options, Tol, Tolerances};
+///
+/// // Five unknowns (x, y, v, w, λ): relative 1e-8 on the positions and
+/// // velocities, none on the multiplier λ, which gets an absolute 1e-6.
+/// let tol = Tolerances {
+///     rtol: Tol::PerComponent(vec![1e-8, 1e-8, 1e-8, 1e-8, 0.0]),
+///     atol: Tol::PerComponent(vec![1e-10, 1e-10, 1e-10, 1e-10, 1e-6]),
+/// };
+/// assert!(tol.validate(5).is_ok());
+/// assert_eq!((tol.rtol(4), tol.atol(4)), (0.0, 1e-6));
+/// // A per-component tolerance must have one value per unknown.
+/// assert!(tol.validate(6).is_err());
+/// let options = Options { tol, ..Options::default() };
+/// assert_eq!(options.tol.rtol(0), 1e-8);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub enum Tol {
     /// The same value for every component.
@@ -213,8 +231,9 @@ impl Default for Tolerances {
 /// (the command line and scene files apply the same rule to their uniform
 /// `RTOL = ATOL = tol` through [`check_uniform`]):
 ///
-/// * every `rtol_i` and `atol_i` finite and non-negative, `rtol_i + atol_i
-///   > 0`, lengths matching the system — else [`SolveError::InvalidInput`];
+/// * every `rtol_i` and `atol_i` finite and non-negative, their sum
+///   `rtol_i + atol_i > 0`, lengths matching the system — else
+///   [`SolveError::InvalidInput`];
 /// * every `rtol_i` either `0` (a purely absolute tolerance for that
 ///   component) or in `[RTOL_MIN, RTOL_MAX)` = `[100 ε, 1)` ≈ `[2.2e-14,
 ///   1)` — else [`SolveError::ToleranceOutOfRange`], naming `rtol`, the

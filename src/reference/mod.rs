@@ -74,6 +74,8 @@
 //! ≈ 4·10⁻¹³. To reproduce the paper's start `x = 1, y = 0` exactly use
 //! [`PendulumExact::from_start`].
 
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
 pub mod data;
 
 use std::fmt;

@@ -48,6 +48,14 @@ pub enum PlotError {
     /// The file could not be written.
     #[error(transparent)]
     Io(#[from] std::io::Error),
+    /// The embedded font could not be registered with the plotting library.
+    #[error("the embedded font {file} could not be registered as `{family}`")]
+    Font {
+        /// The family name the figures use.
+        family: &'static str,
+        /// The font file, relative to the repository.
+        file: &'static str,
+    },
 }
 
 fn draw_err<E: std::fmt::Display>(e: E) -> PlotError {
@@ -1164,6 +1172,7 @@ pub fn draw<DB: DrawingBackend>(
     fig: &Figure,
     segmented: bool,
 ) -> Result<(), PlotError> {
+    crate::font::register()?;
     root.fill(&WHITE).map_err(draw_err)?;
     let (top, body) = root.split_vertically(TITLE_HEIGHT);
     top.draw(&Text::new(

@@ -4,7 +4,7 @@
 //!
 //! * the paper's pendulum in seven formulations ([`Pendulum`], [`Form`]) and
 //!   in `ovd0` ([`PendulumOvd0`]), its exact solution and the reference
-//!   files of `shared/reference/`;
+//!   files shipped in the repository's `data/`;
 //! * the planar double pendulum ([`DoublePendulum`]), the index-2 test
 //!   problem of the IDeC paper ([`Idec`]) and two toy chains ([`Toy`]),
 //!   written as [`Hand`] formulations;
@@ -736,7 +736,7 @@ pub fn pendulum_exact(t: f64) -> [f64; 5] {
     pendulum_exact_at(t, 1.0, 1.0, G, 0.5 * PI)
 }
 
-/// Rows `(t, x, y, v, w, λ)` of `shared/reference/pendulum_s01_exact.csv`
+/// Rows `(t, x, y, v, w, λ)` of `data/pendulum_s01_exact.csv`
 /// and `pendulum_s02_periods_exact.csv` (20-digit closed-form values),
 /// embedded to check [`pendulum_exact`] without reading files.
 pub const EXACT_ROWS: [[f64; 6]; 5] = [
@@ -782,16 +782,15 @@ pub const EXACT_ROWS: [[f64; 6]; 5] = [
     ],
 ];
 
-/// The path of a file in `shared/reference/`.
+/// The path of a reference file shipped in the repository's `data/`
+/// (`data/README.md` says where each comes from). Only files inside the
+/// repository: a fresh clone with nothing beside it passes its tests.
 pub fn reference_path(file: &str) -> String {
-    format!(
-        "{}/../../shared/reference/{file}",
-        env!("CARGO_MANIFEST_DIR")
-    )
+    format!("{}/../data/{file}", env!("CARGO_MANIFEST_DIR"))
 }
 
 /// Exact pendulum values `(t, [x, y, v, w, λ])` from a reference file in
-/// `shared/reference/`.
+/// the repository's `data/`.
 pub fn reference(file: &str) -> Vec<(f64, [f64; 5])> {
     let path = reference_path(file);
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
