@@ -125,62 +125,7 @@ pub const MAX_REFERENCE_BYTES: u64 = 256 << 20;
 /// Closed forms a reference of kind `exact` may name.
 pub const CLOSED_FORMS: [&str; 1] = ["pendulum"];
 
-/// The known name closest to `given`, if one is close enough to be a typo:
-/// at most one edit (insertion, deletion, substitution, or transposition
-/// of neighbours) for names of up to four characters, two for longer ones,
-/// never as many as half of `given`. Ties go to the first in `known`.
-/// Case is ignored.
-///
-/// ```
-/// use dae::scene::did_you_mean;
-///
-/// let solvers = ["radau5", "bdf", "odradau", "gauss"];
-/// assert_eq!(did_you_mean("radua5", &solvers), Some("radau5"));
-/// assert_eq!(did_you_mean("BDF", &solvers), Some("bdf"));
-/// assert_eq!(did_you_mean("euler", &solvers), None);
-/// assert_eq!(did_you_mean("ggl", &["ggl1", "rcd1"]), Some("ggl1"));
-/// ```
-pub fn did_you_mean<'a>(given: &str, known: &[&'a str]) -> Option<&'a str> {
-    let given = given.to_lowercase();
-    let len = given.chars().count();
-    let limit = if len <= 4 { 1 } else { 2 };
-    let mut best: Option<(usize, &'a str)> = None;
-    for &k in known {
-        let d = edit_distance(&given, &k.to_lowercase());
-        if d <= limit && 2 * d < len.max(2) && !matches!(best, Some((b, _)) if b <= d) {
-            best = Some((d, k));
-        }
-    }
-    best.map(|(_, k)| k)
-}
-
-/// Optimal-string-alignment distance: Levenshtein's insertions, deletions
-/// and substitutions, and transpositions of neighbouring characters, each
-/// costing one.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let a: Vec<char> = a.chars().collect();
-    let b: Vec<char> = b.chars().collect();
-    // Three rows of the dynamic programme: i-2, i-1, i.
-    let mut before: Vec<usize> = vec![0; b.len() + 1];
-    let mut previous: Vec<usize> = (0..=b.len()).collect();
-    let mut current = vec![0; b.len() + 1];
-    for i in 1..=a.len() {
-        current[0] = i;
-        for j in 1..=b.len() {
-            let cost = usize::from(a[i - 1] != b[j - 1]);
-            let mut d = (previous[j] + 1)
-                .min(current[j - 1] + 1)
-                .min(previous[j - 1] + cost);
-            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
-                d = d.min(before[j - 2] + 1);
-            }
-            current[j] = d;
-        }
-        std::mem::swap(&mut before, &mut previous);
-        std::mem::swap(&mut previous, &mut current);
-    }
-    previous[b.len()]
-}
+pub use dae_core::names::did_you_mean;
 
 /// `; did you mean `NAME`?` for an error message, or nothing.
 fn hint<S: AsRef<str>>(name: &str, known: &[S]) -> String {

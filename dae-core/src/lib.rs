@@ -19,6 +19,7 @@ pub mod index;
 pub mod interp;
 pub mod lex;
 pub mod model;
+pub mod names;
 pub mod print;
 pub mod report;
 pub mod selector;

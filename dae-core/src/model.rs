@@ -181,10 +181,8 @@ pub fn unknown_function_hint(name: &str) -> String {
     if let Some(advice) = advice {
         return format!("; {advice}");
     }
-    FUNCTIONS
-        .iter()
-        .chain(std::iter::once(&"der"))
-        .find(|known| strsim::damerau_levenshtein(name, known) == 1)
+    let known: Vec<&str> = FUNCTIONS.iter().copied().chain(["der"]).collect();
+    crate::names::did_you_mean(name, &known)
         .map(|known| format!("; did you mean `{known}`?"))
         .unwrap_or_default()
 }

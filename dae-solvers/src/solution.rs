@@ -170,19 +170,12 @@ impl Solution {
 }
 
 /// Position of `name` in `names`, or the typed error with the closest
-/// name (Damerau–Levenshtein distance at most a third of the length, and
-/// at least one edit allowed) and the list.
+/// name ([`dae_core::names::did_you_mean`]) and the list.
 pub(crate) fn index_of(names: &[String], name: &str) -> Result<usize, SolutionError> {
     if let Some(i) = names.iter().position(|n| n == name) {
         return Ok(i);
     }
-    let limit = (name.chars().count() / 3).max(1);
-    let suggestion = names
-        .iter()
-        .map(|n| (strsim::damerau_levenshtein(n, name), n))
-        .filter(|&(d, _)| d <= limit)
-        .min_by_key(|&(d, _)| d)
-        .map(|(_, n)| n.clone());
+    let suggestion = dae_core::names::did_you_mean(name, names).map(str::to_string);
     Err(SolutionError::UnknownName {
         name: name.to_string(),
         suggestion,
