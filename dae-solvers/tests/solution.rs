@@ -217,8 +217,10 @@ fn by_name_equals_by_index() {
                 }
                 other => panic!("{other:?}"),
             }
+            // (`theta` would be two edits from `eta`: a suggestion under
+            // the shared rule of `dae_core::names::did_you_mean`.)
             assert!(matches!(
-                sol.component("theta"),
+                sol.component("omega"),
                 Err(SolutionError::UnknownName {
                     suggestion: None,
                     ..
