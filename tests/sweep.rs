@@ -1016,7 +1016,9 @@ fn s02_work_precision_carries_the_fortran_curves() {
     assert!(fig
         .legend
         .iter()
-        .any(|(l, lk, m)| l == "DASSL (Fortran, rcd0)" && lk.hollow && *m));
+        .any(|(l, lk, _)| l == "DASSL (Fortran)" && lk.line == plot::Line::Dotted));
+    // One legend entry per Fortran code, not per code and formulation.
+    assert!(!fig.legend.iter().any(|(l, _, _)| l.contains("(Fortran, ")));
     assert!(fig.caption.contains("time_median_s") && fig.caption.contains("cpu_s"));
     assert!(fig.caption.contains("another session"));
     // The legend fits: the figure grows with its entries.

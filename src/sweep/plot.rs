@@ -595,7 +595,13 @@ fn error_figure(report: &SweepReport, runs: &[&SweepRun], tol: &str, sampled_at:
                     .copied()
                     .filter(|r| &r.record.solver == s)
                     .collect();
-                panel(s.clone(), series_of(&mine))
+                // One colour per panel: hollow markers stand out on the
+                // lines and tell the formulations apart.
+                let mut series = series_of(&mine);
+                for x in &mut series {
+                    x.look.hollow = true;
+                }
+                panel(s.clone(), series)
             })
             .collect()
     };
@@ -877,7 +883,16 @@ fn work_precision_figure(report: &SweepReport, lines: Option<&ReferenceLines>) -
     let lines = lines.filter(|_| with_ref);
     for c in lines.iter().flat_map(|l| &l.curves) {
         let lk = reference_look(&c.code, &c.formulation);
-        legend.push((c.label.clone(), lk, true));
+        // One legend entry per code (its grey, dotted); the formulation is
+        // the marker, as for ours.
+        let code_label = c.label.replace(&format!(", {}", c.formulation), "");
+        if !legend.iter().any(|(l, _, _)| *l == code_label) {
+            let entry = Look {
+                marker: Marker::None,
+                ..lk
+            };
+            legend.push((code_label, entry, false));
+        }
         series.push(Series {
             label: c.label.clone(),
             look: lk,
