@@ -163,8 +163,8 @@ pub struct RunRecord {
     /// Integration time in seconds: the CPU time of the thread that ran
     /// the integration (median of the repeats). CPU time, not wall time,
     /// so that it does not grow when other processes compete for the cores
-    /// (a sweep's ranking stays the same on a loaded machine; see
-    /// BENCHMARKS.md). It does not count time spent waiting, e.g. for
+    /// (BENCHMARKS.md §7: a sweep's CPU times moved 0.98× in the median
+    /// where wall times moved 2.66× with both cores loaded). It does not count time spent waiting, e.g. for
     /// pages; [`wall_s`](RunRecord::wall_s) is the elapsed time beside it.
     pub tsim_s: f64,
     /// Wall-clock time of the same integration(s) in seconds (median of the

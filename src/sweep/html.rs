@@ -303,8 +303,8 @@ pub fn index(
             "<h2 id=\"trade\">The trade</h2>\n<p>Both summaries use <code>err</code>, the largest pointwise error of the \
              differential unknowns over the check times. Pareto front: successful runs that no other successful run \
              beats on both tsim and err (at least as good in both, strictly better in one), by increasing tsim. tsim is \
-             the CPU time of the integrating thread, so the ranking does not move with the machine's load; wall_s is in \
-             the efficiency table.</p>\n",
+             the CPU time of the integrating thread, so the load of the machine as a whole does not move the ranking (runs \
+             within their timing spread can still swap; BENCHMARKS.md §7); wall_s is in the efficiency table.</p>\n",
         );
         let mut rows = vec![vec![
             "pair".to_string(),

@@ -21,8 +21,9 @@
 //! only at the check times), each measured as the **CPU time of the thread
 //! that integrated** ([`crate::runner::timed`]), so that a machine loaded
 //! by other work does not slow the runs down on paper: the Pareto front and
-//! the fastest pair per target use it, and stay the same on an idle and on
-//! a loaded machine (BENCHMARKS.md, "CPU time"). The wall-clock time of the
+//! the fastest pair per target use it, so other work on the machine does not
+//! reorder them as a whole (runs within their timing spread still can;
+//! BENCHMARKS.md §7). The wall-clock time of the
 //! same integrations is kept beside it (`wall_s`, the median, and
 //! [`SweepRun::wall_runs`]). A run is timed again only while its timed
 //! integrations took less than [`REPEAT_BUDGET_S`] of CPU time in total, so
