@@ -167,8 +167,16 @@ pub struct RunRecord {
     pub accuracy: Option<Accuracy>,
     /// What the verdict rests on, in one line (`null` with it).
     pub accuracy_note: Option<String>,
-    /// Integration time in seconds (median of the repeats).
+    /// Integration time in seconds: the CPU time of the thread that ran
+    /// the integration (median of the repeats). CPU time, not wall time,
+    /// so that it does not grow when other processes compete for the cores
+    /// (BENCHMARKS.md §8: a sweep's CPU times moved 0.98× in the median
+    /// where wall times moved 2.66× with both cores loaded). It does not count time spent waiting, e.g. for
+    /// pages; [`wall_s`](RunRecord::wall_s) is the elapsed time beside it.
     pub tsim_s: f64,
+    /// Wall-clock time of the same integration(s) in seconds (median of the
+    /// repeats): what a user waits, and what grows with the machine's load.
+    pub wall_s: f64,
     /// Work counters.
     pub stats: Stats,
     /// Constraint residuals per level.
@@ -608,6 +616,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         accuracy: None,
         accuracy_note: None,
         tsim_s: 0.0,
+        wall_s: 0.0,
         stats: Stats::default(),
         residuals: Residuals::default(),
         invariant_drift: Named::default(),
@@ -682,15 +691,17 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         t_end: spec.t_end,
     };
     let mut times = Vec::new();
+    let mut walls = Vec::new();
     let mut solution = None;
     for _ in 0..spec.repeats.max(1) {
-        let start = Instant::now();
-        let result = solver.solve(&problem, &options);
-        times.push(start.elapsed().as_secs_f64());
+        let (result, cpu, wall) = timed(|| solver.solve(&problem, &options));
+        times.push(cpu);
+        walls.push(wall);
         match result {
             Ok(s) => solution = Some(s),
             Err(e) => {
-                record.tsim_s = times[times.len() - 1];
+                record.tsim_s = cpu;
+                record.wall_s = wall;
                 return Ok(fail(record, e));
             }
         }
@@ -704,7 +715,9 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         ));
     };
     times.sort_by(f64::total_cmp);
+    walls.sort_by(f64::total_cmp);
     record.tsim_s = times[times.len() / 2];
+    record.wall_s = walls[walls.len() / 2];
     record.stats = sol.stats;
     record.t_end = sol.t.last().copied().unwrap_or(spec.t_end);
     if let Some(last) = sol.last() {
@@ -727,6 +740,30 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         record.trajectory.steps.extend(sol.steps);
     }
     Ok(record)
+}
+
+/// Run `f` on this thread and measure it: its result, the CPU time this
+/// thread spent in it, and the wall-clock time it took, both in seconds.
+///
+/// The CPU time is the thread's (`CLOCK_THREAD_CPUTIME_ID` on Unix, via
+/// the `cpu-time` crate), so work of other threads and processes does not
+/// count; where the platform offers no thread clock it falls back to the
+/// wall-clock time.
+///
+/// ```
+/// let (sum, cpu, wall) = dae::runner::timed(|| (0..100_000u64).sum::<u64>());
+/// assert_eq!(sum, 4_999_950_000);
+/// assert!(cpu >= 0.0 && wall >= 0.0);
+/// ```
+pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64, f64) {
+    let cpu = cpu_time::ThreadTime::try_now().ok();
+    let wall = Instant::now();
+    let out = f();
+    let wall = wall.elapsed().as_secs_f64();
+    let cpu = cpu
+        .and_then(|c| c.try_elapsed().ok())
+        .map_or(wall, |d| d.as_secs_f64());
+    (out, cpu, wall)
 }
 
 /// Whether each output time is a check time (within `10⁻¹²(1 + |t|)`), by

@@ -40,6 +40,8 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
         }),
         accuracy_note: Some("test".into()),
         tsim_s: tsim,
+        // A loaded machine: the wall clock ran longer than the CPU.
+        wall_s: 2.0 * tsim,
         stats: Stats {
             steps: 100,
             rejected: 3,
@@ -79,6 +81,7 @@ fn failed(solver: &str, formulation: &str, tol: f64) -> RunRecord {
 fn run(r: RunRecord) -> SweepRun {
     SweepRun {
         tsim_runs: vec![r.tsim_s],
+        wall_runs: vec![r.wall_s],
         record: r,
     }
 }
@@ -212,6 +215,12 @@ fn success_matrix_marks_reasons_and_counts() {
     );
     assert!(text.contains("-1: overdetermined: solver needs a square system"));
     assert!(text.contains("-2: not provided by the model"));
+    // Colours follow usable (finished and accurate) answers, not only
+    // completion: bdf(rcd1) finished once, inaccurate, so it is red.
+    assert_eq!(c("radau5", "rcd1").usable(), table::Usable::All);
+    assert_eq!(c("bdf", "rcd1").usable(), table::Usable::None);
+    assert_eq!(c("bdf", "psi0").usable(), table::Usable::None);
+    assert_eq!(c("radau5", "ovd0").usable(), table::Usable::NotApplicable);
     // The JSON uses the paper's symbols.
     let json = serde_json::to_value(&m).unwrap();
     assert_eq!(json["rows"][0]["cells"][0]["mark"], "X");
@@ -232,13 +241,14 @@ fn efficiency_rows_show_values_and_failures() {
     assert_eq!(ok[1], "1e-5");
     assert_eq!(ok[2], "ok");
     assert_eq!(ok[3], "accurate"); // next to the status
-    assert_eq!(ok[4], "1.0e-02"); // tsim
-    assert_eq!(ok[5], "1.0e-04"); // err
-    assert_eq!(ok[6], "2.0e-04"); // err_sum
-    assert_eq!(ok[8], "100"); // steps
-    assert_eq!(ok[12], "95"); // factorisations
-    assert_eq!(ok[15], "-"); // no level-2 residual
-    assert_eq!(ok[16], "1.0e-07"); // drift
+    assert_eq!(ok[4], "1.0e-02"); // tsim (CPU)
+    assert_eq!(ok[5], "2.0e-02"); // wall_s beside it
+    assert_eq!(ok[6], "1.0e-04"); // err
+    assert_eq!(ok[7], "2.0e-04"); // err_sum
+    assert_eq!(ok[9], "100"); // steps
+    assert_eq!(ok[13], "95"); // factorisations
+    assert_eq!(ok[16], "-"); // no level-2 residual
+    assert_eq!(ok[17], "1.0e-07"); // drift
                                    // Finished but wrong: flagged in capitals.
     assert_eq!(rows[3][0], "bdf(rcd1)");
     assert_eq!(rows[3][3], "INACCURATE");
@@ -653,11 +663,18 @@ fn small_s01_sweep_writes_every_output() {
         "err_sum",
         "err_l2",
         "tsim_s",
+        "wall_s",
         "stats",
         "residuals",
         "tsim_runs",
+        "wall_runs",
     ] {
         assert!(runs[0].get(key).is_some(), "run lacks {key}");
+    }
+    // CPU and wall time of the same integrations, one of each per timing.
+    for r in &report.runs {
+        assert_eq!(r.tsim_runs.len(), r.wall_runs.len());
+        assert!(r.record.tsim_s > 0.0 && r.record.wall_s > 0.0, "{r:?}");
     }
     assert_eq!(json["paper"]["table"], "Table 6 (S01)");
     assert_eq!(json["paper"]["measure"], "err_sum");
@@ -669,6 +686,62 @@ fn small_s01_sweep_writes_every_output() {
     assert!(html.contains("overdetermined: solver needs a square system"));
     let text = sweep::table::text_report(&report, &summary);
     assert!(text.contains("Success matrix") && text.contains("Pareto front"));
+}
+
+#[test]
+fn the_page_has_a_table_of_contents_and_colours_cells_by_accuracy() {
+    let mut report = pendulum_report("T", 20.0, "exact");
+    // rcd0 reaches the end at both tolerances, 1e4 × the tolerance off;
+    // rcd1 within 10 × the tolerance.
+    for r in report.runs.iter_mut() {
+        let f = r.record.formulation.clone();
+        let factor = if f == "rcd0" { 1e4 } else { 10.0 };
+        r.record = rec("radau5", &f, r.record.tol, 0.2, Some(factor * r.record.tol));
+    }
+    let summary = sweep::Summary::of(&report);
+    let cell = summary.success.cell("radau5", "rcd0").unwrap();
+    assert_eq!((cell.mark, cell.accurate), (Mark::Every, 0));
+    assert_eq!(cell.usable(), table::Usable::None);
+    let figures = plot::figures(&report);
+    let drawn: Vec<&plot::Figure> = figures.figures.iter().collect();
+    let html = sweep::html::index(&report, &summary, &drawn, &[]);
+    // The table of contents links every section and figure to its anchor.
+    assert!(html.contains("<nav id=\"toc\">"), "{html}");
+    for anchor in [
+        "success",
+        "trade",
+        "pareto",
+        "targets",
+        "paper",
+        "figures",
+        "efficiency",
+    ] {
+        assert!(
+            html.contains(&format!("href=\"#{anchor}\"")),
+            "no link to {anchor}"
+        );
+        assert!(
+            html.contains(&format!("id=\"{anchor}\"")),
+            "no anchor {anchor}"
+        );
+    }
+    for f in &drawn {
+        assert!(html.contains(&format!("<figure id=\"fig-{}\"", f.file)));
+        assert!(html.contains(&format!("href=\"#fig-{}\"", f.file)));
+    }
+    // Finished everywhere but accurate nowhere: red, not green; the
+    // accurate pair green; the rule is stated under the matrix.
+    assert!(html.contains("<td class=\"acc-none\" title=\"reached the end at 2 of 2"));
+    assert!(html.contains("<td class=\"acc-all\" title=\"reached the end at 2 of 2"));
+    assert!(html.contains(table::USABLE_LEGEND));
+    // One legend entry per solver and per formulation, not per pair.
+    let wp = work_precision(&report);
+    let labels: Vec<&str> = wp.legend.iter().map(|(l, _, _)| l.as_str()).collect();
+    assert!(labels.contains(&"radau5") && labels.contains(&"rcd0") && labels.contains(&"rcd1"));
+    assert!(
+        !labels.iter().any(|l| l.starts_with("radau5(")),
+        "{labels:?}"
+    );
 }
 
 #[test]
@@ -943,7 +1016,9 @@ fn s02_work_precision_carries_the_fortran_curves() {
     assert!(fig
         .legend
         .iter()
-        .any(|(l, lk, m)| l == "DASSL (Fortran, rcd0)" && lk.hollow && *m));
+        .any(|(l, lk, _)| l == "DASSL (Fortran)" && lk.line == plot::Line::Dotted));
+    // One legend entry per Fortran code, not per code and formulation.
+    assert!(!fig.legend.iter().any(|(l, _, _)| l.contains("(Fortran, ")));
     assert!(fig.caption.contains("time_median_s") && fig.caption.contains("cpu_s"));
     assert!(fig.caption.contains("another session"));
     // The legend fits: the figure grows with its entries.
@@ -1054,4 +1129,70 @@ fn bdf_reproduces_the_papers_dassl_under_err_l2() {
     );
     // The norm sits between the largest error and the sum.
     assert!(r.err.unwrap() < l2 && l2 < sum);
+}
+
+/// indicatif draws nothing when stderr is not a terminal; the sweep then
+/// prints plain progress lines instead (here stderr is a pipe).
+#[test]
+fn progress_lines_when_stderr_is_not_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    for (jobs, label) in [("1", "sweep S01: "), ("2", "sweep S01 accuracy: ")] {
+        let out = dir.path().join(format!("s01-{jobs}"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_dae"))
+            .args([
+                "sweep",
+                "s01",
+                "--solvers",
+                "radau5,bdf",
+                "--formulations",
+                "rcd1",
+                "--tols",
+                "1e-5,1e-6",
+                "--repeats",
+                "1",
+                "--jobs",
+                jobs,
+                "--out",
+            ])
+            .arg(&out)
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let err = String::from_utf8_lossy(&o.stderr);
+        let lines: Vec<&str> = err.lines().filter(|l| l.starts_with(label)).collect();
+        // 4 runs: every run is another 25 % (> 5 %), so one line each,
+        // the last one at 4/4.
+        assert_eq!(lines.len(), 4, "{err}");
+        assert!(lines[3].starts_with(&format!("{label}4/4 runs, ")), "{err}");
+        assert!(lines[3].ends_with(" s"), "{err}");
+        // No bar drawing codes in a log.
+        assert!(!err.contains('\u{1b}'), "{err}");
+        if jobs == "2" {
+            assert!(err.contains("sweep S01 timing: 4/4 runs, "), "{err}");
+        }
+        // --quiet: nothing.
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_dae"))
+            .args([
+                "sweep",
+                "s01",
+                "--solvers",
+                "radau5",
+                "--formulations",
+                "rcd1",
+                "--tols",
+                "1e-5",
+                "--repeats",
+                "1",
+                "--quiet",
+                "--jobs",
+                jobs,
+                "--out",
+            ])
+            .arg(dir.path().join(format!("quiet-{jobs}")))
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        assert!(!String::from_utf8_lossy(&o.stderr).contains(" runs, "));
+    }
 }

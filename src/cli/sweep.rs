@@ -39,7 +39,8 @@ pub struct SweepArgs {
     #[arg(long, value_delimiter = ',')]
     pub tols: Option<Vec<f64>>,
     /// Timed integrations per run, at most (a run is timed again only while
-    /// its timings total under 1 s); tsim is their median.
+    /// its timings total under 1 s); tsim is their median, in CPU time of
+    /// the integrating thread (wall time beside it in results.csv/json).
     #[arg(long, default_value_t = 3)]
     pub repeats: usize,
     /// Threads for the accuracy pass (timing stays sequential).
@@ -57,7 +58,8 @@ pub struct SweepArgs {
     /// Refuse inconsistent initial values instead of projecting them.
     #[arg(long)]
     pub strict_init: bool,
-    /// Do not draw the progress bar.
+    /// No progress on stderr (otherwise a bar on a terminal, plain lines
+    /// every 5 % or 10 s when stderr is a pipe or a file).
     #[arg(long)]
     pub quiet: bool,
     /// Build the stability map instead: every scene of DIR (default

@@ -4,7 +4,7 @@
 use super::fortran::ReferenceLines;
 use super::paper::Verdict;
 use super::plot::Figure;
-use super::table::{accuracy_line, efficiency_rows, paper_cell, sci, tol_label, Mark};
+use super::table::{accuracy_line, efficiency_rows, paper_cell, sci, tol_label, USABLE_LEGEND};
 use super::{Summary, SweepReport};
 use std::fmt::Write;
 
@@ -28,7 +28,10 @@ const STYLE: &str = "body{font-family:system-ui,-apple-system,'Segoe UI',sans-se
 padding:0 1em;color:#222}h1{font-size:1.6em}h2{margin-top:2em;border-bottom:1px solid #ccc}\
 table{border-collapse:collapse;margin:.5em 0;font-size:.9em}th,td{border:1px solid #ccc;padding:.25em .6em;\
 text-align:right;white-space:nowrap}th{background:#f3f3f3}td.l,th.l{text-align:left}\
-td.X{background:#d8f0d8}td.x{background:#fff3c4}td.o{background:#f8d0d0}td.na{background:#eee;color:#666}\
+td.acc-all{background:#cdeccd}td.acc-some{background:#ffe9a8}td.acc-none{background:#f6c4c4}\
+td.na{background:#eee;color:#666}span.sw{display:inline-block;width:1em;height:1em;vertical-align:middle;\
+border:1px solid #999;margin:0 .2em 0 .6em}nav#toc{background:#f7f7f7;border:1px solid #ddd;padding:.3em 1em;\
+display:inline-block}nav#toc ol{margin:.3em 0;padding-left:1.4em}nav#toc li{margin:.1em 0}\
 td.fail{color:#a00}td.more{background:#d8f0d8}td.eq{background:#eef}td.behind{background:#f8d0d0}\
 figure{margin:1.5em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.9em;color:#444}\
 .note{background:#fff8e0;border-left:4px solid #e0b000;padding:.4em .8em}\
@@ -73,11 +76,7 @@ fn success_html(summary: &Summary) -> String {
                     );
                 }
                 (None, mark) => {
-                    let class = match mark {
-                        Mark::Every => "X",
-                        Mark::Some => "x",
-                        _ => "o",
-                    };
+                    let class = c.usable().class();
                     let warn = c.inaccurate + c.suspect > 0;
                     let note = c.failure_note().map_or_else(String::new, |note| {
                         failures.push(format!("{}({}) {note}", r.solver, c.formulation));
@@ -110,6 +109,40 @@ fn success_html(summary: &Summary) -> String {
         let _ = write!(s, "<sup>*{}</sup> {}<br>", i + 1, esc(f));
     }
     let _ = writeln!(s, "{}</p>", esc(m.legend));
+    let _ = writeln!(
+        s,
+        "<p class=\"legend\"><span class=\"sw\" style=\"background:#cdeccd\"></span>every tolerance usable\
+         <span class=\"sw\" style=\"background:#ffe9a8\"></span>some\
+         <span class=\"sw\" style=\"background:#f6c4c4\"></span>none\
+         <span class=\"sw\" style=\"background:#eee\"></span>not applicable. {}</p>",
+        esc(USABLE_LEGEND)
+    );
+    s
+}
+
+/// The table of contents: the page's sections and figures, as links to
+/// their anchors.
+fn toc(report: &SweepReport, figures: &[&Figure]) -> String {
+    let mut s = String::from("<nav id=\"toc\"><strong>Contents</strong>\n<ol>\n");
+    s.push_str("<li><a href=\"#success\">Success matrix</a></li>\n");
+    if report.has_reference() {
+        s.push_str(
+            "<li><a href=\"#trade\">The trade</a>: <a href=\"#pareto\">Pareto front</a>, \
+             <a href=\"#targets\">fastest run per target error</a></li>\n",
+        );
+    } else {
+        s.push_str("<li><a href=\"#trade\">The trade</a> (no reference)</li>\n");
+    }
+    s.push_str("<li><a href=\"#paper\">Against the paper</a></li>\n");
+    s.push_str("<li><a href=\"#figures\">Figures</a>");
+    if !figures.is_empty() {
+        let items: Vec<String> = figures
+            .iter()
+            .map(|f| format!("<a href=\"#fig-{0}\">{0}</a>", esc(&f.file)))
+            .collect();
+        let _ = write!(s, ": {}", items.join(", "));
+    }
+    s.push_str("</li>\n<li><a href=\"#efficiency\">Efficiency</a> (every run)</li>\n</ol></nav>\n");
     s
 }
 
@@ -258,6 +291,7 @@ pub fn index(
         esc(sc.reference),
         esc(&report.scale_line())
     );
+    s.push_str(&toc(report, figures));
     for n in notes {
         let _ = writeln!(s, "<p class=\"note\">{}</p>", esc(n));
     }
@@ -268,7 +302,9 @@ pub fn index(
         s.push_str(
             "<h2 id=\"trade\">The trade</h2>\n<p>Both summaries use <code>err</code>, the largest pointwise error of the \
              differential unknowns over the check times. Pareto front: successful runs that no other successful run \
-             beats on both tsim and err (at least as good in both, strictly better in one), by increasing tsim.</p>\n",
+             beats on both tsim and err (at least as good in both, strictly better in one), by increasing tsim. tsim is \
+             the CPU time of the integrating thread, so the load of the machine as a whole does not move the ranking (runs \
+             within their timing spread can still swap; BENCHMARKS.md §8); wall_s is in the efficiency table.</p>\n",
         );
         let mut rows = vec![vec![
             "pair".to_string(),
@@ -284,9 +320,9 @@ pub fn index(
                 sci(Some(p.err)),
             ]
         }));
-        s.push_str("<h3>Pareto front</h3>\n");
+        s.push_str("<h3 id=\"pareto\">Pareto front</h3>\n");
         s.push_str(&table(&rows, 1));
-        s.push_str("<h3>Fastest run per target error</h3>\n");
+        s.push_str("<h3 id=\"targets\">Fastest run per target error</h3>\n");
         let mut rows = vec![vec![
             "target err".to_string(),
             "fastest pair".into(),
@@ -340,7 +376,7 @@ pub fn index(
         };
         let _ = writeln!(
             s,
-            "<figure><a href=\"{0}.svg\"><img src=\"{0}.svg\" alt=\"{1}\"></a><figcaption>{2} \
+            "<figure id=\"fig-{0}\"><a href=\"{0}.svg\"><img src=\"{0}.svg\" alt=\"{1}\"></a><figcaption>{2} \
              (<a href=\"{0}.svg\">SVG</a>, <a href=\"{0}.png\">PNG</a>)</figcaption></figure>",
             esc(&f.file),
             esc(&alt),
@@ -350,7 +386,9 @@ pub fn index(
     let inv = report.invariants.first().map_or("I", String::as_str);
     let _ = write!(
         s,
-        "<h2 id=\"efficiency\">Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds; err: largest pointwise \
+        "<h2 id=\"efficiency\">Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds, the CPU time of the integrating thread (median of \
+         the timed integrations; the Pareto front and the fastest pairs use it); wall_s: the wall-clock time of the \
+         same integrations; err: largest pointwise \
          error of the differential unknowns over the reference's times; err_sum: sum over those times of the errors \
          of all unknowns the reference gives (SPEC's reading of the paper's ERR; results.csv also has err_l2, their \
          Euclidean norm); err_alg: largest error of the algebraic \

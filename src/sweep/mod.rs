@@ -18,19 +18,33 @@
 //! # Timing
 //! `tsim_s` is the median of `repeats` timed integrations of the same run
 //! (integration only: no model loading, no consistent initialisation, output
-//! only at the check times); a run is timed again only while its timed
-//! integrations took less than [`REPEAT_BUDGET_S`] in total, so slow runs
-//! (seconds each, where timing noise is relatively small) are timed fewer
-//! times. Every individual time is kept in [`SweepRun::tsim_runs`]. Timed
-//! integrations never overlap with other work of the sweep:
+//! only at the check times), each measured as the **CPU time of the thread
+//! that integrated** ([`crate::runner::timed`]), so that a machine loaded
+//! by other work does not slow the runs down on paper: the Pareto front and
+//! the fastest pair per target use it, so other work on the machine does not
+//! reorder them as a whole (runs within their timing spread still can;
+//! BENCHMARKS.md §8). The wall-clock time of the
+//! same integrations is kept beside it (`wall_s`, the median, and
+//! [`SweepRun::wall_runs`]). A run is timed again only while its timed
+//! integrations took less than [`REPEAT_BUDGET_S`] of CPU time in total, so
+//! slow runs (seconds each, where timing noise is relatively small) are
+//! timed fewer times. Every individual time is kept in
+//! [`SweepRun::tsim_runs`]. Timed integrations never overlap with other
+//! work of the sweep:
 //! - `jobs = 1` (default): one sequential pass; each run is integrated
 //!   `repeats` times in a row and the first integration also gives the
 //!   errors and statistics.
-//! - `jobs > 1`: an accuracy pass runs the runs in parallel on `jobs`
-//!   threads (each thread loads its own model), then a timing pass re-runs
-//!   every successful run `repeats` times sequentially. Failed runs are not
-//!   re-timed: their `tsim_s` is the time to failure of the one
-//!   (parallel) attempt.
+//! - `jobs > 1`: an accuracy pass runs the runs in parallel on a rayon
+//!   pool of `jobs` threads (each thread loads its own model once), then a
+//!   timing pass re-runs every successful run `repeats` times sequentially.
+//!   Failed runs are not re-timed: their `tsim_s` is the time to failure of
+//!   the one (parallel) attempt. The results are in grid order whatever
+//!   the threads' schedule.
+//!
+//! # Progress
+//! With `progress` set, a bar is drawn on stderr when it is a terminal;
+//! otherwise (a pipe, a CI log) plain lines are printed to stderr every 5 %
+//! of the runs or every 10 s, whichever comes first ([`progress`]).
 //!
 //! At the figure tolerance (1e-7 like the paper, else the sweep's nearest
 //! in `log10`) one further, untimed integration samples the solution for the
@@ -44,6 +58,7 @@ pub mod html;
 pub mod paper;
 pub mod pareto;
 pub mod plot;
+pub mod progress;
 pub mod table;
 pub mod write;
 
@@ -52,13 +67,13 @@ use crate::runner::{self, RunError, RunRecord, RunSpec, Trajectory};
 use crate::scene::{ModelSource, Scene};
 use dae_core::system::{FormulationError, Model};
 use dae_solvers::init::InitMode;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use progress::Progress;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::borrow::Borrow;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::{Duration, Instant};
+use std::sync::{Mutex, OnceLock};
+use std::time::Instant;
 
 /// The tolerance the paper's figures use.
 pub const FIGURE_TOL: f64 = 1e-7;
@@ -85,7 +100,8 @@ pub struct SweepOptions {
     pub jobs: usize,
     /// Project inconsistent initial values (default) or refuse them.
     pub init_mode: InitMode,
-    /// Show a progress bar on stderr (only drawn when stderr is a terminal).
+    /// Report progress on stderr: a bar on a terminal, plain lines
+    /// otherwise ([`progress::Progress`]).
     pub progress: bool,
     /// Bound on the accepted steps of each run (`None`: the library's).
     pub max_steps: Option<usize>,
@@ -152,6 +168,14 @@ pub enum SweepError {
     /// A worker thread panicked.
     #[error("a sweep worker thread panicked")]
     WorkerPanicked,
+    /// The pool of worker threads could not be started.
+    #[error("cannot start {threads} sweep worker thread(s): {source}")]
+    ThreadPool {
+        /// Threads asked for (`--jobs`).
+        threads: usize,
+        /// Rayon's error.
+        source: rayon::ThreadPoolBuildError,
+    },
     /// The output directory holds something a sweep did not write, so it
     /// is not replaced (see [`write_outputs`]).
     #[error(
@@ -202,11 +226,15 @@ pub struct Pair {
 /// `dae run` prints it) plus every timed integration.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SweepRun {
-    /// The record; `tsim_s` is the median of `tsim_runs`.
+    /// The record; `tsim_s` is the median of `tsim_runs`, `wall_s` the
+    /// median of `wall_runs`.
     #[serde(flatten)]
     pub record: RunRecord,
-    /// Every timed integration in seconds.
+    /// Every timed integration in seconds: CPU time of the integrating
+    /// thread ([`crate::runner::timed`]).
     pub tsim_runs: Vec<f64>,
+    /// The wall-clock times of the same integrations, in the same order.
+    pub wall_runs: Vec<f64>,
 }
 
 impl Borrow<RunRecord> for SweepRun {
@@ -278,8 +306,9 @@ impl SweepReport {
     /// terminal report and index.html).
     pub fn scale_line(&self) -> String {
         format!(
-            "{} solver(s) × {} formulation(s) × {} tolerance(s): {} runs in {:.1} s (tsim = median of up to {} timed \
-             integration(s), fewer once they took {} s; {}{})",
+            "{} solver(s) × {} formulation(s) × {} tolerance(s): {} runs in {:.1} s (tsim = CPU time of the \
+             integrating thread, median of up to {} timed integration(s), fewer once they took {} s; wall time \
+             beside it in results.csv; {}{})",
             self.solvers.len(),
             self.formulations.len(),
             self.tolerances.len(),
@@ -480,6 +509,11 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
+    /// `sweep S01` + `phase`: the prefix of the progress lines.
+    fn label(&self, phase: &str) -> String {
+        format!("sweep {}{phase}", self.scene.name)
+    }
+
     fn run(&self, model: &dyn Model, job: &Job, samples: &[f64]) -> Result<RunRecord, RunError> {
         runner::run(&RunSpec {
             model,
@@ -505,38 +539,42 @@ impl Ctx<'_> {
     }
 
     /// Add timed integrations (output at the check times only) until there
-    /// are `repeats` of them or they took [`REPEAT_BUDGET_S`]; at least one.
-    fn timings(
-        &self,
-        model: &dyn Model,
-        job: &Job,
-        mut times: Vec<f64>,
-    ) -> Result<Vec<f64>, RunError> {
-        while times.is_empty()
-            || (times.len() < self.repeats && times.iter().sum::<f64>() < REPEAT_BUDGET_S)
+    /// are `repeats` of them or they took [`REPEAT_BUDGET_S`] of CPU time;
+    /// at least one.
+    fn timings(&self, model: &dyn Model, job: &Job, times: &mut Timings) -> Result<(), RunError> {
+        while times.cpu.is_empty()
+            || (times.cpu.len() < self.repeats && times.cpu.iter().sum::<f64>() < REPEAT_BUDGET_S)
         {
-            times.push(self.run(model, job, &[])?.tsim_s);
+            let rec = self.run(model, job, &[])?;
+            times.push(&rec);
         }
-        Ok(times)
+        Ok(())
     }
 }
 
-fn progress_bar(len: usize, prefix: &'static str, show: bool) -> ProgressBar {
-    let target = if show && std::io::stderr().is_terminal() {
-        ProgressDrawTarget::stderr()
-    } else {
-        ProgressDrawTarget::hidden()
-    };
-    let bar = ProgressBar::with_draw_target(Some(len as u64), target);
-    let style = ProgressStyle::with_template(
-        "{prefix:>9} [{bar:32.cyan/blue}] {pos}/{len} {elapsed:>4} {wide_msg}",
-    )
-    .unwrap_or_else(|_| ProgressStyle::default_bar())
-    .progress_chars("=> ");
-    bar.set_style(style);
-    bar.set_prefix(prefix);
-    bar.enable_steady_tick(Duration::from_millis(200));
-    bar
+/// The timed integrations of one run: CPU and wall-clock seconds.
+#[derive(Default)]
+struct Timings {
+    cpu: Vec<f64>,
+    wall: Vec<f64>,
+}
+
+impl Timings {
+    fn push(&mut self, rec: &RunRecord) {
+        self.cpu.push(rec.tsim_s);
+        self.wall.push(rec.wall_s);
+    }
+
+    /// The run with its medians and every time.
+    fn into_run(self, mut record: RunRecord) -> SweepRun {
+        record.tsim_s = median(&self.cpu);
+        record.wall_s = median(&self.wall);
+        SweepRun {
+            record,
+            tsim_runs: self.cpu,
+            wall_runs: self.wall,
+        }
+    }
 }
 
 fn job_label(job: &Job) -> String {
@@ -620,33 +658,27 @@ fn sequential(
     jobs: &[Job],
     progress: bool,
 ) -> Result<Vec<SweepRun>, SweepError> {
-    let bar = progress_bar(jobs.len(), "sweep", progress);
+    let bar = Progress::new(&ctx.label(""), jobs.len(), progress);
     let mut out = Vec::with_capacity(jobs.len());
     for job in jobs {
         bar.set_message(job_label(job));
-        let (mut record, timed) = ctx.accuracy(model, job)?;
-        let mut times = if timed {
-            vec![record.tsim_s]
-        } else {
-            Vec::new()
-        };
-        if record.status == "ok" {
-            times = ctx.timings(model, job, times)?;
-        } else if times.is_empty() {
-            times.push(record.tsim_s);
+        let (record, timed) = ctx.accuracy(model, job)?;
+        let mut times = Timings::default();
+        if timed || record.status != "ok" {
+            times.push(&record);
         }
-        record.tsim_s = median(&times);
-        out.push(SweepRun {
-            record,
-            tsim_runs: times,
-        });
-        bar.inc(1);
+        if record.status == "ok" {
+            ctx.timings(model, job, &mut times)?;
+        }
+        out.push(times.into_run(record));
+        bar.inc();
     }
-    bar.finish_and_clear();
+    bar.finish();
     Ok(out)
 }
 
-/// `jobs > 1`: a parallel accuracy pass, then a sequential timing pass.
+/// `jobs > 1`: a parallel accuracy pass on a rayon pool of `threads`
+/// threads, then a sequential timing pass.
 fn parallel(
     ctx: &Ctx<'_>,
     model: &dyn Model,
@@ -654,57 +686,65 @@ fn parallel(
     threads: usize,
     progress: bool,
 ) -> Result<Vec<SweepRun>, SweepError> {
-    let bar = progress_bar(jobs.len(), "accuracy", progress);
-    let next = AtomicUsize::new(0);
-    let mut slots: Vec<Option<RunRecord>> = vec![None; jobs.len()];
-    std::thread::scope(|s| -> Result<(), SweepError> {
-        let handles: Vec<_> = (0..threads.min(jobs.len().max(1)))
-            .map(|_| {
-                let (next, bar) = (&next, &bar);
-                s.spawn(move || -> Result<Vec<(usize, RunRecord)>, SweepError> {
-                    // Each thread integrates with its own model instance.
-                    let model = crate::inputs::model(ctx.scene)?;
-                    let mut done = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        let Some(job) = jobs.get(i) else { break };
-                        bar.set_message(job_label(job));
-                        let (rec, _) = ctx.accuracy(&*model, job)?;
-                        done.push((i, rec));
-                        bar.inc(1);
+    let threads = threads.min(jobs.len().max(1));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(|i| format!("dae-sweep-{i}"))
+        .build()
+        .map_err(|source| SweepError::ThreadPool { threads, source })?;
+    // One model per worker thread, loaded by the thread on its first run
+    // (one model instance is never integrated by two threads at once). A
+    // model that fails to load leaves its slot empty and its error in
+    // `load_error`, returned once the pass stops.
+    let models: Vec<OnceLock<Option<Box<dyn Model + Send + Sync>>>> =
+        (0..threads).map(|_| OnceLock::new()).collect();
+    let load_error: Mutex<Option<InputError>> = Mutex::new(None);
+    let bar = Progress::new(&ctx.label(" accuracy"), jobs.len(), progress);
+    let records: Result<Vec<RunRecord>, SweepError> = pool.install(|| {
+        jobs.par_iter()
+            .map(|job| {
+                let slot = rayon::current_thread_index()
+                    .and_then(|i| models.get(i))
+                    .ok_or(SweepError::WorkerPanicked)?;
+                let model = slot.get_or_init(|| match crate::inputs::model(ctx.scene) {
+                    Ok(m) => Some(m),
+                    Err(e) => {
+                        if let Ok(mut first) = load_error.lock() {
+                            first.get_or_insert(e);
+                        }
+                        None
                     }
-                    Ok(done)
-                })
+                });
+                let Some(model) = model else {
+                    return Err(SweepError::WorkerPanicked);
+                };
+                bar.set_message(job_label(job));
+                let (rec, _) = ctx.accuracy(&**model, job)?;
+                bar.inc();
+                Ok(rec)
             })
-            .collect();
-        for h in handles {
-            for (i, rec) in h.join().map_err(|_| SweepError::WorkerPanicked)?? {
-                slots[i] = Some(rec);
-            }
-        }
-        Ok(())
-    })?;
-    bar.finish_and_clear();
-    let ok = slots.iter().flatten().filter(|r| r.status == "ok").count();
-    let bar = progress_bar(ok, "timing", progress);
-    let mut out = Vec::with_capacity(jobs.len());
-    for (job, slot) in jobs.iter().zip(slots) {
-        let mut record = slot.ok_or(SweepError::WorkerPanicked)?;
-        let times = if record.status == "ok" {
-            bar.set_message(job_label(job));
-            let t = ctx.timings(model, job, Vec::new())?;
-            bar.inc(1);
-            t
-        } else {
-            vec![record.tsim_s]
-        };
-        record.tsim_s = median(&times);
-        out.push(SweepRun {
-            record,
-            tsim_runs: times,
-        });
+            .collect()
+    });
+    if let Some(e) = load_error.into_inner().ok().flatten() {
+        return Err(SweepError::Inputs(e));
     }
-    bar.finish_and_clear();
+    let records = records?;
+    bar.finish();
+    let ok = records.iter().filter(|r| r.status == "ok").count();
+    let bar = Progress::new(&ctx.label(" timing"), ok, progress);
+    let mut out = Vec::with_capacity(jobs.len());
+    for (job, record) in jobs.iter().zip(records) {
+        let mut times = Timings::default();
+        if record.status == "ok" {
+            bar.set_message(job_label(job));
+            ctx.timings(model, job, &mut times)?;
+            bar.inc();
+        } else {
+            times.push(&record);
+        }
+        out.push(times.into_run(record));
+    }
+    bar.finish();
     Ok(out)
 }
 

@@ -92,58 +92,75 @@ pub enum PaperError {
 }
 
 impl PaperTable {
-    /// Parse the CSV shape of `data/paper_table*.csv`: `#` comment lines,
-    /// a header `solver,formulation,quantity,TOL…`, then rows; an empty
-    /// cell is a failed run, `?` an illegible one.
+    /// Parse the CSV shape of `data/paper_table*.csv` (read with the `csv`
+    /// crate): `#` comment lines, a header `solver,formulation,quantity,TOL…`,
+    /// then rows; an empty cell is a failed run, `?` an illegible one.
+    ///
+    /// ```
+    /// use dae::sweep::paper::{PaperCell, PaperTable};
+    ///
+    /// let t = PaperTable::parse("T", "# a note\nsolver,formulation,quantity,1e-5,1e-6\nDASSL,rcd0,err,3.1e2,\n")?;
+    /// assert_eq!(t.cell("DASSL", "rcd0", "err", 1e-5), Some(PaperCell::Value(310.0)));
+    /// assert_eq!(t.cell("DASSL", "rcd0", "err", 1e-6), Some(PaperCell::Failed));
+    /// # Ok::<(), dae::sweep::paper::PaperError>(())
+    /// ```
     pub fn parse(label: &str, text: &str) -> Result<PaperTable, PaperError> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
-        let (_, header) = lines.next().ok_or_else(|| PaperError::Header {
+        let mut reader = csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .trim(csv::Trim::All)
+            .flexible(true)
+            .from_reader(text.as_bytes());
+        let header_err = |why: String| PaperError::Header {
             label: label.into(),
-            why: "no header".into(),
-        })?;
-        let head: Vec<&str> = header.split(',').map(str::trim).collect();
-        if head.len() < 4 || head[..3] != ["solver", "formulation", "quantity"] {
-            return Err(PaperError::Header {
-                label: label.into(),
-                why: format!("expected solver,formulation,quantity,… got `{header}`"),
-            });
+            why,
+        };
+        let head = reader
+            .headers()
+            .map_err(|e| header_err(e.to_string()))?
+            .clone();
+        if head.is_empty() {
+            return Err(header_err("no header".into()));
         }
-        let tolerances = head[3..]
+        let names: Vec<&str> = head.iter().collect();
+        if names.len() < 4 || names[..3] != ["solver", "formulation", "quantity"] {
+            return Err(header_err(format!(
+                "expected solver,formulation,quantity,… got `{}`",
+                names.join(",")
+            )));
+        }
+        let tolerances = names[3..]
             .iter()
             .map(|t| {
-                t.parse::<f64>().map_err(|_| PaperError::Header {
-                    label: label.into(),
-                    why: format!("tolerance `{t}` is not a number"),
-                })
+                t.parse::<f64>()
+                    .map_err(|_| header_err(format!("tolerance `{t}` is not a number")))
             })
             .collect::<Result<Vec<f64>, _>>()?;
         let mut rows = Vec::new();
-        for (i, line) in lines {
-            let f: Vec<&str> = line.split(',').map(str::trim).collect();
-            let row_err = |why: String| PaperError::Row {
+        for record in reader.records() {
+            let row_err = |line: u64, why: String| PaperError::Row {
                 label: label.into(),
-                line: i + 1,
+                line: usize::try_from(line).unwrap_or(usize::MAX),
                 why,
             };
+            let f = record
+                .map_err(|e| row_err(e.position().map_or(0, csv::Position::line), e.to_string()))?;
+            let line = f.position().map_or(0, csv::Position::line);
             if f.len() != 3 + tolerances.len() {
-                return Err(row_err(format!(
-                    "{} fields, expected {}",
-                    f.len(),
-                    3 + tolerances.len()
-                )));
+                return Err(row_err(
+                    line,
+                    format!("{} fields, expected {}", f.len(), 3 + tolerances.len()),
+                ));
             }
-            let cells = f[3..]
+            let cells = f
                 .iter()
-                .map(|c| match *c {
+                .skip(3)
+                .map(|c| match c {
                     "" => Ok(PaperCell::Failed),
                     "?" => Ok(PaperCell::Illegible),
                     v => v
                         .parse::<f64>()
                         .map(PaperCell::Value)
-                        .map_err(|_| row_err(format!("`{v}` is not a number"))),
+                        .map_err(|_| row_err(line, format!("`{v}` is not a number"))),
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             rows.push(PaperRow {

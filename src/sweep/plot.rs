@@ -14,13 +14,18 @@
 //!   the position-constraint residual instead of the error.
 //!
 //! A figure is first described as data ([`Figure`]: panels of series) and
-//! then drawn by one renderer on either backend. Colours encode the
-//! formulation, line style and marker the solver, so a pair keeps its look
-//! in every figure and every sweep; a Fortran reference line is dotted grey
-//! (tinted towards the formulation) with hollow markers in the
-//! formulation's colour, one shape per code. Axes carry no units: the model language
-//! declares none, and a unit guessed from a name is wrong for the next
-//! model (`tsim` is measured, in seconds).
+//! then drawn by one renderer on either backend. **One colour per solver,
+//! one marker per formulation** ([`look`]), the same in every figure and
+//! every sweep, so the legend is compact — the solvers by colour, the
+//! formulations by marker ([`compact_legend`]) — instead of one entry per
+//! pair (58 at 40 pairs). Curves over time carry a few markers spaced along
+//! them ([`Markers::Sparse`]) so that their formulation can be read too. At
+//! more than [`FEW_CURVES`] pairs the solution figure shows one curve per
+//! solver (its most accurate formulation) and the error figure one panel
+//! per solver. A Fortran reference line is dotted, in a grey tinted per
+//! code, with hollow markers of its formulation's shape. Axes carry no
+//! units: the model language declares none, and a unit guessed from a name
+//! is wrong for the next model (`tsim` is measured, in seconds).
 
 use super::fortran::ReferenceLines;
 use super::table::tol_label;
@@ -79,6 +84,10 @@ pub enum Marker {
     TriangleDown,
     /// A diagonal cross.
     Cross,
+    /// An upright cross.
+    Plus,
+    /// A hexagon.
+    Hexagon,
 }
 
 /// How a line is stroked.
@@ -90,6 +99,8 @@ pub enum Line {
     Dashed,
     /// Short dashes of 3 px, gaps of 4 px (the Fortran reference lines).
     Dotted,
+    /// No line: markers only (the formulations' legend entries).
+    Hidden,
 }
 
 /// How a series looks.
@@ -109,95 +120,189 @@ pub struct Look {
     pub width: u32,
 }
 
-/// Colours of the formulations (in [`dae_core::system::FORMULATION_NAMES`]
-/// order), a categorical palette whose colours stay apart also in the
-/// darker shade of every other solver ([`look`]): psi0 is olive, not the
-/// palette's cyan, whose darker shade was hard to tell from ori2's.
-const FORMULATION_COLORS: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),  // ori2 blue
-    RGBColor(255, 127, 14),  // rcd1 orange
-    RGBColor(44, 160, 44),   // rcd0 green
-    RGBColor(214, 39, 40),   // ovd1 red
-    RGBColor(148, 103, 189), // ovd0 purple
-    RGBColor(140, 86, 75),   // ggl1 brown
-    RGBColor(227, 119, 194), // psi1 pink
-    RGBColor(188, 189, 34),  // psi0 olive
+/// Colours of the solvers (in [`dae_solvers::SOLVER_NAMES`] order): a
+/// categorical palette (Tableau 10) with grey left for the Fortran
+/// reference lines.
+pub const SOLVER_COLORS: [RGBColor; 7] = [
+    RGBColor(31, 119, 180),  // radau5 blue
+    RGBColor(255, 127, 14),  // bdf orange
+    RGBColor(44, 160, 44),   // odradau green
+    RGBColor(214, 39, 40),   // odbdf red
+    RGBColor(148, 103, 189), // mebdf purple
+    RGBColor(140, 86, 75),   // idec brown
+    RGBColor(227, 119, 194), // gauss pink
 ];
 
-/// The look of a pair: colour from the formulation, shade, dash and marker
-/// from the solver.
-pub fn look(solver: &str, formulation: &str) -> Look {
-    let f = dae_core::system::FORMULATION_NAMES
-        .iter()
-        .position(|n| *n == formulation)
-        .unwrap_or(0);
-    let s = dae_solvers::SOLVER_NAMES
+/// Colour of a solver this table does not know.
+const OTHER_COLOR: RGBColor = RGBColor(90, 90, 90);
+
+/// Markers of the formulations (in
+/// [`dae_core::system::FORMULATION_NAMES`] order).
+pub const FORMULATION_MARKERS: [Marker; 8] = [
+    Marker::Circle,       // ori2
+    Marker::Triangle,     // rcd1
+    Marker::Square,       // rcd0
+    Marker::Diamond,      // ovd1
+    Marker::TriangleDown, // ovd0
+    Marker::Cross,        // ggl1
+    Marker::Plus,         // psi1
+    Marker::Hexagon,      // psi0
+];
+
+/// At most this many pairs, the solution and error figures draw every
+/// pair at the figure tolerance; beyond, one curve (solution) or one panel
+/// (error) per solver.
+pub const FEW_CURVES: usize = 8;
+
+/// The colour of a solver.
+///
+/// ```
+/// use dae::sweep::plot::{solver_color, SOLVER_COLORS};
+///
+/// assert_eq!(solver_color("odradau"), SOLVER_COLORS[2]);
+/// assert_ne!(solver_color("radau5"), solver_color("mebdf"));
+/// ```
+pub fn solver_color(solver: &str) -> RGBColor {
+    dae_solvers::SOLVER_NAMES
         .iter()
         .position(|n| *n == solver)
-        .unwrap_or(0);
-    let RGBColor(r, g, b) = FORMULATION_COLORS[f % FORMULATION_COLORS.len()];
-    // The papers' six solvers: every other one a darker shade, so that
-    // coinciding curves of two solvers on one formulation stay apart. Those
-    // after them (`gauss`): a lighter tint, a wider line and diamonds.
-    let later = s >= 6;
-    let shade = |c: u8| {
-        if later {
-            (0.55 * f64::from(c) + 0.45 * 255.0).round() as u8
-        } else if s % 2 == 1 {
-            (f64::from(c) * 0.62).round() as u8
-        } else {
-            c
-        }
-    };
-    let color = RGBColor(shade(r), shade(g), shade(b));
+        .and_then(|i| SOLVER_COLORS.get(i).copied())
+        .unwrap_or(OTHER_COLOR)
+}
+
+/// The marker of a formulation.
+///
+/// ```
+/// use dae::sweep::plot::{formulation_marker, Marker};
+///
+/// assert_eq!(formulation_marker("rcd0"), Marker::Square);
+/// ```
+pub fn formulation_marker(formulation: &str) -> Marker {
+    dae_core::system::FORMULATION_NAMES
+        .iter()
+        .position(|n| *n == formulation)
+        .and_then(|i| FORMULATION_MARKERS.get(i).copied())
+        .unwrap_or(Marker::Circle)
+}
+
+/// The look of a pair: the solver's colour and the formulation's marker,
+/// a solid line.
+///
+/// ```
+/// use dae::sweep::plot::look;
+///
+/// // radau5, odradau and mebdf on rcd0: three colours, one marker.
+/// let [a, b, c] = ["radau5", "odradau", "mebdf"].map(|s| look(s, "rcd0"));
+/// assert!(a.color != b.color && b.color != c.color && a.color != c.color);
+/// assert!(a.marker == b.marker && b.marker == c.marker);
+/// ```
+pub fn look(solver: &str, formulation: &str) -> Look {
+    let color = solver_color(solver);
     Look {
         color,
-        line: if s % 2 == 1 && !later {
-            Line::Dashed
-        } else {
-            Line::Solid
-        },
-        marker: if later {
-            Marker::Diamond
-        } else {
-            [Marker::Circle, Marker::Triangle, Marker::Square][s % 3]
-        },
+        line: Line::Solid,
+        marker: formulation_marker(formulation),
         hollow: false,
         marker_color: color,
-        width: if later { 3 } else { 2 },
+        width: 2,
     }
 }
 
-/// The look of a Fortran reference line ([`super::fortran`]): a dotted
-/// grey line tinted towards the formulation's colour (70 % grey, so it
-/// never matches one of our two shades of it) with hollow markers, one
-/// shape per code, outlined in the formulation's colour. It pairs with our
-/// lines on the formulation but never reads as one of ours (solid or
-/// dashed, saturated, filled markers).
+/// The look of a Fortran reference line ([`super::fortran`]): dotted, in a
+/// grey tinted per code (so never one of our solvers' saturated colours),
+/// with hollow markers of the formulation's shape outlined in dark grey.
 pub fn reference_look(code: &str, formulation: &str) -> Look {
-    let f = dae_core::system::FORMULATION_NAMES
-        .iter()
-        .position(|n| *n == formulation)
-        .unwrap_or(0);
-    let RGBColor(r, g, b) = FORMULATION_COLORS[f % FORMULATION_COLORS.len()];
-    let grey = |c: u8| (0.3 * f64::from(c) + 0.7 * 128.0).round() as u8;
-    let marker = match code.split('-').next().unwrap_or(code) {
-        "radau5" => Marker::Circle,
-        "dassl" => Marker::Square,
-        "daspk" => Marker::Diamond,
-        "odassl" => Marker::Triangle,
-        "mebdf" if code.contains('-') => Marker::Cross,
-        "mebdf" => Marker::TriangleDown,
-        _ => Marker::Diamond,
+    let tint = match code.split('-').next().unwrap_or(code) {
+        "radau5" => RGBColor(31, 119, 180),
+        "dassl" => RGBColor(255, 127, 14),
+        "daspk" => RGBColor(188, 189, 34),
+        "odassl" => RGBColor(214, 39, 40),
+        "mebdf" if code.contains('-') => RGBColor(23, 190, 207),
+        "mebdf" => RGBColor(148, 103, 189),
+        _ => RGBColor(128, 128, 128),
     };
+    let RGBColor(r, g, b) = tint;
+    let grey = |c: u8| (0.35 * f64::from(c) + 0.65 * 128.0).round() as u8;
+    let color = RGBColor(grey(r), grey(g), grey(b));
     Look {
-        color: RGBColor(grey(r), grey(g), grey(b)),
+        color,
         line: Line::Dotted,
-        marker,
+        marker: formulation_marker(formulation),
         hollow: true,
-        marker_color: RGBColor(r, g, b),
+        marker_color: color,
         width: 2,
     }
+}
+
+/// The compact legend of a figure: a heading and one entry per solver (its
+/// colour, a line), a heading and one entry per formulation (its marker in
+/// dark grey, no line), each in the order given.
+///
+/// ```
+/// use dae::sweep::plot::compact_legend;
+///
+/// let s = ["radau5", "bdf"].map(String::from);
+/// let f = ["rcd0", "ggl1", "psi0"].map(String::from);
+/// // 2 headings + 2 solvers + 3 formulations, not 6 pairs.
+/// assert_eq!(compact_legend(&s, &f, true).len(), 7);
+/// ```
+pub fn compact_legend(
+    solvers: &[String],
+    formulations: &[String],
+    with_markers: bool,
+) -> Vec<(String, Look, bool)> {
+    let heading = |text: &str| {
+        (
+            text.to_string(),
+            Look {
+                line: Line::Hidden,
+                marker: Marker::None,
+                ..look("", "")
+            },
+            false,
+        )
+    };
+    let mut out = vec![heading("solver (colour)")];
+    out.extend(solvers.iter().map(|s| {
+        (
+            s.clone(),
+            Look {
+                marker: Marker::None,
+                width: 3,
+                ..look(s, "")
+            },
+            false,
+        )
+    }));
+    if with_markers {
+        out.push(heading("formulation (marker)"));
+        out.extend(formulations.iter().map(|f| {
+            let grey = RGBColor(60, 60, 60);
+            (
+                f.clone(),
+                Look {
+                    color: grey,
+                    marker_color: grey,
+                    line: Line::Hidden,
+                    ..look("", f)
+                },
+                true,
+            )
+        }));
+    }
+    out
+}
+
+/// Where a panel draws its curves' markers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Markers {
+    /// None.
+    None,
+    /// At every data point (a work-precision line through its tolerances).
+    Every,
+    /// About a dozen along each curve, shifted from curve to curve so that
+    /// coinciding curves show each marker (curves over time).
+    Sparse,
 }
 
 /// One curve.
@@ -227,8 +332,8 @@ pub struct Panel {
     pub x_log: bool,
     /// Logarithmic y axis.
     pub y_log: bool,
-    /// Draw markers at the data points.
-    pub markers: bool,
+    /// Where markers are drawn.
+    pub markers: Markers,
     /// On a log axis, leave out exact zeros (an error or drift at `t0`)
     /// instead of drawing them on the lower edge.
     pub drop_zeros: bool,
@@ -277,16 +382,59 @@ fn label(run: &SweepRun) -> String {
     format!("{}({})", run.record.solver, run.record.formulation)
 }
 
-fn legend_of(runs: &[&SweepRun], markers: bool) -> Vec<(String, Look, bool)> {
-    runs.iter()
-        .map(|r| {
-            (
-                label(r),
-                look(&r.record.solver, &r.record.formulation),
-                markers,
-            )
+/// The solvers and formulations of some runs, each in order of first
+/// appearance.
+fn solvers_and_formulations<'a>(
+    runs: impl Iterator<Item = (&'a str, &'a str)>,
+) -> (Vec<String>, Vec<String>) {
+    let (mut solvers, mut formulations): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
+    for (s, f) in runs {
+        if !solvers.iter().any(|x| x == s) {
+            solvers.push(s.to_string());
+        }
+        if !formulations.iter().any(|x| x == f) {
+            formulations.push(f.to_string());
+        }
+    }
+    (solvers, formulations)
+}
+
+fn legend_of(runs: &[&SweepRun]) -> Vec<(String, Look, bool)> {
+    let (solvers, formulations) = solvers_and_formulations(
+        runs.iter()
+            .map(|r| (r.record.solver.as_str(), r.record.formulation.as_str())),
+    );
+    compact_legend(&solvers, &formulations, true)
+}
+
+/// The most accurate run of each solver (by `err`, else the
+/// position-constraint residual), solvers in run order.
+fn best_per_solver<'a>(report: &SweepReport, runs: &[&'a SweepRun]) -> Vec<&'a SweepRun> {
+    let (solvers, _) = solvers_and_formulations(
+        runs.iter()
+            .map(|r| (r.record.solver.as_str(), r.record.formulation.as_str())),
+    );
+    solvers
+        .iter()
+        .filter_map(|s| {
+            runs.iter()
+                .copied()
+                .filter(|r| &r.record.solver == s)
+                .min_by(|a, b| score(report, a).total_cmp(&score(report, b)))
         })
         .collect()
+}
+
+/// What "most accurate" sorts by: `err`, or without a reference the
+/// position-constraint residual; a missing value last.
+fn score(report: &SweepReport, r: &SweepRun) -> f64 {
+    if report.has_reference() {
+        r.record.err
+    } else {
+        r.record.residuals.level(0)
+    }
+    .filter(|v| v.is_finite())
+    .unwrap_or(f64::INFINITY)
 }
 
 fn grid_size(panels: usize, cols: usize, panel_h: u32, width: u32) -> (u32, u32) {
@@ -349,12 +497,15 @@ pub fn figures(report: &SweepReport) -> Figures {
     out
 }
 
-fn solution_figure(
-    report: &SweepReport,
-    runs: &[&SweepRun],
-    tol: &str,
-    sampled_at: &str,
-) -> Figure {
+fn solution_figure(report: &SweepReport, all: &[&SweepRun], tol: &str, sampled_at: &str) -> Figure {
+    let few = all.len() <= FEW_CURVES;
+    let best;
+    let runs: &[&SweepRun] = if few {
+        all
+    } else {
+        best = best_per_solver(report, all);
+        &best
+    };
     let panels: Vec<Panel> = report
         .variables
         .iter()
@@ -364,7 +515,7 @@ fn solution_figure(
             y_label: v.to_string(),
             x_log: false,
             y_log: false,
-            markers: false,
+            markers: Markers::Sparse,
             drop_zeros: false,
             series: runs
                 .iter()
@@ -387,32 +538,82 @@ fn solution_figure(
         title: format!(
             "{}: numerical solution{}, RTOL = ATOL = {tol}",
             report.scene.name,
-            if sampled_at.is_empty() { "" } else { " at the check times" }
+            if sampled_at.is_empty() {
+                ""
+            } else {
+                " at the check times"
+            }
         ),
-        caption: format!(
-            "Every unknown over time at RTOL = ATOL = {tol}, one curve per solver(formulation){sampled_at} \
-             (paper Fig. 3 / 9)."
-        ),
+        caption: if few {
+            format!(
+                "Every unknown over time at RTOL = ATOL = {tol}, one curve per solver(formulation){sampled_at} \
+                 (paper Fig. 3 / 9); colour: solver, marker: formulation."
+            )
+        } else {
+            format!(
+                "Every unknown over time at RTOL = ATOL = {tol}{sampled_at} (paper Fig. 3 / 9): one curve per \
+                 solver, its most accurate formulation at this tolerance (colour: solver, marker: formulation), \
+                 so that {} pairs do not hide each other; the error figure below shows every pair, one panel \
+                 per solver, and results.csv every run.",
+                all.len()
+            )
+        },
         size: grid_size(panels.len(), cols, 300, 1400),
         panels,
         cols,
-        legend: legend_of(runs, false),
+        legend: legend_of(runs),
     }
 }
 
 fn error_figure(report: &SweepReport, runs: &[&SweepRun], tol: &str, sampled_at: &str) -> Figure {
-    let series = runs
-        .iter()
-        .map(|r| {
-            let tr = &r.record.trajectory;
-            Series {
+    let series_of = |rs: &[&SweepRun]| -> Vec<Series> {
+        rs.iter()
+            .map(|r| Series {
                 label: label(r),
                 look: look(&r.record.solver, &r.record.formulation),
                 labels: Vec::new(),
-                points: tr.err.clone(),
-            }
-        })
-        .collect();
+                points: r.record.trajectory.err.clone(),
+            })
+            .collect()
+    };
+    let what = "max(|x−x*|, |y−y*|, |v−v*|, |w−w*|)";
+    let panel = |title: String, series: Vec<Series>| Panel {
+        title,
+        x_label: "t".into(),
+        y_label: "error".into(),
+        x_log: false,
+        y_log: true,
+        markers: Markers::Sparse,
+        drop_zeros: true,
+        series,
+    };
+    let few = runs.len() <= FEW_CURVES;
+    let panels: Vec<Panel> = if few {
+        vec![panel(what.into(), series_of(runs))]
+    } else {
+        let (solvers, _) = solvers_and_formulations(
+            runs.iter()
+                .map(|r| (r.record.solver.as_str(), r.record.formulation.as_str())),
+        );
+        solvers
+            .iter()
+            .map(|s| {
+                let mine: Vec<&SweepRun> = runs
+                    .iter()
+                    .copied()
+                    .filter(|r| &r.record.solver == s)
+                    .collect();
+                // One colour per panel: hollow markers stand out on the
+                // lines and tell the formulations apart.
+                let mut series = series_of(&mine);
+                for x in &mut series {
+                    x.look.hollow = true;
+                }
+                panel(s.clone(), series)
+            })
+            .collect()
+    };
+    let cols = if panels.len() > 1 { 2 } else { 1 };
     Figure {
         file: "error".into(),
         title: format!(
@@ -421,41 +622,28 @@ fn error_figure(report: &SweepReport, runs: &[&SweepRun], tol: &str, sampled_at:
             if sampled_at.is_empty() { "" } else { " at the check times" }
         ),
         caption: format!(
-            "Largest pointwise error of the differential unknowns, max(|x−x*|, |y−y*|, |v−v*|, |w−w*|), over \
-             time at RTOL = ATOL = {tol}{sampled_at}; log scale (paper Fig. 4 / 10). Exact zeros (t = t0) are \
-             left out; values below 1e-16 are drawn on the lower edge."
+            "Largest pointwise error of the differential unknowns, {what}, over time at RTOL = ATOL = \
+             {tol}{sampled_at}; log scale (paper Fig. 4 / 10){}; colour: solver, marker: formulation. Exact \
+             zeros (t = t0) are left out; values below 1e-16 are drawn on the lower edge.",
+            if few {
+                ""
+            } else {
+                ", one panel per solver with one curve per formulation (panels share no axis range)"
+            }
         ),
-        panels: vec![Panel {
-            title: "max(|x−x*|, |y−y*|, |v−v*|, |w−w*|)".into(),
-            x_label: "t".into(),
-            y_label: "error [m, m/s]".into(),
-            x_log: false,
-            y_log: true,
-            markers: false,
-            drop_zeros: true,
-            series,
-        }],
-        cols: 1,
-        size: (1300, 700),
-        legend: legend_of(runs, false),
+        size: if few {
+            (1300, 700)
+        } else {
+            grid_size(panels.len(), cols, 340, 1400)
+        },
+        panels,
+        cols,
+        legend: legend_of(runs),
     }
 }
 
-/// One run per formulation, in the sweep's formulation order: the most
-/// accurate at the figure tolerance (smallest `err`; without a reference
-/// the smallest position residual). The residuals are the formulation's
-/// (drift or none); one curve each keeps the panels readable with many
-/// solvers.
 fn per_formulation<'a>(report: &SweepReport, runs: &[&'a SweepRun]) -> Vec<&'a SweepRun> {
-    let score = |r: &SweepRun| {
-        if report.has_reference() {
-            r.record.err
-        } else {
-            r.record.residuals.level(0)
-        }
-        .filter(|v| v.is_finite())
-        .unwrap_or(f64::INFINITY)
-    };
+    let score = |r: &SweepRun| score(report, r);
     report
         .formulations
         .iter()
@@ -509,7 +697,7 @@ fn residual_figure(
                 y_label: format!("|g{}|", subscript(l)),
                 x_log: false,
                 y_log: true,
-                markers: false,
+                markers: Markers::Sparse,
                 drop_zeros: false,
                 series: runs
                     .iter()
@@ -538,7 +726,7 @@ fn residual_figure(
             y_label: format!("|{inv}(t) − {inv}(t0)|"),
             x_log: false,
             y_log: true,
-            markers: false,
+            markers: Markers::Sparse,
             drop_zeros: true,
             series: runs
                 .iter()
@@ -569,7 +757,7 @@ fn residual_figure(
         size: grid_size(panels.len(), cols, 380, 1400),
         panels,
         cols,
-        legend: legend_of(runs, false),
+        legend: legend_of(runs),
     }
 }
 
@@ -584,7 +772,7 @@ fn pair_series(
     point: impl Fn(&SweepRun) -> Option<(f64, f64)>,
 ) -> (Vec<Series>, Vec<(String, Look, bool)>) {
     let mut series = Vec::new();
-    let mut legend = Vec::new();
+    let mut drawn: Vec<(&str, &str)> = Vec::new();
     for p in report.pairs.iter().filter(|p| p.not_applicable.is_none()) {
         let mut runs: Vec<&SweepRun> = report
             .runs
@@ -611,7 +799,7 @@ fn pair_series(
         }
         let l = format!("{}({})", p.solver, p.formulation);
         let lk = look(&p.solver, &p.formulation);
-        legend.push((l.clone(), lk, true));
+        drawn.push((p.solver.as_str(), p.formulation.as_str()));
         series.push(Series {
             label: l,
             look: lk,
@@ -619,7 +807,8 @@ fn pair_series(
             points: pts,
         });
     }
-    (series, legend)
+    let (solvers, formulations) = solvers_and_formulations(drawn.into_iter());
+    (series, compact_legend(&solvers, &formulations, true))
 }
 
 /// The IVP Test Set's work-precision diagram: the integration time against
@@ -650,7 +839,7 @@ fn scd_figure(report: &SweepReport) -> Option<Figure> {
             y_label: "tsim [s]".into(),
             x_log: false,
             y_log: true,
-            markers: true,
+            markers: Markers::Every,
             drop_zeros: true,
             series,
         }],
@@ -702,7 +891,16 @@ fn work_precision_figure(report: &SweepReport, lines: Option<&ReferenceLines>) -
     let lines = lines.filter(|_| with_ref);
     for c in lines.iter().flat_map(|l| &l.curves) {
         let lk = reference_look(&c.code, &c.formulation);
-        legend.push((c.label.clone(), lk, true));
+        // One legend entry per code (its grey, dotted); the formulation is
+        // the marker, as for ours.
+        let code_label = c.label.replace(&format!(", {}", c.formulation), "");
+        if !legend.iter().any(|(l, _, _)| *l == code_label) {
+            let entry = Look {
+                marker: Marker::None,
+                ..lk
+            };
+            legend.push((code_label, entry, false));
+        }
         series.push(Series {
             label: c.label.clone(),
             look: lk,
@@ -766,7 +964,7 @@ fn work_precision_figure(report: &SweepReport, lines: Option<&ReferenceLines>) -
             y_label,
             x_log: true,
             y_log: true,
-            markers: true,
+            markers: Markers::Every,
             drop_zeros: true,
             series,
         }],
@@ -906,6 +1104,7 @@ fn stroke<DB: DrawingBackend>(
     segmented: bool,
 ) -> Result<(), PlotError> {
     let pieces = match line {
+        Line::Hidden => return Ok(()),
         Line::Solid => vec![px.to_vec()],
         Line::Dashed => dashes(px, 9.0, 5.0),
         Line::Dotted => dashes(px, 3.0, 4.0),
@@ -956,7 +1155,19 @@ fn marker_corners(marker: Marker, at: (i32, i32), r: i32) -> Vec<(i32, i32)> {
             ]
         }
         Marker::Diamond => vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y)],
-        Marker::None | Marker::Circle | Marker::Cross => Vec::new(),
+        Marker::Hexagon => {
+            let hex: [f64; 6] = [-90.0, -30.0, 30.0, 90.0, 150.0, 210.0];
+            hex.iter()
+                .map(|d| {
+                    let a = d.to_radians();
+                    (
+                        (f64::from(x) + f64::from(r - 1) * a.cos()).round() as i32,
+                        (f64::from(y) + f64::from(r - 1) * a.sin()).round() as i32,
+                    )
+                })
+                .collect()
+        }
+        Marker::None | Marker::Circle | Marker::Cross | Marker::Plus => Vec::new(),
     }
 }
 
@@ -985,12 +1196,28 @@ fn draw_marker<DB: DrawingBackend>(
             area.draw(&Circle::new(at, 5, style)).map_err(draw_err)
         }
         Marker::Circle => area.draw(&Circle::new(at, 4, filled)).map_err(draw_err),
-        Marker::Cross => {
-            let d = r * 2 / 3;
-            for (a, b) in [
-                ((at.0 - d, at.1 - d), (at.0 + d, at.1 + d)),
-                ((at.0 - d, at.1 + d), (at.0 + d, at.1 - d)),
-            ] {
+        Marker::Cross | Marker::Plus => {
+            let d = if marker == Marker::Cross {
+                r * 2 / 3
+            } else {
+                r
+            };
+            let arms = if marker == Marker::Cross {
+                [
+                    ((at.0 - d, at.1 - d), (at.0 + d, at.1 + d)),
+                    ((at.0 - d, at.1 + d), (at.0 + d, at.1 - d)),
+                ]
+            } else {
+                [
+                    ((at.0 - d, at.1), (at.0 + d, at.1)),
+                    ((at.0, at.1 - d), (at.0, at.1 + d)),
+                ]
+            };
+            let style = ShapeStyle {
+                stroke_width: look.width.max(2) + 1,
+                ..style
+            };
+            for (a, b) in arms {
                 area.draw(&PathElement::new(vec![a, b], style))
                     .map_err(draw_err)?;
             }
@@ -1054,7 +1281,7 @@ where
         .map_err(draw_err)?;
     let area = chart.plotting_area();
     let screen = area.use_screen_coord();
-    for s in &p.series {
+    for (k, s) in p.series.iter().enumerate() {
         let style = ShapeStyle {
             color: s.look.color.to_rgba(),
             filled: false,
@@ -1069,9 +1296,26 @@ where
             .collect();
         px.dedup();
         stroke(&screen, &px, style, s.look.line, segmented)?;
-        if p.markers {
-            for q in &px {
-                draw_marker(&screen, *q, &s.look)?;
+        match p.markers {
+            Markers::None => {}
+            Markers::Every => {
+                for q in &px {
+                    draw_marker(&screen, *q, &s.look)?;
+                }
+            }
+            Markers::Sparse if px.len() > 1 => {
+                // About a dozen per curve, each curve's shifted by a
+                // fraction of the spacing so coinciding curves show all.
+                let every = (px.len() / 12).max(1);
+                let shift = (k * every / p.series.len().max(1)) % every;
+                for q in px.iter().skip(shift).step_by(every) {
+                    draw_marker(&screen, *q, &s.look)?;
+                }
+            }
+            Markers::Sparse => {
+                for q in &px {
+                    draw_marker(&screen, *q, &s.look)?;
+                }
             }
         }
         for (i, text) in &s.labels {
@@ -1155,6 +1399,13 @@ fn draw_legend<DB: DrawingBackend>(
             filled: false,
             stroke_width: lk.width,
         };
+        if lk.line == Line::Hidden && !*marker {
+            // A heading of the compact legend.
+            let bold = ("sans-serif", 15).into_font().style(FontStyle::Bold);
+            area.draw(&Text::new(text.as_str(), (12, y - 8), bold))
+                .map_err(draw_err)?;
+            continue;
+        }
         stroke(area, &[(12, y), (58, y)], style, lk.line, segmented)?;
         if *marker {
             draw_marker(area, (35, y), lk)?;
@@ -1229,23 +1480,57 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_solver_and_formulation_has_its_own_look() {
-        let mut seen: Vec<(String, String, Look)> = Vec::new();
-        for solver in dae_solvers::SOLVER_NAMES {
-            for formulation in dae_core::system::FORMULATION_NAMES {
-                let lk = look(solver, formulation);
-                for (s, f, other) in &seen {
-                    let same_color = lk.color == other.color;
-                    let same_style = lk.line == other.line
-                        && lk.marker == other.marker
-                        && lk.width == other.width;
-                    assert!(
-                        !(same_color && same_style),
-                        "{solver}({formulation}) looks like {s}({f})"
-                    );
-                }
-                seen.push((solver.to_string(), formulation.to_string(), lk));
+    fn one_colour_per_solver_and_one_marker_per_formulation() {
+        let solvers = dae_solvers::SOLVER_NAMES;
+        let formulations = dae_core::system::FORMULATION_NAMES;
+        for (i, a) in solvers.iter().enumerate() {
+            for b in &solvers[i + 1..] {
+                assert_ne!(solver_color(a), solver_color(b), "{a} and {b}");
+            }
+            // The Fortran lines' greys are not a solver's colour.
+            for code in [
+                "radau5",
+                "dassl",
+                "daspk",
+                "odassl",
+                "mebdf",
+                "mebdf-maxder5",
+            ] {
+                assert_ne!(reference_look(code, "rcd0").color, solver_color(a));
             }
         }
+        for (i, a) in formulations.iter().enumerate() {
+            for b in &formulations[i + 1..] {
+                assert_ne!(formulation_marker(a), formulation_marker(b), "{a} and {b}");
+            }
+            assert_ne!(formulation_marker(a), Marker::None);
+        }
+        // The same look in every figure: colour from the solver alone,
+        // marker from the formulation alone.
+        for s in solvers {
+            for f in formulations {
+                let lk = look(s, f);
+                assert_eq!(lk.color, solver_color(s));
+                assert_eq!(lk.marker, formulation_marker(f));
+                assert_eq!(reference_look(s, f).marker, formulation_marker(f));
+            }
+        }
+    }
+
+    #[test]
+    fn the_legend_is_compact() {
+        let solvers: Vec<String> = dae_solvers::SOLVER_NAMES.map(String::from).to_vec();
+        let formulations: Vec<String> = dae_core::system::FORMULATION_NAMES
+            .map(String::from)
+            .to_vec();
+        // 56 pairs: 2 headings + 7 + 8 entries.
+        let legend = compact_legend(&solvers, &formulations, true);
+        assert_eq!(legend.len(), 17);
+        assert!(legend
+            .iter()
+            .any(|(l, lk, _)| l == "mebdf" && lk.color == solver_color("mebdf")));
+        assert!(legend
+            .iter()
+            .any(|(l, lk, m)| l == "psi1" && lk.marker == Marker::Plus && *m));
     }
 }

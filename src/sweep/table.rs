@@ -105,7 +105,81 @@ pub const SUCCESS_LEGEND: &str = "X: successful at every tolerance, x: at some, 
                                   to verify against, !k = k runs suspect (constraint residual or invariant drift \
                                   >= 1e4·tol)";
 
+/// The colour class of a success-matrix cell: how many of its tolerances
+/// gave a usable answer — one that reached the end of the horizon and is
+/// accurate (or, without a reference, unverified and not suspect). So a
+/// pair that reached the end at every tolerance but was accurate at none
+/// is not green.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Usable {
+    /// Every tolerance: green.
+    All,
+    /// Some tolerances: amber.
+    Some,
+    /// None: red.
+    None,
+    /// The pair is not applicable: grey.
+    NotApplicable,
+}
+
+impl Usable {
+    /// The CSS class of `index.html` (`acc-all`, `acc-some`, `acc-none`,
+    /// `na`).
+    pub fn class(self) -> &'static str {
+        match self {
+            Usable::All => "acc-all",
+            Usable::Some => "acc-some",
+            Usable::None => "acc-none",
+            Usable::NotApplicable => "na",
+        }
+    }
+}
+
+/// The rule of the success matrix's colours, for the legend under it.
+pub const USABLE_LEGEND: &str = "Colour: how many tolerances gave a usable answer (reached the end and accurate; \
+                                 without a reference: reached the end and not suspect) — green: every one, amber: \
+                                 some, red: none, grey: not applicable. A pair that reached the end at every \
+                                 tolerance but is accurate at none is red.";
+
 impl SuccessCell {
+    /// How many of the cell's tolerances gave a usable answer (see
+    /// [`Usable`]).
+    ///
+    /// ```
+    /// use dae::sweep::table::{Mark, SuccessCell, Usable};
+    ///
+    /// let cell = SuccessCell {
+    ///     formulation: "ori2".into(),
+    ///     mark: Mark::Every,
+    ///     ok: 8,
+    ///     runs: 8,
+    ///     accurate: 0,
+    ///     inaccurate: 8,
+    ///     unverified: 0,
+    ///     suspect: 0,
+    ///     reason: None,
+    ///     failed: Vec::new(),
+    /// };
+    /// // Finished at 8/8 tolerances, accurate at 0/8: not green.
+    /// assert_eq!(cell.usable(), Usable::None);
+    /// assert_eq!(SuccessCell { accurate: 5, inaccurate: 3, ..cell.clone() }.usable(), Usable::Some);
+    /// assert_eq!(SuccessCell { accurate: 8, inaccurate: 0, ..cell }.usable(), Usable::All);
+    /// ```
+    pub fn usable(&self) -> Usable {
+        if self.reason.is_some() {
+            return Usable::NotApplicable;
+        }
+        let good = self.accurate + self.unverified;
+        if self.runs > 0 && good == self.runs {
+            Usable::All
+        } else if good > 0 {
+            Usable::Some
+        } else {
+            Usable::None
+        }
+    }
+
     /// The accuracy after the mark (see [`SUCCESS_LEGEND`]): `n/m`, `?`,
     /// `!k`; empty for a not-applicable cell or when no run finished.
     pub fn accuracy_label(&self) -> String {
@@ -268,33 +342,46 @@ pub fn tol_label(t: f64) -> String {
     }
 }
 
-/// Render rows of cells as an aligned text table (first column left, the
-/// rest right-aligned).
+/// Render rows of cells as an aligned text table (comfy-table, no
+/// borders): the first column left-aligned, the others right-aligned two
+/// spaces apart; trailing blanks trimmed, one line per row.
+///
+/// ```
+/// use dae::sweep::table::align;
+///
+/// let rows = vec![
+///     vec!["pair".to_string(), "tol".into(), "err".into()],
+///     vec!["radau5(rcd0)".into(), "1e-7".into(), "3.1e-07".into()],
+///     vec!["bdf(ggl1)".into(), "1e-10".into()],
+/// ];
+/// assert_eq!(
+///     align(&rows),
+///     "pair            tol      err\n\
+///      radau5(rcd0)   1e-7  3.1e-07\n\
+///      bdf(ggl1)     1e-10\n"
+/// );
+/// ```
 pub fn align(rows: &[Vec<String>]) -> String {
+    use comfy_table::{CellAlignment, ContentArrangement, Table};
     let cols = rows.iter().map(Vec::len).max().unwrap_or(0);
-    let width: Vec<usize> = (0..cols)
-        .map(|c| {
-            rows.iter()
-                .filter_map(|r| r.get(c))
-                .map(|s| s.chars().count())
-                .max()
-                .unwrap_or(0)
-        })
-        .collect();
-    let mut s = String::new();
+    let mut table = Table::new();
+    table
+        .load_preset(comfy_table::presets::NOTHING)
+        .set_content_arrangement(ContentArrangement::Disabled);
     for r in rows {
-        let mut line = String::new();
-        for (c, cell) in r.iter().enumerate() {
-            let pad = width[c].saturating_sub(cell.chars().count());
-            if c == 0 {
-                line.push_str(cell);
-                line.push_str(&" ".repeat(pad));
-            } else {
-                line.push_str("  ");
-                line.push_str(&" ".repeat(pad));
-                line.push_str(cell);
-            }
+        table.add_row(r.iter().map(String::as_str));
+    }
+    for (c, column) in table.column_iter_mut().enumerate().take(cols) {
+        if c == 0 {
+            column.set_padding((0, 0));
+        } else {
+            column
+                .set_padding((2, 0))
+                .set_cell_alignment(CellAlignment::Right);
         }
+    }
+    let mut s = String::new();
+    for line in table.lines() {
         s.push_str(line.trim_end());
         s.push('\n');
     }
@@ -344,8 +431,8 @@ pub fn success_text(m: &SuccessMatrix) -> String {
 /// `levels` levels (one `|gk|` column each).
 pub fn efficiency_header(levels: usize) -> Vec<String> {
     let head = [
-        "pair", "tol", "status", "accuracy", "tsim_s", "err", "err_sum", "err_alg", "steps",
-        "rejected", "evals", "jac", "LU",
+        "pair", "tol", "status", "accuracy", "tsim_s", "wall_s", "err", "err_sum", "err_alg",
+        "steps", "rejected", "evals", "jac", "LU",
     ];
     let mut h: Vec<String> = head.iter().map(|s| s.to_string()).collect();
     h.extend((0..levels).map(|k| format!("|g{k}|")));
@@ -390,6 +477,7 @@ pub fn efficiency_rows<R: Borrow<RunRecord>>(runs: &[R]) -> Vec<Vec<String>> {
                 None => "-".into(),
             },
             if ok { sci(Some(r.tsim_s)) } else { "-".into() },
+            if ok { sci(Some(r.wall_s)) } else { "-".into() },
             val(r.err),
             val(r.err_sum),
             val(r.err_algebraic),
@@ -621,6 +709,8 @@ pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
         "t_end",
         "tsim_s",
         "tsim_runs",
+        "wall_s",
+        "wall_runs",
         "err",
         "err_sum",
         "err_l2",
@@ -662,6 +752,12 @@ pub fn results_csv(report: &SweepReport) -> std::io::Result<Vec<u8>> {
             format!("{:e}", r.t_end),
             format!("{:e}", r.tsim_s),
             run.tsim_runs
+                .iter()
+                .map(|t| format!("{t:e}"))
+                .collect::<Vec<_>>()
+                .join(";"),
+            format!("{:e}", r.wall_s),
+            run.wall_runs
                 .iter()
                 .map(|t| format!("{t:e}"))
                 .collect::<Vec<_>>()
