@@ -58,7 +58,10 @@ pub mod prelude {
         BoxedSystem, DaeSystem, FormulationInfo, Model, ModelInfo, RowKind, StaticSize, VarKind,
     };
     pub use dae_macros::dae;
-    pub use dae_solvers::{Options, Problem, Solution, SolveError, Solver, Stats, Tol, Tolerances};
+    pub use dae_solvers::{
+        Integrator, Options, Problem, Solution, SolutionError, SolveError, Solver, Stats,
+        StepOutcome, Tol, Tolerances,
+    };
 }
 
 /// Runtime support for macro-generated code. Not public API.
