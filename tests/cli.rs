@@ -241,20 +241,30 @@ fn malformed_scene_files_exit_2_naming_the_field_and_line() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
-#[test]
-fn solver_failure_prints_json_and_exits_3() {
-    let dir = tempfile::tempdir().unwrap();
+/// A scene in `dir` whose solution `x' = x², x(0) = 1` blows up at t = 1,
+/// before its end t = 2 (every solver fails); `extra` is appended to the
+/// scene file. Returns the scene's path.
+fn blowup_scene(dir: &std::path::Path, extra: &str) -> std::path::PathBuf {
     std::fs::write(
-        dir.path().join("blowup.dae"),
+        dir.join("blowup.dae"),
         "pub Blowup {\n  differential { x }\n  equations { der(x) = x^2; }\n}\n",
     )
     .unwrap();
-    let scene = dir.path().join("blowup.toml");
+    let scene = dir.join("blowup.toml");
     std::fs::write(
         &scene,
-        "name = \"blowup\"\nmodel = \"blowup.dae\"\n[initial]\nx = 1.0\n[time]\nend = 2.0\n[reference]\nkind = \"none\"\n",
+        format!(
+            "name = \"blowup\"\nmodel = \"blowup.dae\"\n[initial]\nx = 1.0\n[time]\nend = 2.0\n{extra}"
+        ),
     )
     .unwrap();
+    scene
+}
+
+#[test]
+fn solver_failure_prints_json_and_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = blowup_scene(dir.path(), "[reference]\nkind = \"none\"\n");
     for solver in ["radau5", "bdf"] {
         let o = dae(&[
             "run",
@@ -677,17 +687,7 @@ fn trajectory_rows_follow_the_exact_pendulum() {
 #[test]
 fn trajectory_is_written_whole_or_not_at_all() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("blowup.dae"),
-        "pub Blowup {\n  differential { x }\n  equations { der(x) = x^2; }\n}\n",
-    )
-    .unwrap();
-    let scene = dir.path().join("blowup.toml");
-    std::fs::write(
-        &scene,
-        "name = \"blowup\"\nmodel = \"blowup.dae\"\n[initial]\nx = 1.0\n[time]\nend = 2.0\n",
-    )
-    .unwrap();
+    let scene = blowup_scene(dir.path(), "");
     let file = dir.path().join("out.csv");
     std::fs::write(&file, "previous").unwrap();
     let o = dae(&[
