@@ -49,7 +49,8 @@ pub struct RunSpec<'a> {
     pub init_mode: InitMode,
     /// Extra output times for figures (solution sampled there too).
     pub samples: &'a [f64],
-    /// Repeat the timed integration this many times (median reported).
+    /// Repeat the timed integration this many times (the minimum is
+    /// reported: interference only adds time, see [`RunRecord::tsim_s`]).
     pub repeats: usize,
     /// Bound on the accepted steps of each integration (`None`: the
     /// library's [`Options::max_steps`]); a run stopped there is a
@@ -168,14 +169,18 @@ pub struct RunRecord {
     /// What the verdict rests on, in one line (`null` with it).
     pub accuracy_note: Option<String>,
     /// Integration time in seconds: the CPU time of the thread that ran
-    /// the integration (median of the repeats). CPU time, not wall time,
-    /// so that it does not grow when other processes compete for the cores
+    /// the integration, the **minimum** over the repeats: the integration is
+    /// deterministic, so what varies between repeats is interference, and
+    /// interference only ever adds time. CPU time, not wall time, so that it
+    /// does not grow when other processes compete for the cores
     /// (BENCHMARKS.md §8: a sweep's CPU times moved 0.98× in the median
-    /// where wall times moved 2.66× with both cores loaded). It does not count time spent waiting, e.g. for
-    /// pages; [`wall_s`](RunRecord::wall_s) is the elapsed time beside it.
+    /// where wall times moved 2.66× with both cores loaded). It does not
+    /// count time spent waiting, e.g. for pages;
+    /// [`wall_s`](RunRecord::wall_s) is the elapsed time beside it.
     pub tsim_s: f64,
-    /// Wall-clock time of the same integration(s) in seconds (median of the
-    /// repeats): what a user waits, and what grows with the machine's load.
+    /// Wall-clock time of the same integration(s) in seconds (minimum over
+    /// the repeats): what a user waits, and what grows with the machine's
+    /// load.
     pub wall_s: f64,
     /// Work counters.
     pub stats: Stats,
@@ -714,10 +719,10 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
             },
         ));
     };
-    times.sort_by(f64::total_cmp);
-    walls.sort_by(f64::total_cmp);
-    record.tsim_s = times[times.len() / 2];
-    record.wall_s = walls[walls.len() / 2];
+    // Interference only adds time to a deterministic computation: the
+    // minimum is the stable statistic (sweep::minimum).
+    record.tsim_s = times.iter().copied().fold(f64::INFINITY, f64::min);
+    record.wall_s = walls.iter().copied().fold(f64::INFINITY, f64::min);
     record.stats = sol.stats;
     record.t_end = sol.t.last().copied().unwrap_or(spec.t_end);
     if let Some(last) = sol.last() {

@@ -38,9 +38,10 @@ pub struct SweepArgs {
     /// in [2.2e-14, 1).
     #[arg(long, value_delimiter = ',')]
     pub tols: Option<Vec<f64>>,
-    /// Timed integrations per run, at most (a run is timed again only while
-    /// its timings total under 1 s); tsim is their median, in CPU time of
-    /// the integrating thread (wall time beside it in results.csv/json).
+    /// Timed integrations per run, at least: more (up to 50) while they
+    /// total under 0.25 s of CPU time, fewer once they total 1 s; tsim is
+    /// their minimum (interference only adds time), in CPU time of the
+    /// integrating thread (wall time beside it in results.csv/json).
     #[arg(long, default_value_t = 3)]
     pub repeats: usize,
     /// Threads for the accuracy pass (timing stays sequential).

@@ -386,9 +386,10 @@ pub fn index(
     let inv = report.invariants.first().map_or("I", String::as_str);
     let _ = write!(
         s,
-        "<h2 id=\"efficiency\">Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds, the CPU time of the integrating thread (median of \
-         the timed integrations; the Pareto front and the fastest pairs use it); wall_s: the wall-clock time of the \
-         same integrations; err: largest pointwise \
+        "<h2 id=\"efficiency\">Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds, the CPU time of the integrating thread (minimum of \
+         the timed integrations, at least the sweep's repeats and more for short runs: interference only adds \
+         time; the Pareto front and the fastest pairs use it); wall_s: the wall-clock time of the \
+         same integrations (their minimum); err: largest pointwise \
          error of the differential unknowns over the reference's times; err_sum: sum over those times of the errors \
          of all unknowns the reference gives (SPEC's reading of the paper's ERR; results.csv also has err_l2, their \
          Euclidean norm); err_alg: largest error of the algebraic \

@@ -16,27 +16,42 @@
 //! ([`write::publish_dir`]: a staging directory renamed into place).
 //!
 //! # Timing
-//! `tsim_s` is the median of `repeats` timed integrations of the same run
+//! `tsim_s` is the **minimum** over the timed integrations of the same run
 //! (integration only: no model loading, no consistent initialisation, output
 //! only at the check times), each measured as the **CPU time of the thread
-//! that integrated** ([`crate::runner::timed`]), so that a machine loaded
-//! by other work does not slow the runs down on paper: the Pareto front and
-//! the fastest pair per target use it, so other work on the machine does not
-//! reorder them as a whole (runs within their timing spread still can;
-//! BENCHMARKS.md §8). The wall-clock time of the
-//! same integrations is kept beside it (`wall_s`, the median, and
-//! [`SweepRun::wall_runs`]). A run is timed again only while its timed
-//! integrations took less than [`REPEAT_BUDGET_S`] of CPU time in total, so
-//! slow runs (seconds each, where timing noise is relatively small) are
-//! timed fewer times. Every individual time is kept in
-//! [`SweepRun::tsim_runs`]. Timed integrations never overlap with other
-//! work of the sweep:
-//! - `jobs = 1` (default): one sequential pass; each run is integrated
-//!   `repeats` times in a row and the first integration also gives the
-//!   errors and statistics.
+//! that integrated** ([`crate::runner::timed`]). The computation is
+//! deterministic, so what varies between its integrations is interference
+//! (preemption, lost caches, a shared core's frequency), and interference
+//! only ever adds time: the minimum is the statistic other work on the
+//! machine moves least, as benchmark harnesses take it. The Pareto front and
+//! the fastest pair per target use it (BENCHMARKS.md §8 measures how far
+//! their order holds between an idle and a loaded machine). The wall-clock
+//! time of the same integrations is kept beside it (`wall_s`, their
+//! minimum, and [`SweepRun::wall_runs`]).
+//!
+//! How often a run is timed: at least `repeats` times, and more while the
+//! timings total less than [`SweepOptions::min_timed_cpu_s`] of CPU time
+//! (default [`MIN_TIMED_CPU_S`]), up to
+//! [`MAX_TIMED`] integrations, so that a millisecond-long run, whose minimum
+//! needs many samples, is timed tens of times; but never again once they
+//! total [`REPEAT_BUDGET_S`], so a slow run (seconds each, where timing
+//! noise is relatively small) is timed fewer than `repeats` times. Every
+//! individual time is kept in [`SweepRun::tsim_runs`].
+//!
+//! The timings are taken in **rounds**: each round times once, in grid
+//! order, every successful run that needs another timing
+//! ([`more_timings`]). A run's timings are thus spread over the whole timing
+//! pass, not taken in a row: a slow phase of the machine (another job's
+//! burst, a lower clock) then reaches every run alike, instead of all the
+//! timings of the few runs that happened to be timed during it, which a
+//! minimum cannot undo. Timed integrations never overlap with other work
+//! of the sweep:
+//! - `jobs = 1` (default): a sequential accuracy pass, whose integration
+//!   of a run (unless it also sampled the figures) is that run's first
+//!   timing, then the timing rounds.
 //! - `jobs > 1`: an accuracy pass runs the runs in parallel on a rayon
-//!   pool of `jobs` threads (each thread loads its own model once), then a
-//!   timing pass re-runs every successful run `repeats` times sequentially.
+//!   pool of `jobs` threads (each thread loads its own model once), then
+//!   the timing rounds, sequentially.
 //!   Failed runs are not re-timed: their `tsim_s` is the time to failure of
 //!   the one (parallel) attempt. The results are in grid order whatever
 //!   the threads' schedule.
@@ -84,6 +99,14 @@ pub const CHECKS_AS_SAMPLES: usize = 100;
 /// A run is timed again only while its timed integrations took less than
 /// this in total (seconds): a slow run is timed fewer than `repeats` times.
 pub const REPEAT_BUDGET_S: f64 = 1.0;
+/// A run is timed at least `repeats` times and then again while its timed
+/// integrations took less than this CPU time in total (seconds), up to
+/// [`MAX_TIMED`] times: short runs need more samples for a stable minimum
+/// (the default of [`SweepOptions::min_timed_cpu_s`]).
+pub const MIN_TIMED_CPU_S: f64 = 0.25;
+/// At most this many timed integrations per run, unless `repeats` asks
+/// for more.
+pub const MAX_TIMED: usize = 50;
 
 /// What to sweep and how.
 #[derive(Clone, Debug)]
@@ -94,8 +117,14 @@ pub struct SweepOptions {
     pub formulations: Vec<String>,
     /// Tolerances, `RTOL = ATOL`, each in `[100 ε, 1)`.
     pub tolerances: Vec<f64>,
-    /// Timed integrations per run (median reported); at least 1.
+    /// Timed integrations per run, at least (fewer only once they took
+    /// [`REPEAT_BUDGET_S`]; more while they took under `min_timed_cpu_s`,
+    /// up to [`MAX_TIMED`]); the minimum is reported. At least 1.
     pub repeats: usize,
+    /// Time a run again, beyond `repeats`, while its timings total less
+    /// than this CPU time in seconds ([`more_timings`]); 0: exactly
+    /// `repeats` timings (e.g. a map that does not rank by time).
+    pub min_timed_cpu_s: f64,
     /// Threads of the accuracy pass; 1 = one sequential pass.
     pub jobs: usize,
     /// Project inconsistent initial values (default) or refuse them.
@@ -111,13 +140,15 @@ pub struct SweepOptions {
 }
 
 impl SweepOptions {
-    /// The scene's own `[sweep]` grid, 3 repeats, sequential.
+    /// The scene's own `[sweep]` grid, 3 repeats and more for runs under
+    /// [`MIN_TIMED_CPU_S`], sequential.
     pub fn from_scene(scene: &Scene) -> Self {
         SweepOptions {
             solvers: scene.sweep.solvers.clone(),
             formulations: scene.sweep.formulations.clone(),
             tolerances: scene.sweep.tolerances.clone(),
             repeats: 3,
+            min_timed_cpu_s: MIN_TIMED_CPU_S,
             jobs: 1,
             init_mode: InitMode::Project,
             progress: true,
@@ -226,8 +257,8 @@ pub struct Pair {
 /// `dae run` prints it) plus every timed integration.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SweepRun {
-    /// The record; `tsim_s` is the median of `tsim_runs`, `wall_s` the
-    /// median of `wall_runs`.
+    /// The record; `tsim_s` is the minimum of `tsim_runs`, `wall_s` the
+    /// minimum of `wall_runs`.
     #[serde(flatten)]
     pub record: RunRecord,
     /// Every timed integration in seconds: CPU time of the integrating
@@ -273,8 +304,10 @@ pub struct SweepReport {
     pub formulations: Vec<String>,
     /// Tolerances, in sweep order.
     pub tolerances: Vec<f64>,
-    /// Timed integrations per run.
+    /// Timed integrations per run, at least (see [`SweepOptions::repeats`]).
     pub repeats: usize,
+    /// See [`SweepOptions::min_timed_cpu_s`].
+    pub min_timed_cpu_s: f64,
     /// Threads of the accuracy pass.
     pub jobs: usize,
     /// Bound on each run's steps (`None`: the library's).
@@ -307,7 +340,8 @@ impl SweepReport {
     pub fn scale_line(&self) -> String {
         format!(
             "{} solver(s) × {} formulation(s) × {} tolerance(s): {} runs in {:.1} s (tsim = CPU time of the \
-             integrating thread, median of up to {} timed integration(s), fewer once they took {} s; wall time \
+             integrating thread, minimum of at least {} timed integration(s) (more, up to {}, while they took under {} s; \
+             fewer once they took {} s); wall time \
              beside it in results.csv; {}{})",
             self.solvers.len(),
             self.formulations.len(),
@@ -315,6 +349,8 @@ impl SweepReport {
             self.runs.len(),
             self.wall_s,
             self.repeats,
+            MAX_TIMED.max(self.repeats),
+            self.min_timed_cpu_s,
             REPEAT_BUDGET_S,
             if self.jobs > 1 {
                 format!("accuracy pass on {} threads, timing pass sequential", self.jobs)
@@ -505,6 +541,7 @@ struct Ctx<'a> {
     init_mode: InitMode,
     samples: Vec<f64>,
     repeats: usize,
+    min_timed_cpu_s: f64,
     max_steps: Option<usize>,
 }
 
@@ -538,18 +575,82 @@ impl Ctx<'_> {
         Ok((rec, !sampled))
     }
 
-    /// Add timed integrations (output at the check times only) until there
-    /// are `repeats` of them or they took [`REPEAT_BUDGET_S`] of CPU time;
-    /// at least one.
-    fn timings(&self, model: &dyn Model, job: &Job, times: &mut Timings) -> Result<(), RunError> {
-        while times.cpu.is_empty()
-            || (times.cpu.len() < self.repeats && times.cpu.iter().sum::<f64>() < REPEAT_BUDGET_S)
-        {
-            let rec = self.run(model, job, &[])?;
-            times.push(&rec);
+    /// Does this run need another timing?
+    fn needs_timing(&self, times: &Timings) -> bool {
+        more_timings(
+            times.cpu.len(),
+            times.cpu.iter().sum(),
+            self.repeats,
+            self.min_timed_cpu_s,
+        )
+    }
+
+    /// The timing rounds: each round adds one timed integration (output at
+    /// the check times only) to every successful run that
+    /// [`needs_timing`](Ctx::needs_timing), in grid order, until none does.
+    /// Progress counts the runs whose timings are complete.
+    fn timing_rounds(
+        &self,
+        model: &dyn Model,
+        jobs: &[Job],
+        runs: &mut [(RunRecord, Timings)],
+        progress: bool,
+    ) -> Result<(), RunError> {
+        let mut pending: Vec<usize> = (0..runs.len())
+            .filter(|&i| runs[i].0.status == "ok")
+            .collect();
+        let bar = Progress::new(&self.label(" timing"), pending.len(), progress);
+        while !pending.is_empty() {
+            let mut next = Vec::with_capacity(pending.len());
+            for i in pending {
+                let times = &mut runs[i].1;
+                if self.needs_timing(times) {
+                    bar.set_message(job_label(&jobs[i]));
+                    times.push(&self.run(model, &jobs[i], &[])?);
+                }
+                if self.needs_timing(times) {
+                    next.push(i);
+                } else {
+                    bar.inc();
+                }
+            }
+            pending = next;
         }
+        bar.finish();
         Ok(())
     }
+}
+
+/// Does a run with `count` timed integrations totalling `cpu_s` seconds
+/// of CPU time need another, when `repeats` were asked for and
+/// `min_cpu_s` ([`SweepOptions::min_timed_cpu_s`])? Yes for the first;
+/// then no once they total [`REPEAT_BUDGET_S`]; else yes below `repeats`,
+/// and beyond while they total under `min_cpu_s` and number fewer than
+/// [`MAX_TIMED`].
+///
+/// ```
+/// use dae::sweep::{more_timings, MIN_TIMED_CPU_S};
+/// assert!(more_timings(0, 0.0, 3, MIN_TIMED_CPU_S));
+/// assert!(more_timings(3, 0.003, 3, MIN_TIMED_CPU_S)); // 1 ms runs: more samples
+/// assert!(!more_timings(50, 0.05, 3, MIN_TIMED_CPU_S)); // ... up to 50
+/// assert!(!more_timings(3, 0.3, 3, MIN_TIMED_CPU_S)); // 0.1 s runs: 3 suffice
+/// assert!(!more_timings(1, 2.0, 3, MIN_TIMED_CPU_S)); // a 2 s run: once
+/// assert!(!more_timings(1, 0.001, 1, 0.0)); // exactly `repeats`
+/// ```
+pub fn more_timings(count: usize, cpu_s: f64, repeats: usize, min_cpu_s: f64) -> bool {
+    count == 0
+        || (cpu_s < REPEAT_BUDGET_S
+            && (count < repeats || (count < MAX_TIMED && cpu_s < min_cpu_s)))
+}
+
+/// Smallest value of a list; 0 for an empty one.
+///
+/// ```
+/// assert_eq!(dae::sweep::minimum(&[3.0, 1.5, 2.0]), 1.5);
+/// assert_eq!(dae::sweep::minimum(&[]), 0.0);
+/// ```
+pub fn minimum(values: &[f64]) -> f64 {
+    values.iter().copied().reduce(f64::min).unwrap_or(0.0)
 }
 
 /// The timed integrations of one run: CPU and wall-clock seconds.
@@ -565,10 +666,10 @@ impl Timings {
         self.wall.push(rec.wall_s);
     }
 
-    /// The run with its medians and every time.
+    /// The run with its minima and every time.
     fn into_run(self, mut record: RunRecord) -> SweepRun {
-        record.tsim_s = median(&self.cpu);
-        record.wall_s = median(&self.wall);
+        record.tsim_s = minimum(&self.cpu);
+        record.wall_s = minimum(&self.wall);
         SweepRun {
             record,
             tsim_runs: self.cpu,
@@ -607,6 +708,7 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
         init_mode: opts.init_mode,
         samples: sample_times(scene),
         repeats: opts.repeats.max(1),
+        min_timed_cpu_s: opts.min_timed_cpu_s,
         max_steps: opts.max_steps,
     };
     let runs = if opts.jobs <= 1 {
@@ -638,6 +740,7 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
         formulations: opts.formulations.clone(),
         tolerances: opts.tolerances.clone(),
         repeats: ctx.repeats,
+        min_timed_cpu_s: ctx.min_timed_cpu_s,
         jobs: opts.jobs.max(1),
         max_steps: opts.max_steps,
         figure_tol: fig_tol,
@@ -651,7 +754,8 @@ pub fn run(scene: &Scene, opts: &SweepOptions) -> Result<SweepReport, SweepError
     })
 }
 
-/// `jobs = 1`: accuracy and timing in one sequential pass.
+/// `jobs = 1`: a sequential accuracy pass (its integrations are the first
+/// timings), then the timing rounds.
 fn sequential(
     ctx: &Ctx<'_>,
     model: &dyn Model,
@@ -659,7 +763,7 @@ fn sequential(
     progress: bool,
 ) -> Result<Vec<SweepRun>, SweepError> {
     let bar = Progress::new(&ctx.label(""), jobs.len(), progress);
-    let mut out = Vec::with_capacity(jobs.len());
+    let mut runs = Vec::with_capacity(jobs.len());
     for job in jobs {
         bar.set_message(job_label(job));
         let (record, timed) = ctx.accuracy(model, job)?;
@@ -667,18 +771,19 @@ fn sequential(
         if timed || record.status != "ok" {
             times.push(&record);
         }
-        if record.status == "ok" {
-            ctx.timings(model, job, &mut times)?;
-        }
-        out.push(times.into_run(record));
+        runs.push((record, times));
         bar.inc();
     }
     bar.finish();
-    Ok(out)
+    ctx.timing_rounds(model, jobs, &mut runs, progress)?;
+    Ok(runs
+        .into_iter()
+        .map(|(record, times)| times.into_run(record))
+        .collect())
 }
 
 /// `jobs > 1`: a parallel accuracy pass on a rayon pool of `threads`
-/// threads, then a sequential timing pass.
+/// threads, then the (sequential) timing rounds.
 fn parallel(
     ctx: &Ctx<'_>,
     model: &dyn Model,
@@ -730,29 +835,29 @@ fn parallel(
     }
     let records = records?;
     bar.finish();
-    let ok = records.iter().filter(|r| r.status == "ok").count();
-    let bar = Progress::new(&ctx.label(" timing"), ok, progress);
-    let mut out = Vec::with_capacity(jobs.len());
-    for (job, record) in jobs.iter().zip(records) {
-        let mut times = Timings::default();
-        if record.status == "ok" {
-            bar.set_message(job_label(job));
-            ctx.timings(model, job, &mut times)?;
-            bar.inc();
-        } else {
-            times.push(&record);
-        }
-        out.push(times.into_run(record));
-    }
-    bar.finish();
-    Ok(out)
+    // A failed run keeps the time to failure of its one attempt.
+    let mut runs: Vec<(RunRecord, Timings)> = records
+        .into_iter()
+        .map(|record| {
+            let mut times = Timings::default();
+            if record.status != "ok" {
+                times.push(&record);
+            }
+            (record, times)
+        })
+        .collect();
+    ctx.timing_rounds(model, jobs, &mut runs, progress)?;
+    Ok(runs
+        .into_iter()
+        .map(|(record, times)| times.into_run(record))
+        .collect())
 }
 
 /// The JSON document `results.json`:
 ///
 /// ```text
 /// { "scene":   {name, origin, model, t0, t_end, checks, reference},
-///   "sweep":   {solvers, formulations, tolerances, repeats, jobs, max_steps, figure_tol, wall_s, pairs: [...]},
+///   "sweep":   {solvers, formulations, tolerances, repeats, min_timed_cpu_s, jobs, max_steps, figure_tol, wall_s, pairs: [...]},
 ///   "runs":    [ RunRecord fields (as `dae run` prints them) + "tsim_runs": [...] ],
 ///   "success": {legend, formulations, rows: [{solver, cells: [{formulation, mark, ok, runs, reason?}]}]},
 ///   "pareto":  {error: "err", definition, rows: [{solver, formulation, tol, tsim_s, err}]},
@@ -791,6 +896,7 @@ struct SweepDoc<'a> {
     formulations: &'a [String],
     tolerances: &'a [f64],
     repeats: usize,
+    min_timed_cpu_s: f64,
     jobs: usize,
     max_steps: Option<usize>,
     figure_tol: f64,
@@ -814,6 +920,7 @@ impl<'a> ResultsDoc<'a> {
                 formulations: &report.formulations,
                 tolerances: &report.tolerances,
                 repeats: report.repeats,
+                min_timed_cpu_s: report.min_timed_cpu_s,
                 jobs: report.jobs,
                 max_steps: report.max_steps,
                 figure_tol: report.figure_tol,

@@ -827,7 +827,7 @@ fn scd_figure(report: &SweepReport) -> Option<Figure> {
         file: "scd".into(),
         title: format!("{}: significant correct digits", report.scene.name),
         caption: format!(
-            "The integration time tsim (median of {} timed runs, log scale) against the significant correct \
+            "The integration time tsim (minimum of at least {} timed runs, log scale) against the significant correct \
              digits scd = −log10 of the largest scaled error of the unknowns the reference gives, over its \
              times — the IVP Test Set's work-precision diagram; one line per solver(formulation) through its \
              successful tolerances. Further right is more accurate, lower is cheaper.",
@@ -939,7 +939,7 @@ fn work_precision_figure(report: &SweepReport, lines: Option<&ReferenceLines>) -
         file: "work_precision".into(),
         title,
         caption: format!(
-            "{what} against the integration time tsim (median of {} timed runs), log-log; one line per \
+            "{what} against the integration time tsim (minimum of at least {} timed runs), log-log; one line per \
              solver(formulation) through its successful tolerances {}{} (paper Fig. 6 / 12).{}",
             report.repeats,
             tols.join(", "),
