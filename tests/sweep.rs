@@ -820,6 +820,17 @@ fn bad_grids_are_refused() {
         sweep::validate(&bad_form),
         Err(sweep::SweepError::UnknownFormulation { .. })
     ));
+    // A typo gets the closest name; a name far from every one, none.
+    let typo = SweepOptions {
+        solvers: names(&["radua5"]),
+        ..base.clone()
+    };
+    let message = sweep::validate(&typo).unwrap_err().to_string();
+    assert!(message.contains("did you mean `radau5`?"), "{message}");
+    let message = sweep::validate(&bad_solver).unwrap_err().to_string();
+    assert!(!message.contains("did you mean"), "{message}");
+    let message = sweep::validate(&bad_form).unwrap_err().to_string();
+    assert!(message.contains("did you mean `rcd1`?"), "{message}");
     let bad_tol = SweepOptions {
         tolerances: vec![1e-6, -1.0],
         ..base.clone()

@@ -158,17 +158,32 @@ impl SweepOptions {
     }
 }
 
+/// `; did you mean `NAME`?` when a known name is close to `name`
+/// ([`dae_core::names::did_you_mean`]), or nothing.
+fn suggest(name: &str, known: &[&str]) -> String {
+    dae_core::names::did_you_mean(name, known)
+        .map_or_else(String::new, |k| format!("; did you mean `{k}`?"))
+}
+
 /// Why a sweep could not run or its results could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
     /// A solver name that is not known.
-    #[error("unknown solver `{name}` (known: {known})", known = dae_solvers::SOLVER_NAMES.join(", "))]
+    #[error(
+        "unknown solver `{name}`{hint} (known: {known})",
+        hint = suggest(name, &dae_solvers::SOLVER_NAMES),
+        known = dae_solvers::SOLVER_NAMES.join(", ")
+    )]
     UnknownSolver {
         /// The name given.
         name: String,
     },
     /// A formulation name that is not one of the eight.
-    #[error("unknown formulation `{name}` (known: {known})", known = dae_core::system::FORMULATION_NAMES.join(", "))]
+    #[error(
+        "unknown formulation `{name}`{hint} (known: {known})",
+        hint = suggest(name, &dae_core::system::FORMULATION_NAMES),
+        known = dae_core::system::FORMULATION_NAMES.join(", ")
+    )]
     UnknownFormulation {
         /// The name given.
         name: String,
