@@ -720,9 +720,9 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         ));
     };
     // Interference only adds time to a deterministic computation: the
-    // minimum is the stable statistic (sweep::minimum).
-    record.tsim_s = times.iter().copied().fold(f64::INFINITY, f64::min);
-    record.wall_s = walls.iter().copied().fold(f64::INFINITY, f64::min);
+    // minimum is the stable statistic.
+    record.tsim_s = minimum(&times);
+    record.wall_s = minimum(&walls);
     record.stats = sol.stats;
     record.t_end = sol.t.last().copied().unwrap_or(spec.t_end);
     if let Some(last) = sol.last() {
@@ -769,6 +769,16 @@ pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64, f64) {
         .and_then(|c| c.try_elapsed().ok())
         .map_or(wall, |d| d.as_secs_f64());
     (out, cpu, wall)
+}
+
+/// Smallest value of a list; 0 for an empty one.
+///
+/// ```
+/// assert_eq!(dae::runner::minimum(&[3.0, 1.5, 2.0]), 1.5);
+/// assert_eq!(dae::runner::minimum(&[]), 0.0);
+/// ```
+pub fn minimum(values: &[f64]) -> f64 {
+    values.iter().copied().reduce(f64::min).unwrap_or(0.0)
 }
 
 /// Whether each output time is a check time (within `10⁻¹²(1 + |t|)`), by

@@ -658,15 +658,7 @@ pub fn more_timings(count: usize, cpu_s: f64, repeats: usize, min_cpu_s: f64) ->
             && (count < repeats || (count < MAX_TIMED && cpu_s < min_cpu_s)))
 }
 
-/// Smallest value of a list; 0 for an empty one.
-///
-/// ```
-/// assert_eq!(dae::sweep::minimum(&[3.0, 1.5, 2.0]), 1.5);
-/// assert_eq!(dae::sweep::minimum(&[]), 0.0);
-/// ```
-pub fn minimum(values: &[f64]) -> f64 {
-    values.iter().copied().reduce(f64::min).unwrap_or(0.0)
-}
+pub use crate::runner::minimum;
 
 /// The timed integrations of one run: CPU and wall-clock seconds.
 #[derive(Default)]

@@ -174,10 +174,7 @@ impl<A: Method, B: Method, F: FnOnce(&A, &[Vec<f64>]) -> Option<B>> Method for S
         self.current().t()
     }
     fn y(&self) -> &[f64] {
-        match &self.run {
-            Some(run) if self.run_started => run.y(),
-            _ => self.startup.y(),
-        }
+        self.current().y()
     }
     fn dense(&self, tau: f64, out: &mut [f64]) {
         self.current().dense(tau, out)
