@@ -12,6 +12,7 @@ use dae::sweep::table::{self, Mark};
 use dae::sweep::write::{atomic_write, atomic_write_via, atomic_write_with};
 use dae::sweep::{self, Pair, SweepOptions, SweepRun};
 use dae_solvers::Stats;
+use proptest::prelude::*;
 use std::io::{self, Write};
 use std::path::Path;
 
@@ -295,7 +296,7 @@ fn trade_runs() -> Vec<SweepRun> {
         run(rec("c", "h", 1e-5, 0.5, None)),       // no reference: not eligible
         run(failed("c", "h", 1e-6)),               // failed: not eligible
         run(rec("c", "h", 1e-7, 5.0, Some(1e-8))), // beaten by b 1e-7
-        run(rec("d", "k", 1e-5, 1.0, Some(1e-3))), // tie with a 1e-5: both on the front
+        run(rec("d", "k", 1e-5, 1.0, Some(1e-3))), // tie with a 1e-5 in both: the name decides
     ]
 }
 
@@ -308,7 +309,6 @@ fn pareto_front_keeps_only_unbeaten_successful_runs() {
         got,
         vec![
             ("a(f)".to_string(), 1e-5),
-            ("d(k)".to_string(), 1e-5),
             ("a(f)".to_string(), 1e-6),
             ("b(g)".to_string(), 1e-7)
         ]
@@ -316,15 +316,26 @@ fn pareto_front_keeps_only_unbeaten_successful_runs() {
     // Sorted by time; error falls along the front.
     assert!(front
         .windows(2)
-        .all(|w| w[0].tsim_s <= w[1].tsim_s && w[0].err >= w[1].err));
-    // No eligible run beats a front member; every other eligible run is beaten.
+        .all(|w| w[0].tsim_s < w[1].tsim_s && w[0].err > w[1].err));
+    // No eligible run beats a front member (no chain of ties here); every
+    // other eligible run is beaten.
     let all = pareto::eligible(&runs);
     assert_eq!(all.len(), 7);
+    let r = pareto::TIME_RESOLUTION;
     for p in &all {
-        let beaten = all.iter().any(|q| pareto::beats(q, p));
-        assert_eq!(beaten, !front.contains(p), "{}", p.pair());
+        let beaten = all.iter().any(|q| pareto::beats(q, p, r));
+        assert_eq!(beaten, !front.contains(p), "{}", p.label());
     }
     assert!(pareto::pareto_front::<RunRecord>(&[]).is_empty());
+    // d(k) 1e-5 ties a(f) 1e-5 in time and error, steps and evaluations:
+    // the name decides, and it shows.
+    let t = pareto::targets(&runs, &[1e-2]);
+    assert_eq!(t[0].best.as_ref().map(pt), Some(("a(f)".into(), 1e-5)));
+    assert_eq!(
+        t[0].tied.iter().map(pt).collect::<Vec<_>>(),
+        vec![("d(k)".to_string(), 1e-5)]
+    );
+    assert!(table::targets_text(&t).contains("d(k) 1e-5"));
 }
 
 #[test]
@@ -336,13 +347,19 @@ fn targets_pick_the_fastest_run_that_met_them() {
         best,
         vec![
             Some(("a(f)".into(), 1e-5)),
-            Some(("a(f)".into(), 1e-5)), // tie in time and error: sweep order
+            Some(("a(f)".into(), 1e-5)), // tie in time and error: the name
             Some(("a(f)".into(), 1e-6)),
             Some(("b(g)".into(), 1e-7)),
             Some(("b(g)".into(), 1e-7)), // not c(h): slower
             None,
         ]
     );
+    // a(f) 1e-6 ties b(g) 1e-5 in time (both 2.0) and is more accurate.
+    assert_eq!(
+        t[2].tied.iter().map(pt).collect::<Vec<_>>(),
+        vec![("b(g)".to_string(), 1e-5)]
+    );
+    assert!(t[5].tied.is_empty());
     // The fastest run meeting a target is on the Pareto front.
     let front = pareto::pareto_front(&runs);
     assert!(t
@@ -351,6 +368,252 @@ fn targets_pick_the_fastest_run_that_met_them() {
         .all(|b| front.contains(b)));
     assert_eq!(pareto::TARGETS.len(), 8);
     assert_eq!((pareto::TARGETS[0], pareto::TARGETS[7]), (1e-3, 1e-10));
+}
+
+// ------------------------------------------- the ranking's timing resolution
+
+/// A point of the ranking: `name` is the solver, the rest fixed.
+fn point(name: &str, tsim_s: f64, err: f64) -> Point {
+    Point {
+        solver: name.into(),
+        formulation: "f".into(),
+        tol: 1e-6,
+        tsim_s,
+        err,
+        steps: 100,
+        evals: 1000,
+    }
+}
+
+fn solvers(points: &[Point]) -> Vec<&str> {
+    points.iter().map(|p| p.solver.as_str()).collect()
+}
+
+/// Every permutation of `v` (Heap's algorithm, iterative).
+fn permutations<T: Clone>(v: &[T]) -> Vec<Vec<T>> {
+    let mut a = v.to_vec();
+    let mut c = vec![0; a.len()];
+    let mut out = vec![a.clone()];
+    let mut i = 0;
+    while i < a.len() {
+        if c[i] < i {
+            a.swap(if i % 2 == 0 { 0 } else { c[i] }, i);
+            out.push(a.clone());
+            c[i] += 1;
+            i = 0;
+        } else {
+            c[i] = 0;
+            i += 1;
+        }
+    }
+    out
+}
+
+#[test]
+fn the_resolution_is_documented_and_ties_symmetrically() {
+    let r = pareto::TIME_RESOLUTION;
+    assert_eq!(r, 0.05);
+    let pct = format!("{} %", 100.0 * r);
+    assert!(pareto::TARGET_RULE.contains(&pct) && pareto::FRONT_RULE.contains(&pct));
+    assert!(pareto::tied(1.0, 1.05, r) && pareto::tied(1.05, 1.0, r));
+    assert!(!pareto::tied(1.0, 1.051, r) && !pareto::tied(1.051, 1.0, r));
+    // A negative or NaN resolution ties only equal times.
+    assert!(pareto::tied(1.0, 1.0, -1.0) && !pareto::tied(1.0, 1.001, f64::NAN));
+}
+
+#[test]
+fn one_percent_apart_the_more_accurate_wins_either_way_round() {
+    // The bdf pair of BENCHMARKS §8b: bdf(rcd1) 1e-6 (err 5.4e-3) and
+    // bdf(rcd0) 1e-8 (err 8.2e-5), their minima 0.1-1.4 % apart, either
+    // order.
+    let r = pareto::TIME_RESOLUTION;
+    for (t_coarse, t_fine) in [(1.00e-3, 1.01e-3), (1.01e-3, 1.00e-3), (2.001e-3, 1.973e-3)] {
+        let runs = [
+            point("coarse", t_coarse, 5.4e-3),
+            point("fine", t_fine, 8.2e-5),
+        ];
+        for order in permutations(&runs) {
+            assert_eq!(solvers(&pareto::front_of(&order, r)), ["fine"], "{order:?}");
+            let t = pareto::targets_of(&order, &[1e-2, 1e-3, 1e-5], r);
+            assert_eq!(t[0].best.as_ref().map(|p| p.solver.as_str()), Some("fine"));
+            // The loser of the tie is named beside the winner ...
+            assert_eq!(solvers(&t[0].tied), ["coarse"]);
+            // ... but only where it met the target.
+            assert_eq!(t[1].best.as_ref().map(|p| p.solver.as_str()), Some("fine"));
+            assert!(t[1].tied.is_empty());
+            assert!(t[2].best.is_none());
+        }
+    }
+    // Without the resolution the clock decides, as before.
+    let runs = [
+        point("coarse", 1.00e-3, 5.4e-3),
+        point("fine", 1.01e-3, 8.2e-5),
+    ];
+    assert_eq!(solvers(&pareto::front_of(&runs, 0.0)), ["coarse", "fine"]);
+    let t = pareto::targets_of(&runs, &[1e-2], 0.0);
+    assert_eq!(
+        t[0].best.as_ref().map(|p| p.solver.as_str()),
+        Some("coarse")
+    );
+}
+
+#[test]
+fn ten_percent_apart_the_faster_wins() {
+    let r = pareto::TIME_RESOLUTION;
+    let runs = [
+        point("coarse", 1.0e-3, 5.4e-3),
+        point("fine", 1.1e-3, 8.2e-5),
+    ];
+    for order in permutations(&runs) {
+        let front = pareto::front_of(&order, r);
+        assert_eq!(solvers(&front), ["coarse", "fine"]);
+        assert_eq!(table::front_ties(&front), ["", ""]);
+        let t = pareto::targets_of(&order, &[1e-2, 1e-4], r);
+        assert_eq!(
+            t[0].best.as_ref().map(|p| p.solver.as_str()),
+            Some("coarse")
+        );
+        assert!(t[0].tied.is_empty());
+        assert_eq!(t[1].best.as_ref().map(|p| p.solver.as_str()), Some("fine"));
+    }
+}
+
+#[test]
+fn tied_in_time_and_error_the_counts_then_the_name_decide() {
+    let r = pareto::TIME_RESOLUTION;
+    let base = point("b", 1.00, 1e-4);
+    let fewer_steps = Point {
+        solver: "z".into(),
+        tsim_s: 1.02,
+        steps: 90,
+        ..base.clone()
+    };
+    let fewer_evals = Point {
+        solver: "y".into(),
+        tsim_s: 0.99,
+        evals: 900,
+        ..base.clone()
+    };
+    for order in permutations(&[base.clone(), fewer_steps.clone()]) {
+        assert_eq!(solvers(&pareto::front_of(&order, r)), ["z"]);
+    }
+    for order in permutations(&[base.clone(), fewer_evals.clone()]) {
+        assert_eq!(solvers(&pareto::front_of(&order, r)), ["y"]);
+    }
+    for order in permutations(&[base.clone(), point("a", 1.01, 1e-4)]) {
+        assert_eq!(solvers(&pareto::front_of(&order, r)), ["a"]);
+    }
+    assert!(pareto::beats(&fewer_steps, &base, r) && !pareto::beats(&base, &fewer_steps, r));
+}
+
+#[test]
+fn a_chain_of_ties_is_resolved_the_same_whatever_the_order() {
+    let r = pareto::TIME_RESOLUTION;
+    // Each within 4 % of the next, more accurate along the chain; c is 8 %
+    // slower than a. b beats a and c beats b, but c does not beat a.
+    let chain = [
+        point("a", 1.00, 1e-3),
+        point("b", 1.04, 1e-4),
+        point("c", 1.08, 1e-5),
+    ];
+    let [a, b, c] = &chain;
+    assert!(pareto::beats(b, a, r) && pareto::beats(c, b, r) && !pareto::beats(c, a, r));
+    for order in permutations(&chain) {
+        let front = pareto::front_of(&order, r);
+        // b stands for a's speed (tied with a, more accurate), c for its
+        // own error; the two are within the resolution: marked.
+        assert_eq!(solvers(&front), ["b", "c"], "{order:?}");
+        assert_eq!(table::front_ties(&front), ["", "≈"]);
+        let t = pareto::targets_of(&order, &[1e-3, 1e-4, 1e-5], r);
+        let best: Vec<&str> = t
+            .iter()
+            .map(|t| t.best.as_ref().map_or("", |p| p.solver.as_str()))
+            .collect();
+        assert_eq!(best, ["b", "c", "c"]);
+        assert_eq!(solvers(&t[0].tied), ["a"]);
+        assert_eq!(solvers(&t[1].tied), ["b"]);
+    }
+    // A longer chain, 3 % steps: the front is the same for all 720 orders.
+    let long: Vec<Point> = (0..6)
+        .map(|i| point(&format!("r{i}"), 1.03f64.powi(i), 10f64.powi(-3 - i)))
+        .collect();
+    let first = pareto::front_of(&long, r);
+    assert!(!first.is_empty());
+    for order in permutations(&long) {
+        assert_eq!(pareto::front_of(&order, r), first);
+    }
+    // Each of r1..r5 is the pick for its own error (tied with the next
+    // faster run, more accurate); r0 loses to r1. All but the first marked.
+    assert_eq!(solvers(&first), ["r1", "r2", "r3", "r4", "r5"]);
+    assert_eq!(table::front_ties(&first), ["", "≈", "≈", "≈", "≈"]);
+}
+
+/// Points with many near ties: times on a 2 % grid, errors from a few
+/// decades (equal errors too), steps from a few values.
+fn points_strategy() -> impl Strategy<Value = Vec<Point>> {
+    prop::collection::vec((0u32..30, 0u32..6, 0usize..3, 0usize..2), 0..12).prop_map(|v| {
+        v.into_iter()
+            .enumerate()
+            .map(|(i, (t, e, steps, evals))| Point {
+                solver: format!("s{}", i % 4),
+                formulation: format!("f{}", i / 4),
+                tol: 1e-6,
+                tsim_s: 1e-3 * 1.02f64.powi(t as i32),
+                err: 10f64.powi(-(e as i32)),
+                steps: 100 + steps,
+                evals: 1000 + evals,
+            })
+            .collect()
+    })
+}
+
+proptest! {
+    #[test]
+    fn permuting_the_runs_never_changes_the_ranking(
+        (points, shuffled) in points_strategy()
+            .prop_flat_map(|v| (Just(v.clone()), Just(v).prop_shuffle()))
+    ) {
+        let r = pareto::TIME_RESOLUTION;
+        let levels = [1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6];
+        let front = pareto::front_of(&points, r);
+        prop_assert_eq!(&front, &pareto::front_of(&shuffled, r));
+        let targets = pareto::targets_of(&points, &levels, r);
+        prop_assert_eq!(&targets, &pareto::targets_of(&shuffled, &levels, r));
+        // Strictly faster and no more accurate along the front.
+        for w in front.windows(2) {
+            prop_assert!(w[0].tsim_s < w[1].tsim_s && w[0].err >= w[1].err);
+        }
+        for p in &points {
+            // Every run is covered by a front run; every run off the front
+            // is beaten by some run.
+            prop_assert!(front.iter().any(|f| pareto::covers(f, p, r)));
+            if !front.contains(p) {
+                prop_assert!(points.iter().any(|q| pareto::beats(q, p, r)));
+            }
+        }
+        // Every target's pick is on the front, met the target, and is tied
+        // with the fastest run that met it.
+        for t in &targets {
+            let met: Vec<&Point> = points.iter().filter(|p| p.err <= t.target).collect();
+            match &t.best {
+                Some(b) => {
+                    prop_assert!(front.contains(b) && b.err <= t.target);
+                    let t_min = met.iter().map(|p| p.tsim_s).fold(f64::INFINITY, f64::min);
+                    prop_assert!(pareto::tied(b.tsim_s, t_min, r));
+                    prop_assert_eq!(t.tied.len() + 1, met.iter().filter(|p| pareto::tied(p.tsim_s, t_min, r)).count());
+                }
+                None => prop_assert!(met.is_empty()),
+            }
+        }
+        // Without the resolution: the classic front (one of runs equal in
+        // time and error).
+        let classic = pareto::front_of(&points, 0.0);
+        for p in &points {
+            let beaten = points.iter().any(|q| q.tsim_s <= p.tsim_s && q.err <= p.err && (q.tsim_s < p.tsim_s || q.err < p.err));
+            let dup_on_front = classic.iter().any(|f| f.tsim_s == p.tsim_s && f.err == p.err);
+            prop_assert_eq!(!beaten, dup_on_front);
+        }
+    }
 }
 
 // ----------------------------------------------------------------- paper

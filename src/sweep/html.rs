@@ -3,8 +3,12 @@
 
 use super::fortran::ReferenceLines;
 use super::paper::Verdict;
+use super::pareto;
 use super::plot::Figure;
-use super::table::{accuracy_line, efficiency_rows, paper_cell, sci, tol_label, USABLE_LEGEND};
+use super::table::{
+    accuracy_line, efficiency_rows, front_ties, paper_cell, sci, tied_text, tol_label,
+    USABLE_LEGEND,
+};
 use super::{Summary, SweepReport};
 use std::fmt::Write;
 
@@ -301,25 +305,37 @@ pub fn index(
     if report.has_reference() {
         s.push_str(
             "<h2 id=\"trade\">The trade</h2>\n<p>Both summaries use <code>err</code>, the largest pointwise error of the \
-             differential unknowns over the check times. Pareto front: successful runs that no other successful run \
-             beats on both tsim and err (at least as good in both, strictly better in one), by increasing tsim. tsim is \
-             the CPU time of the integrating thread, so the load of the machine as a whole does not move the ranking (runs \
-             within their timing spread can still swap; BENCHMARKS.md §8); wall_s is in the efficiency table.</p>\n",
+             differential unknowns over the check times, and tsim, the CPU time of the integrating thread (so the load \
+             of the machine as a whole does not move the ranking; wall_s is in the efficiency table). ",
+        );
+        let _ = writeln!(
+            s,
+            "{} {}</p>",
+            esc(pareto::TARGET_RULE),
+            esc(pareto::FRONT_RULE)
         );
         let mut rows = vec![vec![
             "pair".to_string(),
             "tol".into(),
             "tsim_s".into(),
             "err".into(),
+            "≈".into(),
         ]];
-        rows.extend(summary.pareto.iter().map(|p| {
-            vec![
-                p.pair(),
-                tol_label(p.tol),
-                sci(Some(p.tsim_s)),
-                sci(Some(p.err)),
-            ]
-        }));
+        rows.extend(
+            summary
+                .pareto
+                .iter()
+                .zip(front_ties(&summary.pareto))
+                .map(|(p, m)| {
+                    vec![
+                        p.pair(),
+                        tol_label(p.tol),
+                        sci(Some(p.tsim_s)),
+                        sci(Some(p.err)),
+                        m.to_string(),
+                    ]
+                }),
+        );
         s.push_str("<h3 id=\"pareto\">Pareto front</h3>\n");
         s.push_str(&table(&rows, 1));
         s.push_str("<h3 id=\"targets\">Fastest run per target error</h3>\n");
@@ -329,6 +345,10 @@ pub fn index(
             "tol".into(),
             "tsim_s".into(),
             "err".into(),
+            format!(
+                "tied with (time within {} %)",
+                100.0 * pareto::TIME_RESOLUTION
+            ),
         ]];
         for t in &summary.targets {
             let mut r = vec![format!("≤ {}", sci(Some(t.target)))];
@@ -338,9 +358,11 @@ pub fn index(
                     tol_label(p.tol),
                     sci(Some(p.tsim_s)),
                     sci(Some(p.err)),
+                    tied_text(t),
                 ]),
                 None => r.extend([
                     "none met it".to_string(),
+                    String::new(),
                     String::new(),
                     String::new(),
                     String::new(),
@@ -388,7 +410,7 @@ pub fn index(
         s,
         "<h2 id=\"efficiency\">Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds, the CPU time of the integrating thread (minimum of \
          the timed integrations, at least the sweep's repeats and more for short runs: interference only adds \
-         time; the Pareto front and the fastest pairs use it); wall_s: the wall-clock time of the \
+         time; the Pareto front and the fastest pairs use it, times within 5 % tied); wall_s: the wall-clock time of the \
          same integrations (their minimum); err: largest pointwise \
          error of the differential unknowns over the reference's times; err_sum: sum over those times of the errors \
          of all unknowns the reference gives (SPEC's reading of the paper's ERR; results.csv also has err_l2, their \

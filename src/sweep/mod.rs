@@ -24,8 +24,11 @@
 //! (preemption, lost caches, a shared core's frequency), and interference
 //! only ever adds time: the minimum is the statistic other work on the
 //! machine moves least, as benchmark harnesses take it. The Pareto front and
-//! the fastest pair per target use it (BENCHMARKS.md §8 measures how far
-//! their order holds between an idle and a loaded machine). The wall-clock
+//! the fastest pair per target use it, with runs closer in time than
+//! [`pareto::TIME_RESOLUTION`] (5 %) tied and ordered by their error, step
+//! and evaluation counts and name, which do not depend on the machine
+//! ([`pareto`]; BENCHMARKS.md §8 measures how far their order holds between
+//! an idle and a loaded machine, §8c describes the tie rule). The wall-clock
 //! time of the same integrations is kept beside it (`wall_s`, their
 //! minimum, and [`SweepRun::wall_runs`]).
 //!
@@ -396,9 +399,10 @@ impl SweepReport {
 pub struct Summary {
     /// X / x / o / - per pair.
     pub success: table::SuccessMatrix,
-    /// Runs not beaten on both time and `err`.
+    /// The Pareto front at [`pareto::TIME_RESOLUTION`] ([`pareto::pareto_front`]).
     pub pareto: Vec<pareto::Point>,
-    /// Fastest run per target error.
+    /// Fastest run per target error, ties in time going to the more
+    /// accurate ([`pareto::targets`]).
     pub targets: Vec<pareto::Target>,
     /// Comparison with the paper under `err_sum` (scenes S01 and S02 only).
     pub paper: Option<paper::Comparison>,
@@ -867,8 +871,11 @@ fn parallel(
 ///   "sweep":   {solvers, formulations, tolerances, repeats, min_timed_cpu_s, jobs, max_steps, figure_tol, wall_s, pairs: [...]},
 ///   "runs":    [ RunRecord fields (as `dae run` prints them) + "tsim_runs": [...] ],
 ///   "success": {legend, formulations, rows: [{solver, cells: [{formulation, mark, ok, runs, reason?}]}]},
-///   "pareto":  {error: "err", definition, rows: [{solver, formulation, tol, tsim_s, err}]},
-///   "targets": {error: "err", rows: [{target, best: {solver, formulation, tol, tsim_s, err} | null}]},
+///   "pareto":  {error: "err", time_resolution: 0.05, definition,
+///               rows: [{solver, formulation, tol, tsim_s, err, steps, evals}]},
+///   "targets": {error: "err", time_resolution: 0.05, definition,
+///               rows: [{target, best: {solver, formulation, tol, tsim_s, err, steps, evals} | null,
+///                       tied: [the same, the runs best was tied with in time]}]},
 ///   "paper":   {table, measure: "err_sum", note, rows: [...], counts: [...]} | null,
 ///   "paper_l2": the same with measure "err_l2" | null,
 ///   "reference_lines": {scenario, note, header, calibration,
@@ -914,6 +921,7 @@ struct SweepDoc<'a> {
 #[derive(Serialize)]
 struct Explained<T> {
     error: &'static str,
+    time_resolution: f64,
     definition: &'static str,
     rows: T,
 }
@@ -938,14 +946,14 @@ impl<'a> ResultsDoc<'a> {
             success: &summary.success,
             pareto: Explained {
                 error: "err",
-                definition: "successful runs with a finite err; a run is on the front when no other such run is at \
-                             least as fast (tsim_s) and at least as accurate (err) and strictly better in one; sorted \
-                             by tsim_s",
+                time_resolution: pareto::TIME_RESOLUTION,
+                definition: pareto::FRONT_RULE,
                 rows: &summary.pareto,
             },
             targets: Explained {
                 error: "err",
-                definition: "for each target error, the fastest successful run with err <= target (null: none)",
+                time_resolution: pareto::TIME_RESOLUTION,
+                definition: pareto::TARGET_RULE,
                 rows: &summary.targets,
             },
             paper: summary.paper.as_ref(),

@@ -944,9 +944,13 @@ fn work_precision_figure(report: &SweepReport, lines: Option<&ReferenceLines>) -
             report.repeats,
             tols.join(", "),
             if with_ref {
-                "; wide grey band: the Pareto front of this sweep's runs"
+                format!(
+                    "; wide grey band: the Pareto front of this sweep's runs (times within {} % tied, the more \
+                     accurate run kept: the table's rule)",
+                    100.0 * super::pareto::TIME_RESOLUTION
+                )
             } else {
-                ""
+                String::new()
             },
             lines.map_or_else(String::new, |l| format!(" {}", l.note))
         ),

@@ -503,19 +503,66 @@ fn point_row(p: &Point) -> Vec<String> {
     ]
 }
 
-/// The Pareto front as text.
+/// The `≈` column of the Pareto front, one entry per run: `≈` when the run
+/// is tied in time with the one before it (within
+/// [`TIME_RESOLUTION`](super::pareto::TIME_RESOLUTION); the front's order
+/// then rests on the error, not on the clock), else empty.
+///
+/// ```
+/// use dae::sweep::pareto::Point;
+/// use dae::sweep::table::front_ties;
+/// let p = |t: f64, err: f64| Point { solver: "s".into(), formulation: "f".into(),
+///     tol: 1e-6, tsim_s: t, err, steps: 1, evals: 1 };
+/// let front = [p(1.00, 1e-3), p(1.04, 1e-4), p(2.0, 1e-6)];
+/// assert_eq!(front_ties(&front), ["", "≈", ""]);
+/// ```
+pub fn front_ties(front: &[Point]) -> Vec<&'static str> {
+    let mut marks = vec![""; front.len()];
+    for (i, w) in front.windows(2).enumerate() {
+        if super::pareto::tied(w[0].tsim_s, w[1].tsim_s, super::pareto::TIME_RESOLUTION) {
+            marks[i + 1] = "≈";
+        }
+    }
+    marks
+}
+
+/// The runs a target's pick was tied with, as `label; label` (empty for
+/// none).
+///
+/// ```
+/// use dae::sweep::pareto::{Point, Target};
+/// use dae::sweep::table::tied_text;
+/// let p = Point { solver: "bdf".into(), formulation: "rcd1".into(), tol: 1e-6,
+///     tsim_s: 1.97e-3, err: 5.4e-3, steps: 4816, evals: 9000 };
+/// let t = Target { target: 1e-2, best: None, tied: vec![p] };
+/// assert_eq!(tied_text(&t), "bdf(rcd1) 1e-6");
+/// ```
+pub fn tied_text(t: &Target) -> String {
+    t.tied
+        .iter()
+        .map(Point::label)
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The Pareto front as text, with the `≈` column of [`front_ties`].
 pub fn pareto_text(front: &[Point]) -> String {
     let mut rows = vec![vec![
         "pair".into(),
         "tol".into(),
         "tsim_s".into(),
         "err".into(),
+        "≈".into(),
     ]];
-    rows.extend(front.iter().map(point_row));
+    rows.extend(front.iter().zip(front_ties(front)).map(|(p, m)| {
+        let mut r = point_row(p);
+        r.push(m.into());
+        r
+    }));
     align(&rows)
 }
 
-/// The target table as text.
+/// The target table as text, with the runs each pick was tied with.
 pub fn targets_text(targets: &[Target]) -> String {
     let mut rows = vec![vec![
         "target err".into(),
@@ -523,12 +570,17 @@ pub fn targets_text(targets: &[Target]) -> String {
         "tol".into(),
         "tsim_s".into(),
         "err".into(),
+        format!(
+            "tied with (time within {} %)",
+            100.0 * super::pareto::TIME_RESOLUTION
+        ),
     ]];
     for t in targets {
         match &t.best {
             Some(p) => {
                 let mut r = vec![format!("≤ {}", sci(Some(t.target)))];
                 r.extend(point_row(p));
+                r.push(tied_text(t));
                 rows.push(r);
             }
             None => rows.push(vec![
@@ -627,9 +679,16 @@ pub fn text_report(report: &SweepReport, summary: &Summary) -> String {
         report.invariants.first().map_or("I", String::as_str));
     s.push_str(&align(&efficiency_rows(&report.runs)));
     if report.has_reference() {
-        let _ = writeln!(s, "\nPareto front (runs not beaten on both tsim and err)");
+        let _ = writeln!(
+            s,
+            "\nPareto front (by tsim and err; times within {} % are tied, ≈: tied with the run above)",
+            100.0 * super::pareto::TIME_RESOLUTION
+        );
         s.push_str(&pareto_text(&summary.pareto));
-        let _ = writeln!(s, "\nFastest run per target error (err)");
+        let _ = writeln!(
+            s,
+            "\nFastest run per target error (err; of runs tied in time, the more accurate)"
+        );
         s.push_str(&targets_text(&summary.targets));
     } else {
         let _ = writeln!(
