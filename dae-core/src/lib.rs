@@ -23,6 +23,7 @@ pub mod names;
 pub mod print;
 pub mod report;
 pub mod selector;
+pub mod structure;
 pub mod system;
 pub mod tape;
 
