@@ -58,7 +58,7 @@ pub struct Compiled {
     pub invariants: Tape,
     /// Default parameter values.
     pub parameter_defaults: Vec<f64>,
-    /// For a model with a mass matrix, whose chain holds der(): the model's
+    /// For a model with a mass matrix whose chain holds der(): the model's
     /// dynamic rows, for eliminating the accelerations ([`crate::accel`]).
     /// `constraints` and `constraints_jacobian` then read der() from `yp`.
     pub accel: Option<AccelTapes>,
@@ -129,7 +129,13 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
         cons.output(e);
         gradient_cells(r, e, n, &mut cj_cells);
     }
-    let accel = model.has_mass_matrix().then(|| accel_tapes(d, n));
+    // The accelerations are eliminated only where the chain holds der():
+    // the implied constraints of a singular mass matrix (which has no
+    // inverse to eliminate with) hold none.
+    let holds_der = chain
+        .iter()
+        .any(|(_, _, e)| e.any_sym(&|s| matches!(s, Sym::Der(_))));
+    let accel = (model.has_mass_matrix() && holds_der).then(|| accel_tapes(d, n));
     let mut inv = TapeBuilder::new();
     for i in &model.invariants {
         inv.output(&i.expr);

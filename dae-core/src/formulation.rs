@@ -4,9 +4,9 @@
 //! | name | rows | applies to |
 //! |---|---|---|
 //! | `ori2` | dynamics + constraints as written | every model |
-//! | `rcd1` | dynamics + each constraint at level `d_i − 1` | every `d_i ≥ 1` |
+//! | `rcd1` | dynamics + each constraint at level `max(d_i − 1, 0)` | some `d_i ≥ 2` |
 //! | `rcd0` | dynamics + each constraint at level `d_i` | every model |
-//! | `ovd1` | dynamics + levels `0 … d_i − 1` (overdetermined) | every `d_i ≥ 1` |
+//! | `ovd1` | dynamics + levels `0 … max(d_i − 1, 0)` (overdetermined) | some `d_i ≥ 2` |
 //! | `ovd0` | dynamics + levels `0 … d_i` (overdetermined) | every model |
 //! | `ggl1` | `c u' = f − c Σ η_i ∂g_i/∂u`, levels 0 and 1 | mechanical (`d_i = 2`) |
 //! | `psi1` | position rows projected by a selector, levels 0, 1 | mechanical |
@@ -129,11 +129,13 @@ pub const SELECTOR_MAX_CONSTRAINTS: usize = 8;
 
 /// Why a formulation does not apply to a model, or `Ok`.
 pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String> {
-    let all_ge1 = an.chains.iter().all(|c| c.top() >= 1);
     match name {
         "ori2" | "rcd0" | "ovd0" => Ok(()),
-        "rcd1" | "ovd1" if all_ge1 => Ok(()),
-        "rcd1" | "ovd1" => Err(format!("`{name}` needs every constraint to have a hidden velocity level (d-index ≥ 2)")),
+        "rcd1" | "ovd1" if an.max_level() >= 2 => Ok(()),
+        "rcd1" | "ovd1" if an.max_level() == 1 => Err(format!(
+            "`{name}` would repeat `ori2`: no constraint is differentiated more than once (d-index 2)"
+        )),
+        "rcd1" | "ovd1" => Err(format!("`{name}` needs a constraint with a hidden velocity level (d-index ≥ 2)")),
         "ggl1" | "psi1" | "psi0" if !an.is_mechanical() => Err(format!(
             "`{name}` needs position-level constraints of a mechanical system (each constraint determining its multiplier after two differentiations)"
         )),
@@ -270,9 +272,11 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
             let d = c.top();
             match name {
                 "ori2" => vec![0],
-                "rcd1" => vec![d - 1],
+                // A constraint that determines its unknowns as written
+                // (level 0: an algebraic equation) stays as written.
+                "rcd1" => vec![d.saturating_sub(1)],
                 "rcd0" => vec![d],
-                "ovd1" => (0..d).collect(),
+                "ovd1" => (0..d.max(1)).collect(),
                 "ovd0" | "psi0" => (0..=d).collect(),
                 _ => vec![0, 1], // ggl1, psi1
             }
@@ -494,7 +498,11 @@ fn selector_split(model: &Model, an: &Analysis) -> Result<SelectorSplit, String>
             .iter()
             .map(|&a| {
                 v.iter()
-                    .map(|&j| expr::diff(&model.dynamics[j].rhs, Sym::Var(a as u32)))
+                    .map(|&j| {
+                        model
+                            .dynamic(j)
+                            .map_or_else(Expr::zero, |d| expr::diff(&d.rhs, Sym::Var(a as u32)))
+                    })
                     .collect()
             })
             .collect();

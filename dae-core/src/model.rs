@@ -135,8 +135,14 @@ pub struct Model {
     pub vars: Vec<VarDef>,
     /// Number of differential unknowns (the first `n_diff` of `vars`).
     pub n_diff: usize,
-    /// Dynamic equations, one per differential unknown, in unknown order.
+    /// Dynamic equations in the order of the unknowns they are assigned
+    /// to: one per differential unknown, except the implicit ones.
     pub dynamics: Vec<Dynamic>,
+    /// Differential unknowns without a dynamic equation of their own
+    /// (ascending): their der() appears only in rows assigned to other
+    /// unknowns (`y1' + η t y2' = …`), and the constraints determine them,
+    /// as they determine the algebraic unknowns.
+    pub implicit: Vec<usize>,
     /// `coupled[j]`: differential unknown `j` is an unknown of a mass
     /// matrix (its der() shares an equation with another der()). Empty when
     /// the model has no mass matrix.
@@ -192,431 +198,47 @@ pub const TIME: &str = "t";
 
 impl Model {
     /// Check a parsed model; every problem is reported, each at its token.
+    ///
+    /// The phases, in order: names declared ([`declare_names`]), derived
+    /// parameters lowered ([`derive_parameters`]), definitions lowered
+    /// ([`lower_definitions`]), equations lowered and split into dynamic
+    /// rows and constraints ([`lower_equations`]), dynamic rows assigned to
+    /// the derivatives they give ([`assign_dynamics`]), equations counted
+    /// against unknowns ([`check_counts`]), invariants and the formulation
+    /// list. Each phase reports into the same [`Errors`].
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
         let mut errors = Errors::default();
-        // Hash maps for lookups only (never iterated): linear in the names.
-        let mut seen: HashMap<String, (Span, &'static str)> = HashMap::new();
-        // Names declared twice or reserved: uses of them raise no further
-        // errors.
-        let mut dupes: HashSet<String> = HashSet::new();
-        let mut declare = |n: &Name, kind: &'static str, errors: &mut Errors| {
-            if let Some((first, first_kind)) = seen.get(&n.name) {
-                let named = [DEFINITION, DERIVED];
-                if named.contains(&kind) || named.contains(first_kind) {
-                    errors.push(
-                        n.span,
-                        format!("{kind} `{}` clashes with the {first_kind} `{}`: every name of a model is unique", n.name, n.name),
-                    );
-                    errors.push(
-                        *first,
-                        format!("the {first_kind} `{}` is declared here", n.name),
-                    );
-                } else {
-                    errors.push(n.span, format!("`{}` is declared twice", n.name));
-                    errors.push(*first, format!("`{}` is first declared here", n.name));
-                }
-                dupes.insert(n.name.clone());
-                return false;
-            }
-            if n.name == TIME {
-                errors.push(n.span, "`t` is reserved (time): choose another name");
-                dupes.insert(n.name.clone());
-                return false;
-            }
-            if FUNCTIONS.contains(&n.name.as_str()) || n.name == "der" {
-                errors.push(
-                    n.span,
-                    format!(
-                        "`{}` is reserved (a function of the model language)",
-                        n.name
-                    ),
-                );
-                dupes.insert(n.name.clone());
-                return false;
-            }
-            seen.insert(n.name.clone(), (n.span, kind));
-            true
-        };
-        let mut params = Vec::new();
-        for p in &ast.parameters {
-            if declare(&p.name, "parameter", &mut errors) {
-                if !p.value.is_finite() {
-                    errors.push(
-                        p.name.span,
-                        format!("default of `{}` is not finite", p.name.name),
-                    );
-                }
-                params.push(ParamDef {
-                    name: p.name.name.clone(),
-                    default: p.value,
-                    span: p.name.span,
-                    derived: None,
-                });
-            }
-        }
-        let n_base = params.len();
-        // Derived parameters are declared now and lowered once every name
-        // is known; `derived_asts[k]` is the expression of `params[n_base + k]`.
-        let mut derived_asts = Vec::new();
-        for d in &ast.derived {
-            if declare(&d.name, DERIVED, &mut errors) {
-                params.push(ParamDef {
-                    name: d.name.name.clone(),
-                    default: f64::NAN,
-                    span: d.name.span,
-                    derived: None,
-                });
-                derived_asts.push(d);
-            }
-        }
-        let mut vars = Vec::new();
-        for n in &ast.differential {
-            if declare(n, "differential unknown", &mut errors) {
-                vars.push(VarDef {
-                    name: n.name.clone(),
-                    kind: VarKind::Differential,
-                    span: n.span,
-                });
-            }
-        }
-        let n_diff = vars.len();
-        for n in &ast.algebraic {
-            if declare(n, "algebraic unknown", &mut errors) {
-                vars.push(VarDef {
-                    name: n.name.clone(),
-                    kind: VarKind::Algebraic,
-                    span: n.span,
-                });
-            }
-        }
-        if n_diff == 0 {
-            errors.push(
-                ast.name.span,
-                format!("model `{}` is empty: it needs `differential {{ … }}` unknowns and `equations {{ … }}`", ast.name.name),
-            );
-        }
-
-        let mut def_decls = Vec::new();
-        for d in &ast.definitions {
-            if declare(&d.name, DEFINITION, &mut errors) {
-                def_decls.push(d);
-            }
-        }
-
-        // Derived parameters, in order: each an expression of the base
-        // parameters and of earlier derived ones.
-        let mut derived_exprs: Vec<Option<Expr>> = Vec::new();
-        let base_defaults: Vec<f64> = params.iter().map(|p| p.default).collect();
-        let mut derived_defaults = Vec::new();
-        {
-            let mut scope = Scope::new(&params, &vars, dupes.clone());
-            scope.forward = derived_asts.iter().map(|d| (*d).clone()).collect();
-            scope.definition_names = def_decls.iter().map(|d| d.name.name.clone()).collect();
-            for (k, d) in derived_asts.iter().enumerate() {
-                scope.mode = Mode::Derived(k, n_base);
-                let Some(e) = scope.lower(&d.expr, &mut errors) else {
-                    derived_exprs.push(None);
-                    continue;
-                };
-                // In the base parameters only.
-                let base = expr::subs(&e, &|s| match s {
-                    Sym::Param(j) if j as usize >= n_base => Some(
-                        derived_exprs[j as usize - n_base]
-                            .clone()
-                            .unwrap_or_else(Expr::zero),
-                    ),
-                    _ => None,
-                });
-                let value = base.eval(&|s| match s {
-                    Sym::Param(j) => base_defaults[j as usize],
-                    _ => f64::NAN,
-                });
-                if !value.is_finite() {
-                    errors.push(
-                        d.name.span,
-                        format!(
-                            "derived parameter `{}` is {value} at the parameters' defaults",
-                            d.name.name
-                        ),
-                    );
-                }
-                derived_defaults.push((n_base + k, value));
-                derived_exprs.push(Some(base));
-            }
-        }
-        for (k, value) in derived_defaults {
-            params[k].default = value;
-        }
-        for (k, e) in derived_exprs.into_iter().enumerate() {
-            params[n_base + k].derived = Some(e.unwrap_or_else(Expr::zero));
-        }
-
-        let mut scope = Scope::new(&params, &vars, dupes);
-        // Definitions, in order: each lowered once and substituted at
-        // every later use.
-        scope.forward = def_decls.iter().map(|d| (*d).clone()).collect();
-        let mut definitions = Vec::new();
-        for (k, d) in def_decls.iter().enumerate() {
-            scope.mode = Mode::Definition(k);
-            match scope.lower(&d.expr, &mut errors) {
-                Some(e) => {
-                    scope.defs.insert(d.name.name.clone(), e.clone());
-                    definitions.push(DefinitionDef {
-                        name: d.name.name.clone(),
-                        expr: e,
-                        span: d.name.span,
-                    });
-                }
-                None => {
-                    // Already reported: uses of it stay quiet.
-                    scope.failed.insert(d.name.name.clone());
-                }
-            }
-        }
-        scope.mode = Mode::Model;
-        let scope = scope;
-        let mut constraints = Vec::new();
-        // Dynamic equations as written: every der() term with its
-        // coefficient, assigned to unknowns below.
-        let mut written: Vec<Written> = Vec::new();
-        // An equation that failed to lower already has its error; counting
-        // equations afterwards would only add a cascade of "too few".
-        let mut lowered_all = true;
-        for eq in &ast.equations {
-            let (Some(lhs), Some(rhs)) = (
-                scope.lower(&eq.lhs, &mut errors),
-                scope.lower(&eq.rhs, &mut errors),
-            ) else {
-                lowered_all = false;
-                continue;
-            };
-            // Equation-level errors point at the equation's first token.
-            let eq_span = eq.lhs.span();
-            let r = expr::sub(&lhs, &rhs);
-            let (ders, rest) = expr::split_ders(&r);
-            if ders.is_empty() {
-                let g = if lhs.is_zero() {
-                    rhs
-                } else {
-                    expr::sub(&lhs, &rhs)
-                };
-                if g.any_sym(&|s| matches!(s, Sym::Var(_))) {
-                    constraints.push(ConstraintDef {
-                        expr: g,
-                        span: eq_span,
-                    });
-                } else {
-                    errors.push(eq_span, "this equation involves no unknown");
-                }
-                continue;
-            }
-            let mut ok = true;
-            for (j, coef) in &ders {
-                let name = &vars[*j].name;
-                let problem = if coef.any_sym(&|s| matches!(s, Sym::Der(_))) {
-                    Some(if ders.len() == 1 {
-                        format!("`der({name})` must appear linearly: write `coef * der({name}) = rhs` with a coefficient free of der()")
-                    } else {
-                        format!("`der({name})` must appear linearly: write `a*der({name}) + b*der(…) = rhs` with coefficients free of der()")
-                    })
-                } else if coef.contains(Sym::Time) {
-                    Some(format!(
-                        "the coefficient of `der({name})` may not depend on time `t`"
-                    ))
-                } else if coef.is_zero() {
-                    Some(format!("the coefficient of `der({name})` vanishes"))
-                } else {
-                    (n_diff..vars.len())
-                        .find(|&a| coef.contains(Sym::Var(a as u32)))
-                        .map(|a| format!(
-                            "the coefficient of `der({name})` depends on the algebraic unknown `{}`: a coefficient of der() may depend on parameters and positions only",
-                            vars[a].name
-                        ))
-                };
-                if let Some(msg) = problem {
-                    errors.push(eq_span, msg);
-                    ok = false;
-                    break;
-                }
-            }
-            if !ok {
-                lowered_all = false;
-                continue;
-            }
-            written.push((ders, expr::neg(&rest), eq_span));
-        }
-        // Coupled unknowns: those whose der() shares an equation with
-        // another der() (a mass matrix). A coefficient in such an equation
-        // may not depend on a coupled unknown (a velocity).
-        let mut coupled = vec![false; n_diff];
-        for (terms, _, _) in written.iter().filter(|(t, _, _)| t.len() > 1) {
-            for &(j, _) in terms {
-                coupled[j] = true;
-            }
-        }
-        for (terms, _, span) in written.iter().filter(|(t, _, _)| t.len() > 1) {
-            for (j, c) in terms {
-                if let Some(k) = (0..n_diff).find(|&k| coupled[k] && c.contains(Sym::Var(k as u32)))
-                {
-                    errors.push(
-                        *span,
-                        format!(
-                            "the coefficient of `der({})` depends on `{}`, whose der() appears with others (a velocity): a mass matrix may depend on parameters and positions only",
-                            vars[*j].name, vars[k].name
-                        ),
-                    );
-                    lowered_all = false;
-                }
-            }
-        }
-        // Assign equations to unknowns: a perfect matching between the
-        // dynamic equations and the derivatives they contain (a structurally
-        // nonsingular mass matrix has one).
-        let adj: Vec<Vec<usize>> = written
-            .iter()
-            .map(|(terms, _, _)| terms.iter().map(|(j, _)| *j).collect())
-            .collect();
-        let assign = crate::index::max_matching(&adj, n_diff);
-        let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
-        let mut placed = vec![false; written.len()];
-        for (j, owner) in assign.iter().enumerate() {
-            if let Some(e) = owner {
-                let (terms, rhs, span) = &written[*e];
-                placed[*e] = true;
-                let coef = terms.iter().find(|(k, _)| *k == j).map(|(_, c)| c.clone());
-                dynamics[j] = Some(Dynamic {
-                    var: j,
-                    coef: coef.unwrap_or_else(Expr::one),
-                    coupled: terms.iter().filter(|(k, _)| *k != j).cloned().collect(),
-                    rhs: rhs.clone(),
-                    span: *span,
-                });
-            }
-        }
-        for (e, (terms, _, span)) in written.iter().enumerate() {
-            if placed[e] {
-                continue;
-            }
-            lowered_all = false;
-            if let [(j, _)] = terms.as_slice() {
-                errors.push(
-                    *span,
-                    format!("a second equation for `der({})`: each differential unknown has exactly one", vars[*j].name),
-                );
-            } else {
-                errors.push(
-                    *span,
-                    format!(
-                        "structurally singular mass matrix: the equations with der() of {} give fewer independent derivatives than equations",
-                        terms.iter().map(|(j, _)| format!("`{}`", vars[*j].name)).collect::<Vec<_>>().join(", ")
-                    ),
-                );
-            }
-        }
-        let mut dyns = Vec::new();
-        for (j, d) in dynamics.into_iter().enumerate() {
-            match d {
-                Some(d) => dyns.push(d),
-                None if !lowered_all => {}
-                None => errors.push(
-                    vars[j].span,
-                    format!(
-                        "too few equations: no equation gives `der({})`",
-                        vars[j].name
-                    ),
-                ),
-            }
-        }
-        let n_alg = vars.len() - n_diff;
-        if !lowered_all {
-            // Counts are meaningless with equations missing.
-        } else if constraints.len() > n_alg {
-            for c in &constraints[n_alg..] {
-                errors.push(
-                    c.span,
-                    format!(
-                        "too many equations: {} constraints for {} algebraic unknown{} (a semi-explicit model has one constraint per algebraic unknown)",
-                        constraints.len(),
-                        n_alg,
-                        if n_alg == 1 { "" } else { "s" }
-                    ),
-                );
-            }
-        } else if constraints.len() < n_alg {
-            for v in &vars[n_diff + constraints.len()..] {
-                errors.push(
-                    v.span,
-                    format!(
-                        "too few equations: {} algebraic unknowns but {} constraints; add `0 = …` for `{}`",
-                        n_alg,
-                        constraints.len(),
-                        v.name
-                    ),
-                );
-            }
-        }
-        if lowered_all {
-            for (a, v) in vars.iter().enumerate().skip(n_diff) {
-                let s = Sym::Var(a as u32);
-                let used = dyns.iter().any(|d| d.rhs.contains(s) || d.coef.contains(s))
-                    || constraints.iter().any(|c| c.expr.contains(s));
-                if !used {
-                    errors.push(
-                        v.span,
-                        format!("structurally singular: `{}` appears in no equation, so nothing determines it", v.name),
-                    );
-                }
-            }
-        }
-        let mut invariants = Vec::new();
-        let mut invariant_names: HashMap<&str, Span> = HashMap::new();
-        for inv in &ast.invariants {
-            if let Some(first) = invariant_names.get(inv.name.name.as_str()) {
-                errors.push(
-                    inv.name.span,
-                    format!("invariant `{}` is declared twice", inv.name.name),
-                );
-                errors.push(
-                    *first,
-                    format!("invariant `{}` is first declared here", inv.name.name),
-                );
-                continue;
-            }
-            invariant_names.insert(&inv.name.name, inv.name.span);
-            if let Some(e) = scope.lower(&inv.expr, &mut errors) {
-                if e.any_sym(&|s| matches!(s, Sym::Der(_))) {
-                    errors.push(inv.expr.span(), "invariants may not contain der()");
-                    continue;
-                }
-                invariants.push(InvariantDef {
-                    name: inv.name.name.clone(),
-                    expr: e,
-                    span: inv.name.span,
-                });
-            }
-        }
-        if let Some(list) = &ast.formulations {
-            let mut listed: Vec<&str> = Vec::new();
-            for f in list {
-                if !FORMULATION_NAMES.contains(&f.name.as_str()) {
-                    errors.push(
-                        f.span,
-                        format!(
-                            "unknown formulation `{}` (known: {})",
-                            f.name,
-                            FORMULATION_NAMES.join(", ")
-                        ),
-                    );
-                } else if listed.contains(&f.name.as_str()) {
-                    errors.push(f.span, format!("formulation `{}` is listed twice", f.name));
-                } else {
-                    listed.push(&f.name);
-                }
-            }
-            if list.is_empty() {
-                errors.push(ast.body_span, "`formulations { }` is empty: list at least one, or leave the block out for all");
-            }
-        }
+        let mut decl = declare_names(ast, &mut errors);
+        derive_parameters(&mut decl, &mut errors);
+        let Declared {
+            params,
+            n_base,
+            vars,
+            n_diff,
+            def_decls,
+            dupes,
+            ..
+        } = decl;
+        let (scope, definitions) =
+            lower_definitions(&params, &vars, dupes, &def_decls, &mut errors);
+        let Lowered {
+            constraints,
+            written,
+            mut lowered_all,
+        } = lower_equations(ast, &scope, &vars, n_diff, &mut errors);
+        let (dyns, coupled, implicit) =
+            assign_dynamics(&written, &vars, n_diff, &mut lowered_all, &mut errors);
+        check_counts(
+            &vars,
+            n_diff,
+            &implicit,
+            &dyns,
+            &constraints,
+            lowered_all,
+            &mut errors,
+        );
+        let invariants = lower_invariants(ast, &scope, &mut errors);
+        check_formulation_list(ast, &mut errors);
         errors.finish(Model {
             name: ast.name.name.clone(),
             name_span: ast.name.span,
@@ -628,6 +250,7 @@ impl Model {
             vars,
             n_diff,
             dynamics: dyns,
+            implicit,
             coupled: if coupled.iter().any(|&c| c) {
                 coupled
             } else {
@@ -674,10 +297,18 @@ impl Model {
     /// (an algebraic unknown, or a der() itself).
     pub fn rate(&self, s: Sym) -> Result<Option<Expr>, Sym> {
         match s {
-            Sym::Var(i) if self.is_coupled(i as usize) => Ok(Some(Expr::der(i as usize))),
+            Sym::Var(i) if self.is_coupled(i as usize) || self.is_implicit(i as usize) => {
+                Ok(Some(Expr::der(i as usize)))
+            }
             Sym::Var(i) if (i as usize) < self.n_diff => {
-                let d = &self.dynamics[i as usize];
-                Ok(Some(expr::div(&d.rhs, &d.coef)))
+                let Some(d) = self.dynamic(i as usize) else {
+                    return Err(s);
+                };
+                // `c u' + Σ c_k y_k' = f` with the y_k implicit (no rate
+                // of their own): `u' = (f − Σ c_k y_k') / c`.
+                let rest =
+                    expr::add_all(d.coupled.iter().map(|(k, c)| expr::mul(c, &Expr::der(*k))));
+                Ok(Some(expr::div(&expr::sub(&d.rhs, &rest), &d.coef)))
             }
             Sym::Param(_) => Ok(None),
             Sym::Time => Ok(Some(Expr::one())),
@@ -717,8 +348,34 @@ impl Model {
 
     /// Whether the dynamic row of unknown `k` contains a symbol of `pred`.
     fn row_involves(&self, k: usize, pred: &dyn Fn(Sym) -> bool) -> bool {
-        let d = &self.dynamics[k];
-        d.rhs.any_sym(pred) || d.terms().any(|(_, c)| c.any_sym(pred))
+        self.dynamic(k)
+            .is_some_and(|d| d.rhs.any_sym(pred) || d.terms().any(|(_, c)| c.any_sym(pred)))
+    }
+
+    /// The dynamic equation assigned to differential unknown `j`; `None`
+    /// for an implicit one (see [`Model::implicit`]) or an algebraic one.
+    pub fn dynamic(&self, j: usize) -> Option<&Dynamic> {
+        // Sorted by the unknown they are assigned to.
+        self.dynamics
+            .binary_search_by_key(&j, |d| d.var)
+            .ok()
+            .map(|k| &self.dynamics[k])
+    }
+
+    /// `true` when differential unknown `j` has no dynamic equation of its
+    /// own (see [`Model::implicit`]).
+    pub fn is_implicit(&self, j: usize) -> bool {
+        self.implicit.binary_search(&j).is_ok()
+    }
+
+    /// The unknowns the constraints determine: the implicit differential
+    /// ones, then the algebraic ones, ascending.
+    pub fn determined(&self) -> Vec<usize> {
+        self.implicit
+            .iter()
+            .copied()
+            .chain(self.n_diff..self.vars.len())
+            .collect()
     }
 
     /// The mass-matrix block of coupled unknown `j`: the unknowns linked to
@@ -783,6 +440,624 @@ impl Model {
     #[allow(clippy::should_implement_trait)] // returns `syn::Error` with spans, unlike `str::parse`
     pub fn from_str(src: &str) -> Result<Model, syn::Error> {
         Model::check(&crate::dsl::parse_str(src)?)
+    }
+}
+
+/// The names a model declares, after [`declare_names`].
+struct Declared<'a> {
+    params: Vec<ParamDef>,
+    n_base: usize,
+    /// `derived_asts[k]` is the expression of `params[n_base + k]`.
+    derived_asts: Vec<&'a crate::dsl::NamedExpr>,
+    vars: Vec<VarDef>,
+    n_diff: usize,
+    def_decls: Vec<&'a crate::dsl::NamedExpr>,
+    /// Names declared twice or reserved: uses of them raise no further
+    /// errors.
+    dupes: HashSet<String>,
+}
+
+/// Phase 1: every name declared once, none reserved; parameters with
+/// finite defaults, unknowns, definitions (not yet lowered).
+fn declare_names<'a>(ast: &'a ModelAst, errors: &mut Errors) -> Declared<'a> {
+    // Hash maps for lookups only (never iterated): linear in the names.
+    let mut seen: HashMap<String, (Span, &'static str)> = HashMap::new();
+    // Names declared twice or reserved: uses of them raise no further
+    // errors.
+    let mut dupes: HashSet<String> = HashSet::new();
+    let mut declare = |n: &Name, kind: &'static str, errors: &mut Errors| {
+        if let Some((first, first_kind)) = seen.get(&n.name) {
+            let named = [DEFINITION, DERIVED];
+            if named.contains(&kind) || named.contains(first_kind) {
+                errors.push(
+                    n.span,
+                    format!("{kind} `{}` clashes with the {first_kind} `{}`: every name of a model is unique", n.name, n.name),
+                );
+                errors.push(
+                    *first,
+                    format!("the {first_kind} `{}` is declared here", n.name),
+                );
+            } else {
+                errors.push(n.span, format!("`{}` is declared twice", n.name));
+                errors.push(*first, format!("`{}` is first declared here", n.name));
+            }
+            dupes.insert(n.name.clone());
+            return false;
+        }
+        if n.name == TIME {
+            errors.push(n.span, "`t` is reserved (time): choose another name");
+            dupes.insert(n.name.clone());
+            return false;
+        }
+        if FUNCTIONS.contains(&n.name.as_str()) || n.name == "der" {
+            errors.push(
+                n.span,
+                format!(
+                    "`{}` is reserved (a function of the model language)",
+                    n.name
+                ),
+            );
+            dupes.insert(n.name.clone());
+            return false;
+        }
+        seen.insert(n.name.clone(), (n.span, kind));
+        true
+    };
+    let mut params = Vec::new();
+    for p in &ast.parameters {
+        if declare(&p.name, "parameter", errors) {
+            if !p.value.is_finite() {
+                errors.push(
+                    p.name.span,
+                    format!("default of `{}` is not finite", p.name.name),
+                );
+            }
+            params.push(ParamDef {
+                name: p.name.name.clone(),
+                default: p.value,
+                span: p.name.span,
+                derived: None,
+            });
+        }
+    }
+    let n_base = params.len();
+    // Derived parameters are declared now and lowered once every name
+    // is known; `derived_asts[k]` is the expression of `params[n_base + k]`.
+    let mut derived_asts = Vec::new();
+    for d in &ast.derived {
+        if declare(&d.name, DERIVED, errors) {
+            params.push(ParamDef {
+                name: d.name.name.clone(),
+                default: f64::NAN,
+                span: d.name.span,
+                derived: None,
+            });
+            derived_asts.push(d);
+        }
+    }
+    let mut vars = Vec::new();
+    for n in &ast.differential {
+        if declare(n, "differential unknown", errors) {
+            vars.push(VarDef {
+                name: n.name.clone(),
+                kind: VarKind::Differential,
+                span: n.span,
+            });
+        }
+    }
+    let n_diff = vars.len();
+    for n in &ast.algebraic {
+        if declare(n, "algebraic unknown", errors) {
+            vars.push(VarDef {
+                name: n.name.clone(),
+                kind: VarKind::Algebraic,
+                span: n.span,
+            });
+        }
+    }
+    if n_diff == 0 {
+        errors.push(
+            ast.name.span,
+            format!("model `{}` is empty: it needs `differential {{ … }}` unknowns and `equations {{ … }}`", ast.name.name),
+        );
+    }
+
+    let mut def_decls = Vec::new();
+    for d in &ast.definitions {
+        if declare(&d.name, DEFINITION, errors) {
+            def_decls.push(d);
+        }
+    }
+    Declared {
+        params,
+        n_base,
+        derived_asts,
+        vars,
+        n_diff,
+        def_decls,
+        dupes,
+    }
+}
+
+/// Phase 2: derived parameters, in order, each an expression of the base
+/// parameters (earlier derived ones substituted), with its default.
+fn derive_parameters(decl: &mut Declared<'_>, errors: &mut Errors) {
+    let Declared {
+        params,
+        n_base,
+        derived_asts,
+        vars,
+        def_decls,
+        dupes,
+        ..
+    } = decl;
+    let n_base = *n_base;
+    // Derived parameters, in order: each an expression of the base
+    // parameters and of earlier derived ones.
+    let mut derived_exprs: Vec<Option<Expr>> = Vec::new();
+    let base_defaults: Vec<f64> = params.iter().map(|p| p.default).collect();
+    let mut derived_defaults = Vec::new();
+    {
+        let mut scope = Scope::new(params, vars, dupes.clone());
+        scope.forward = derived_asts.iter().map(|d| (*d).clone()).collect();
+        scope.definition_names = def_decls.iter().map(|d| d.name.name.clone()).collect();
+        for (k, d) in derived_asts.iter().enumerate() {
+            scope.mode = Mode::Derived(k, n_base);
+            let Some(e) = scope.lower(&d.expr, errors) else {
+                derived_exprs.push(None);
+                continue;
+            };
+            // In the base parameters only.
+            let base = expr::subs(&e, &|s| match s {
+                Sym::Param(j) if j as usize >= n_base => Some(
+                    derived_exprs[j as usize - n_base]
+                        .clone()
+                        .unwrap_or_else(Expr::zero),
+                ),
+                _ => None,
+            });
+            let value = base.eval(&|s| match s {
+                Sym::Param(j) => base_defaults[j as usize],
+                _ => f64::NAN,
+            });
+            if !value.is_finite() {
+                errors.push(
+                    d.name.span,
+                    format!(
+                        "derived parameter `{}` is {value} at the parameters' defaults",
+                        d.name.name
+                    ),
+                );
+            }
+            derived_defaults.push((n_base + k, value));
+            derived_exprs.push(Some(base));
+        }
+    }
+    for (k, value) in derived_defaults {
+        params[k].default = value;
+    }
+    for (k, e) in derived_exprs.into_iter().enumerate() {
+        params[n_base + k].derived = Some(e.unwrap_or_else(Expr::zero));
+    }
+}
+
+/// Phase 3: definitions, in order, each lowered once; the scope every
+/// later expression is lowered in.
+fn lower_definitions<'a>(
+    params: &'a [ParamDef],
+    vars: &'a [VarDef],
+    dupes: HashSet<String>,
+    def_decls: &[&crate::dsl::NamedExpr],
+    errors: &mut Errors,
+) -> (Scope<'a>, Vec<DefinitionDef>) {
+    let mut scope = Scope::new(params, vars, dupes);
+    // Definitions, in order: each lowered once and substituted at
+    // every later use.
+    scope.forward = def_decls.iter().map(|d| (*d).clone()).collect();
+    let mut definitions = Vec::new();
+    for (k, d) in def_decls.iter().enumerate() {
+        scope.mode = Mode::Definition(k);
+        match scope.lower(&d.expr, errors) {
+            Some(e) => {
+                scope.defs.insert(d.name.name.clone(), e.clone());
+                definitions.push(DefinitionDef {
+                    name: d.name.name.clone(),
+                    expr: e,
+                    span: d.name.span,
+                });
+            }
+            None => {
+                // Already reported: uses of it stay quiet.
+                scope.failed.insert(d.name.name.clone());
+            }
+        }
+    }
+    scope.mode = Mode::Model;
+    let scope = scope;
+    (scope, definitions)
+}
+
+/// The equations after [`lower_equations`].
+struct Lowered {
+    constraints: Vec<ConstraintDef>,
+    /// Dynamic equations as written, before assignment.
+    written: Vec<Written>,
+    /// `false` when an equation failed to lower (already reported): counts
+    /// are then meaningless.
+    lowered_all: bool,
+}
+
+/// Phase 4: every equation lowered; those without der() are constraints,
+/// the others dynamic equations whose der() terms are checked (linear, with
+/// coefficients free of der(), `t` and algebraic unknowns).
+fn lower_equations(
+    ast: &ModelAst,
+    scope: &Scope<'_>,
+    vars: &[VarDef],
+    n_diff: usize,
+    errors: &mut Errors,
+) -> Lowered {
+    let mut constraints = Vec::new();
+    // Dynamic equations as written: every der() term with its
+    // coefficient, assigned to unknowns below.
+    let mut written: Vec<Written> = Vec::new();
+    // An equation that failed to lower already has its error; counting
+    // equations afterwards would only add a cascade of "too few".
+    let mut lowered_all = true;
+    for eq in &ast.equations {
+        let (Some(lhs), Some(rhs)) = (scope.lower(&eq.lhs, errors), scope.lower(&eq.rhs, errors))
+        else {
+            lowered_all = false;
+            continue;
+        };
+        // Equation-level errors point at the equation's first token.
+        let eq_span = eq.lhs.span();
+        let r = expr::sub(&lhs, &rhs);
+        let (ders, rest) = expr::split_ders(&r);
+        if ders.is_empty() {
+            let g = if lhs.is_zero() {
+                rhs
+            } else {
+                expr::sub(&lhs, &rhs)
+            };
+            if g.any_sym(&|s| matches!(s, Sym::Var(_))) {
+                constraints.push(ConstraintDef {
+                    expr: g,
+                    span: eq_span,
+                });
+            } else {
+                errors.push(eq_span, "this equation involves no unknown");
+            }
+            continue;
+        }
+        let mut ok = true;
+        for (j, coef) in &ders {
+            let name = &vars[*j].name;
+            let problem = if coef.any_sym(&|s| matches!(s, Sym::Der(_))) {
+                Some(if ders.len() == 1 {
+                    format!("`der({name})` must appear linearly: write `coef * der({name}) = rhs` with a coefficient free of der()")
+                } else {
+                    format!("`der({name})` must appear linearly: write `a*der({name}) + b*der(…) = rhs` with coefficients free of der()")
+                })
+            } else if coef.contains(Sym::Time) {
+                Some(format!(
+                    "the coefficient of `der({name})` may not depend on time `t`"
+                ))
+            } else if coef.is_zero() {
+                Some(format!("the coefficient of `der({name})` vanishes"))
+            } else {
+                (n_diff..vars.len())
+                    .find(|&a| coef.contains(Sym::Var(a as u32)))
+                    .map(|a| format!(
+                        "the coefficient of `der({name})` depends on the algebraic unknown `{}`: a coefficient of der() may depend on parameters and positions only",
+                        vars[a].name
+                    ))
+            };
+            if let Some(msg) = problem {
+                errors.push(eq_span, msg);
+                ok = false;
+                break;
+            }
+        }
+        if !ok {
+            lowered_all = false;
+            continue;
+        }
+        written.push((ders, expr::neg(&rest), eq_span));
+    }
+    Lowered {
+        constraints,
+        written,
+        lowered_all,
+    }
+}
+
+/// Phase 5: every dynamic equation assigned to a derivative it gives (a
+/// matching; where no perfect one exists, one that prefers constant
+/// coefficients); differential unknowns left without an equation of their
+/// own are implicit when their der() appears in some row. The rows of a
+/// mass matrix (several der() of assigned unknowns) may not depend on its
+/// velocities. Returns the dynamic equations in unknown order, which
+/// unknowns are coupled, and the implicit ones.
+fn assign_dynamics(
+    written: &[Written],
+    vars: &[VarDef],
+    n_diff: usize,
+    lowered_all: &mut bool,
+    errors: &mut Errors,
+) -> (Vec<Dynamic>, Vec<bool>, Vec<usize>) {
+    // Assign equations to unknowns: a perfect matching between the
+    // dynamic equations and the derivatives they contain (a structurally
+    // nonsingular mass matrix has one).
+    let adj: Vec<Vec<usize>> = written
+        .iter()
+        .map(|(terms, _, _)| terms.iter().map(|(j, _)| *j).collect())
+        .collect();
+    let mut assign = crate::index::max_matching(&adj, n_diff);
+    if assign.iter().any(Option::is_none) {
+        // Some derivative has no equation of its own: the unknowns that
+        // keep one should be those with the simplest coefficients (a
+        // number before a parameter before an expression of unknowns or
+        // `t`), so that their rates divide by no vanishing coefficient.
+        let rank = |c: &Expr| {
+            if c.as_num().is_some() {
+                0
+            } else if !c.any_sym(&|s| matches!(s, Sym::Var(_) | Sym::Time)) {
+                1
+            } else {
+                2
+            }
+        };
+        let preferred: Vec<Vec<usize>> = written
+            .iter()
+            .map(|(terms, _, _)| {
+                let mut t: Vec<(usize, usize)> = terms.iter().map(|(j, c)| (rank(c), *j)).collect();
+                t.sort();
+                t.into_iter().map(|(_, j)| j).collect()
+            })
+            .collect();
+        assign = crate::index::max_matching(&preferred, n_diff);
+    }
+    let mut dynamics: Vec<Option<Dynamic>> = vec![None; n_diff];
+    let mut placed = vec![false; written.len()];
+    for (j, owner) in assign.iter().enumerate() {
+        if let Some(e) = owner {
+            let (terms, rhs, span) = &written[*e];
+            placed[*e] = true;
+            let coef = terms.iter().find(|(k, _)| *k == j).map(|(_, c)| c.clone());
+            dynamics[j] = Some(Dynamic {
+                var: j,
+                coef: coef.unwrap_or_else(Expr::one),
+                coupled: terms.iter().filter(|(k, _)| *k != j).cloned().collect(),
+                rhs: rhs.clone(),
+                span: *span,
+            });
+        }
+    }
+    for (e, (terms, _, span)) in written.iter().enumerate() {
+        if placed[e] {
+            continue;
+        }
+        *lowered_all = false;
+        if let [(j, _)] = terms.as_slice() {
+            errors.push(
+                *span,
+                format!(
+                    "a second equation for `der({})`: each differential unknown has exactly one",
+                    vars[*j].name
+                ),
+            );
+        } else {
+            errors.push(
+                *span,
+                format!(
+                    "structurally singular mass matrix: the equations with der() of {} give fewer independent derivatives than equations",
+                    terms.iter().map(|(j, _)| format!("`{}`", vars[*j].name)).collect::<Vec<_>>().join(", ")
+                ),
+            );
+        }
+    }
+    // Implicit: no equation of their own, der() in some row.
+    let in_rows = |j: usize| {
+        written
+            .iter()
+            .any(|(t, _, _)| t.iter().any(|(k, _)| *k == j))
+    };
+    let implicit: Vec<usize> = (0..n_diff)
+        .filter(|&j| dynamics[j].is_none() && in_rows(j))
+        .collect();
+    // Coupled unknowns: those whose der() shares an equation with another
+    // assigned unknown's der() (a mass matrix). A coefficient in such an
+    // equation may not depend on a coupled unknown (a velocity).
+    let assigned = |j: &usize| dynamics[*j].is_some();
+    let mut coupled = vec![false; n_diff];
+    for (terms, _, _) in written {
+        let own: Vec<usize> = terms.iter().map(|(j, _)| *j).filter(assigned).collect();
+        if own.len() > 1 {
+            for j in own {
+                coupled[j] = true;
+            }
+        }
+    }
+    for (terms, _, span) in written {
+        if terms.iter().map(|(j, _)| *j).filter(assigned).count() < 2 {
+            continue;
+        }
+        for (j, c) in terms {
+            if let Some(k) = (0..n_diff).find(|&k| coupled[k] && c.contains(Sym::Var(k as u32))) {
+                errors.push(
+                    *span,
+                    format!(
+                        "the coefficient of `der({})` depends on `{}`, whose der() appears with others (a velocity): a mass matrix may depend on parameters and positions only",
+                        vars[*j].name, vars[k].name
+                    ),
+                );
+                *lowered_all = false;
+            }
+        }
+    }
+    let mut dyns = Vec::new();
+    for (j, d) in dynamics.into_iter().enumerate() {
+        match d {
+            Some(d) => dyns.push(d),
+            None if !*lowered_all || implicit.contains(&j) => {}
+            None => errors.push(
+                vars[j].span,
+                format!(
+                    "too few equations: no equation gives `der({})`",
+                    vars[j].name
+                ),
+            ),
+        }
+    }
+    (dyns, coupled, implicit)
+}
+
+/// Phase 6: one constraint per unknown the constraints determine (the
+/// algebraic ones and the implicit differential ones), and every algebraic
+/// unknown in some equation.
+fn check_counts(
+    vars: &[VarDef],
+    n_diff: usize,
+    implicit: &[usize],
+    dyns: &[Dynamic],
+    constraints: &[ConstraintDef],
+    lowered_all: bool,
+    errors: &mut Errors,
+) {
+    let n_alg = vars.len() - n_diff;
+    let wanted = n_alg + implicit.len();
+    // Who the constraints are for, as the messages name them.
+    let determined = || {
+        if implicit.is_empty() {
+            format!(
+                "{n_alg} algebraic unknown{}",
+                if n_alg == 1 { "" } else { "s" }
+            )
+        } else {
+            let names: Vec<String> = implicit
+                .iter()
+                .map(|&j| format!("`{}`", vars[j].name))
+                .collect();
+            format!(
+                "{wanted} unknowns they determine ({n_alg} algebraic, and {} whose der() has no equation of its own)",
+                names.join(", ")
+            )
+        }
+    };
+    if !lowered_all {
+        // Counts are meaningless with equations missing.
+    } else if constraints.len() > wanted {
+        for c in &constraints[wanted..] {
+            errors.push(
+                c.span,
+                format!(
+                    "too many equations: {} constraints for {} (a semi-explicit model has one constraint per algebraic unknown)",
+                    constraints.len(),
+                    determined()
+                ),
+            );
+        }
+    } else if constraints.len() < wanted {
+        if implicit.is_empty() {
+            for v in &vars[n_diff + constraints.len()..] {
+                errors.push(
+                    v.span,
+                    format!(
+                        "too few equations: {} algebraic unknowns but {} constraints; add `0 = …` for `{}`",
+                        n_alg,
+                        constraints.len(),
+                        v.name
+                    ),
+                );
+            }
+        } else {
+            for &j in implicit {
+                errors.push(
+                    vars[j].span,
+                    format!(
+                        "too few equations: no equation gives `der({})`, so the constraints must determine it, but there are {} constraints for {}",
+                        vars[j].name,
+                        constraints.len(),
+                        determined()
+                    ),
+                );
+            }
+        }
+    }
+    if lowered_all {
+        for (a, v) in vars.iter().enumerate().skip(n_diff) {
+            let s = Sym::Var(a as u32);
+            let used = dyns.iter().any(|d| d.rhs.contains(s) || d.coef.contains(s))
+                || constraints.iter().any(|c| c.expr.contains(s));
+            if !used {
+                errors.push(
+                    v.span,
+                    format!("structurally singular: `{}` appears in no equation, so nothing determines it", v.name),
+                );
+            }
+        }
+    }
+}
+
+/// Phase 7: invariants, each named once and free of der().
+fn lower_invariants(ast: &ModelAst, scope: &Scope<'_>, errors: &mut Errors) -> Vec<InvariantDef> {
+    let mut invariants = Vec::new();
+    let mut invariant_names: HashMap<&str, Span> = HashMap::new();
+    for inv in &ast.invariants {
+        if let Some(first) = invariant_names.get(inv.name.name.as_str()) {
+            errors.push(
+                inv.name.span,
+                format!("invariant `{}` is declared twice", inv.name.name),
+            );
+            errors.push(
+                *first,
+                format!("invariant `{}` is first declared here", inv.name.name),
+            );
+            continue;
+        }
+        invariant_names.insert(&inv.name.name, inv.name.span);
+        if let Some(e) = scope.lower(&inv.expr, errors) {
+            if e.any_sym(&|s| matches!(s, Sym::Der(_))) {
+                errors.push(inv.expr.span(), "invariants may not contain der()");
+                continue;
+            }
+            invariants.push(InvariantDef {
+                name: inv.name.name.clone(),
+                expr: e,
+                span: inv.name.span,
+            });
+        }
+    }
+    invariants
+}
+
+/// Phase 8: a `formulations { … }` list names known formulations, once each.
+fn check_formulation_list(ast: &ModelAst, errors: &mut Errors) {
+    if let Some(list) = &ast.formulations {
+        let mut listed: Vec<&str> = Vec::new();
+        for f in list {
+            if !FORMULATION_NAMES.contains(&f.name.as_str()) {
+                errors.push(
+                    f.span,
+                    format!(
+                        "unknown formulation `{}` (known: {})",
+                        f.name,
+                        FORMULATION_NAMES.join(", ")
+                    ),
+                );
+            } else if listed.contains(&f.name.as_str()) {
+                errors.push(f.span, format!("formulation `{}` is listed twice", f.name));
+            } else {
+                listed.push(&f.name);
+            }
+        }
+        if list.is_empty() {
+            errors.push(
+                ast.body_span,
+                "`formulations { }` is empty: list at least one, or leave the block out for all",
+            );
+        }
     }
 }
 

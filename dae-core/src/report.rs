@@ -207,8 +207,32 @@ pub fn text(d: &Derived) -> String {
         s,
         "\nconstraints (level k = k-th total time derivative along the dynamics)"
     );
+    let own = d.analysis.chains.len();
     for c in &r.constraints {
-        let _ = writeln!(s, "  [{}] level {}: 0 = {}", c.source, c.level, c.expr);
+        let _ = write!(s, "  [{}] level {}: 0 = {}", c.source, c.level, c.expr);
+        if let Some(i) = (c.source as usize)
+            .checked_sub(own)
+            .and_then(|k| d.analysis.implied.get(k))
+        {
+            let rows: Vec<String> = i
+                .rows
+                .iter()
+                .map(|(u, w)| {
+                    let row = format!("row of der({})", d.model.vars[*u].name);
+                    if w.is_one() {
+                        row
+                    } else {
+                        format!("({})·{row}", d.model.text(w))
+                    }
+                })
+                .collect();
+            let _ = write!(
+                s,
+                "   (implied by the singular mass matrix: der() cancels in {})",
+                rows.join(" + ")
+            );
+        }
+        let _ = writeln!(s);
     }
     if !r.invariants.is_empty() {
         let _ = writeln!(s, "\ninvariants");
