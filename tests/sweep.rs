@@ -53,6 +53,7 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
         residuals: Residuals(vec![Some(1e-9), Some(1e-8), None]),
         invariant_drift: Named(vec![("energy".into(), 1e-7)]),
         init: None,
+        initialisation: Vec::new(),
         trajectory: Trajectory::default(),
         selector: None,
     }
