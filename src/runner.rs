@@ -517,8 +517,8 @@ pub enum RunError {
         /// Reason.
         why: String,
     },
-    /// An `[initial]` or per-unknown tolerance name that is not an
-    /// unknown.
+    /// An `[initial]`, `[guess]` or per-unknown tolerance name that is not
+    /// an unknown.
     #[error("`{0}` is not an unknown of the model")]
     UnknownVariable(String),
     /// A separate or per-unknown tolerance outside the library's rule

@@ -52,14 +52,29 @@ fn without_a_guess_newton_starts_from_zero_and_says_so() {
     for x in ["x", "y"] {
         let e = entry(&v, x);
         assert_eq!(
-            (&e["given"], &e["guess"], &e["value"], &e["moved"], &e["how"]),
-            (&json!(1.0), &Value::Null, &json!(1.0), &json!(0.0), &json!("fixed")),
+            (
+                &e["given"],
+                &e["guess"],
+                &e["value"],
+                &e["moved"],
+                &e["how"]
+            ),
+            (
+                &json!(1.0),
+                &Value::Null,
+                &json!(1.0),
+                &json!(0.0),
+                &json!("fixed")
+            ),
             "{e}"
         );
     }
     let z = entry(&v, "z");
     assert_eq!((&z["given"], &z["guess"]), (&Value::Null, &Value::Null));
-    assert_eq!((&z["how"], &z["nonlinear"]), (&json!("defaulted"), &json!(true)));
+    assert_eq!(
+        (&z["how"], &z["nonlinear"]),
+        (&json!("defaulted"), &json!(true))
+    );
     let value = z["value"].as_f64().unwrap();
     assert!((value - 1.0).abs() < 1e-12, "z = {value}");
     assert_eq!(z["moved"].as_f64().unwrap(), value.abs());
@@ -80,7 +95,11 @@ fn without_a_guess_newton_starts_from_zero_and_says_so() {
         .find(|l| l.trim_start().starts_with("z "))
         .unwrap_or_else(|| panic!("no table row for z in {text}"));
     let cells: Vec<&str> = row.split_whitespace().collect();
-    assert_eq!(cells, ["z", "-", "-", "1.000e0", "1.00e0", "defaulted"], "{row}");
+    assert_eq!(
+        cells,
+        ["z", "-", "-", "1.000e0", "1.00e0", "defaulted"],
+        "{row}"
+    );
 }
 
 #[test]
@@ -88,7 +107,10 @@ fn a_guess_chooses_the_other_root_without_a_warning() {
     let v = json_of(&dae(&["run", &data("two_roots_guess.toml")]));
     let z = entry(&v, "z");
     assert_eq!((&z["given"], &z["guess"]), (&Value::Null, &json!(-1.0)));
-    assert_eq!((&z["how"], &z["nonlinear"]), (&json!("guessed"), &json!(true)));
+    assert_eq!(
+        (&z["how"], &z["nonlinear"]),
+        (&json!("guessed"), &json!(true))
+    );
     let value = z["value"].as_f64().unwrap();
     assert!((value + 2.0).abs() < 1e-12, "z = {value}");
     assert!((z["moved"].as_f64().unwrap() - 1.0).abs() < 1e-12, "{z}");
@@ -141,7 +163,9 @@ fn bad_guesses_are_refused_with_their_place() {
     assert!(err.contains("`guess.Z`"), "{err}");
     assert!(err.contains("did you mean `z`?"), "{err}");
     // A value fixed by [initial] cannot be guessed too.
-    let (_dir, path) = scene_with(&format!("{head}[guess]\nz = 1.0\ny = 2.0\n[time]\nend = 1.0\n"));
+    let (_dir, path) = scene_with(&format!(
+        "{head}[guess]\nz = 1.0\ny = 2.0\n[time]\nend = 1.0\n"
+    ));
     let o = dae(&["run", &path]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);

@@ -719,13 +719,28 @@ fn guesses_parse_with_places_and_are_checked() {
         matches!(&err, SceneError::UnknownVariable { section: "guess", name, .. } if name == "lamda"),
         "{err}"
     );
-    assert!(err.to_string().starts_with("t.toml:13:1: `guess.lamda`"), "{err}");
+    assert!(
+        err.to_string().starts_with("t.toml:13:1: `guess.lamda`"),
+        "{err}"
+    );
     assert_eq!(err.suggestion().as_deref(), Some("lambda"));
     assert!(err.to_string().contains("did you mean `lambda`?"), "{err}");
     // Not finite, not a number: the field and its line.
-    expect_err(&with_line(10, "w = 0.0\n[guess]\nlambda = nan"), "guess.lambda", 12);
-    expect_err(&with_line(10, "w = 0.0\n[guess]\nlambda = \"a\""), "guess", 12);
+    expect_err(
+        &with_line(10, "w = 0.0\n[guess]\nlambda = nan"),
+        "guess.lambda",
+        12,
+    );
+    expect_err(
+        &with_line(10, "w = 0.0\n[guess]\nlambda = \"a\""),
+        "guess",
+        12,
+    );
     // A value [initial] fixes cannot be guessed too.
-    let err = expect_err(&with_line(10, "w = 0.0\n[guess]\nlambda = 1\nx = 2.5"), "guess.x", 13);
+    let err = expect_err(
+        &with_line(10, "w = 0.0\n[guess]\nlambda = 1\nx = 2.5"),
+        "guess.x",
+        13,
+    );
     assert!(err.to_string().contains("fixed by [initial]"), "{err}");
 }

@@ -84,7 +84,7 @@
 //! block, minimum change from the guess otherwise), iterated until the
 //! correction is at round-off level. A block without full row rank (no
 //! unique multipliers: a singular configuration or redundant constraints) is
-//! a [`SolveError::InvalidInput`] naming the constraint. Algebraic unknowns
+//! an [`InitError::Singular`] naming the dependent rows. Algebraic unknowns
 //! that appear in no member of the chain — the GGL multipliers `η`, whose
 //! exact value is `0` — are set to zero.
 //!
@@ -93,6 +93,35 @@
 //! Which unknowns a row contains is read off the Jacobian, evaluated at the
 //! given point and at two slightly perturbed points, so that an accidental
 //! zero (`∂(x² + y²)/∂x = 0` at `x = 0`) is not taken for a structural one.
+//!
+//! # Given values, guesses and the report
+//!
+//! [`consistent_from`] takes for each unknown a [`Start`]: a value given
+//! ([`Start::Fixed`]: kept if consistent, else projected or refused as
+//! above), a guess ([`Start::Guess`]: only where the iteration starts) or
+//! nothing ([`Start::Omitted`]: from 0). The values computed depend only on
+//! where each unknown starts; [`InitReport::values`] says for every unknown
+//! what was given, the guess, the value returned, how far it moved and how
+//! it came about ([`How`]). Where the algebraic rows contain an algebraic
+//! unknown nonlinearly (its column of their Jacobian changes when the
+//! algebraic unknowns move), Newton's answer is one of possibly several
+//! solutions, the one nearest its start in the sense of Newton's basins:
+//! [`InitValue::nonlinear`] says so, and [`InitValue::root_chosen_by_default`]
+//! flags those started from 0 for want of a guess. (In
+//! [`InitMode::Strict`], a guessed differential value that violates a
+//! constraint is refused like a given one.)
+//!
+//! # Typed failures
+//!
+//! A rank-deficient Jacobian of the algebraic rows at the start is
+//! [`InitError::Singular`], naming the rows whose pivots vanish in a QR
+//! factorisation with column pivoting of its transpose (each a combination
+//! of the rows before it, to `10⁻¹²` relative to the first pivot); a Newton
+//! iteration that stops with a violated algebraic row is
+//! [`InitError::NotConverged`], naming the row with the largest scaled
+//! residual; a NaN or ∞ in a row of the chain or its Jacobian at any point
+//! the iteration evaluates is [`InitError::NonFinite`], naming the row and
+//! every unknown's value there. Nothing non-finite is passed on.
 //!
 //! # Initial derivative
 //!
@@ -457,9 +486,11 @@ impl<'a> Chain<'a> {
                     .map(|&v| (k, "Jacobian", v))
             })
         };
-        let (k, what, value) = residual
-            .or_else(jacobian)
-            .unwrap_or((0, "residual", self.g.first().copied().unwrap_or(f64::NAN)));
+        let (k, what, value) = residual.or_else(jacobian).unwrap_or((
+            0,
+            "residual",
+            self.g.first().copied().unwrap_or(f64::NAN),
+        ));
         let equation = info
             .constraints
             .get(k)
@@ -1295,8 +1326,10 @@ fn consistent_checked(
                         jac[(a, b)] = chain.jac[(r, c)];
                     }
                 }
-                let mut dependent: Vec<usize> =
-                    dependent_rows(&jac).into_iter().map(|a| alg_rows[a]).collect();
+                let mut dependent: Vec<usize> = dependent_rows(&jac)
+                    .into_iter()
+                    .map(|a| alg_rows[a])
+                    .collect();
                 if dependent.is_empty() {
                     // The QR pivots stayed above the threshold where the
                     // singular values did not: the SVD's row.

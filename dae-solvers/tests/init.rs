@@ -878,10 +878,16 @@ fn a_guess_chooses_the_root_and_a_default_start_is_flagged() {
     let names: Vec<&str> = v.iter().map(|e| e.name.as_str()).collect();
     assert_eq!(names, ["x", "y", "z"]);
     for e in &v[..2] {
-        assert_eq!((e.how, e.given, e.guess, e.moved), (How::Fixed, Some(1.0), None, 0.0));
+        assert_eq!(
+            (e.how, e.given, e.guess, e.moved),
+            (How::Fixed, Some(1.0), None, 0.0)
+        );
         assert!(!e.nonlinear);
     }
-    assert_eq!((v[2].how, v[2].given, v[2].guess), (How::Defaulted, None, None));
+    assert_eq!(
+        (v[2].how, v[2].given, v[2].guess),
+        (How::Defaulted, None, None)
+    );
     assert!(v[2].nonlinear && v[2].root_chosen_by_default());
     assert_eq!(v[2].moved, c.y[2].abs());
     // The guess -1 leads Newton to the other root, z = -2.
@@ -923,8 +929,13 @@ fn a_linear_multiplier_is_not_flagged_and_projections_are_named() {
 fn redundant_constraints_are_named_by_the_pivoted_factorisation() {
     use dae::prelude::*;
     let sys = Redundant::default().rcd0();
-    let err = consistent(&sys, 0.0, &[0.6, 0.8, 0.0, 0.0, 0.0, 0.0], &InitOptions::default())
-        .expect_err("singular");
+    let err = consistent(
+        &sys,
+        0.0,
+        &[0.6, 0.8, 0.0, 0.0, 0.0, 0.0],
+        &InitOptions::default(),
+    )
+    .expect_err("singular");
     let text = err.to_string();
     match err {
         SolveError::Init(InitError::Singular {
