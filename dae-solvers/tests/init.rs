@@ -996,3 +996,36 @@ fn a_non_finite_row_is_named_with_the_point() {
     }
     assert!(err.to_string().contains("x = -1e0"), "{err}");
 }
+
+#[test]
+fn newton_without_a_real_root_names_the_worst_row() {
+    // y = -1: the hidden constraint asks z (z + 1) / 2 = -1, which has no
+    // real solution; Newton wanders until the iteration limit.
+    let sys = TwoRoots::default().rcd1();
+    let opts = InitOptions {
+        max_iterations: 50,
+        ..InitOptions::default()
+    };
+    let err = consistent(&sys, 0.0, &[1.0, -1.0, 0.0], &opts).expect_err("no root");
+    assert_eq!(err.kind(), "init_not_converged");
+    match &err {
+        SolveError::Init(InitError::NotConverged {
+            equation,
+            residual,
+            iterations,
+            t,
+        }) => {
+            let level1 = sys
+                .info()
+                .constraints
+                .iter()
+                .find(|m| m.level == 1)
+                .expect("the hidden constraint");
+            assert!(equation.ends_with(level1.expr.trim()), "{equation}");
+            // |z (z + 1) / 2 + 1| ≥ 7/8 for every real z.
+            assert!(residual.abs() >= 0.875 - 1e-12, "{residual}");
+            assert_eq!((*iterations, *t), (50, 0.0));
+        }
+        other => panic!("expected InitError::NotConverged, got {other:?}"),
+    }
+}
