@@ -31,6 +31,8 @@ pub struct Inputs {
     pub model: Box<dyn Model + Send + Sync>,
     /// The scene's initial values, by name.
     pub initial: Vec<(String, f64)>,
+    /// The scene's guesses (`[guess]`), by name.
+    pub guess: Vec<(String, f64)>,
     /// The reference, checked against the model and the horizon.
     pub reference: Option<Reference>,
 }
@@ -64,6 +66,7 @@ impl Inputs {
             scene: &scene.name,
             model: &*self.model,
             initial: &self.initial,
+            guess: &self.guess,
             t0: scene.time.start,
             t_end: scene.time.end,
             check: &scene.time.checks,
@@ -310,6 +313,7 @@ pub fn inputs(scene: &Scene) -> Result<Inputs, InputError> {
     Ok(Inputs {
         model,
         initial,
+        guess: scene.guess_values(),
         reference,
     })
 }

@@ -6,7 +6,7 @@
 use crate::reference::data::{Reference, Scaling, UseError};
 use dae_core::selector::SelectorKind;
 use dae_core::system::{DaeSystem, Model, VarKind};
-use dae_solvers::init::{self, InitMode, InitOptions};
+use dae_solvers::init::{self, InitMode, InitOptions, InitValue, Start};
 use dae_solvers::options::{check_relative, Tol, ToleranceIssue};
 use dae_solvers::{Options, Problem, SolveError, Stats, Tolerances};
 use serde::ser::SerializeMap;
@@ -22,6 +22,11 @@ pub struct RunSpec<'a> {
     /// Given values of unknowns by name (differential ones; algebraic ones
     /// are computed).
     pub initial: &'a [(String, f64)],
+    /// Guesses by name (a scene's `[guess]`): where the computation of an
+    /// unknown not in [`RunSpec::initial`] starts
+    /// ([`dae_solvers::init::Start::Guess`]); an unknown in neither starts
+    /// from 0.
+    pub guess: &'a [(String, f64)],
     /// Start time.
     pub t0: f64,
     /// End time.
@@ -191,6 +196,12 @@ pub struct RunRecord {
     /// What consistent initialisation did (projected values), if anything.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub init: Option<InitSummary>,
+    /// Every unknown of the formulation at the start: the value given, the
+    /// guess, the consistent value used, how far it moved from where it
+    /// started, and how it came about
+    /// ([`dae_solvers::init::InitReport::values`]). Empty when
+    /// initialisation failed.
+    pub initialisation: Vec<InitValue>,
     /// Solution at the sample times (for figures; not serialised).
     #[serde(skip)]
     pub trajectory: Trajectory,
@@ -506,8 +517,8 @@ pub enum RunError {
         /// Reason.
         why: String,
     },
-    /// An `[initial]` or per-unknown tolerance name that is not an
-    /// unknown.
+    /// An `[initial]`, `[guess]` or per-unknown tolerance name that is not
+    /// an unknown.
     #[error("`{0}` is not an unknown of the model")]
     UnknownVariable(String),
     /// A separate or per-unknown tolerance outside the library's rule
@@ -587,21 +598,36 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         None => (Tolerances::uniform(spec.tol), spec.tol),
     };
     let n = info.unknowns();
-    let mut y0 = vec![0.0; n];
+    let mut start = vec![Start::Omitted; n];
+    for (name, v) in spec.guess {
+        let i = info
+            .variable(name)
+            .ok_or_else(|| RunError::UnknownVariable(name.clone()))?;
+        start[i] = Start::Guess(*v);
+    }
+    // A value given fixes it, whatever the guesses say (a scene refuses
+    // both for one name).
     for (name, v) in spec.initial {
         let i = info
             .variable(name)
             .ok_or_else(|| RunError::UnknownVariable(name.clone()))?;
-        y0[i] = *v;
+        start[i] = Start::Fixed(*v);
     }
-    // Differential unknowns of the model the scene gives no value: 0.
+    // Differential unknowns of the model the scene gives no value or
+    // guess: 0.
     let defaulted: Vec<String> = spec
         .model
         .model_info()
         .variables
         .iter()
         .filter(|v| v.kind == VarKind::Differential)
-        .filter(|v| !spec.initial.iter().any(|(name, _)| *name == v.name))
+        .filter(|v| {
+            !spec
+                .initial
+                .iter()
+                .chain(spec.guess)
+                .any(|(name, _)| *name == v.name)
+        })
         .map(|v| v.name.clone())
         .collect();
     let mut record = RunRecord {
@@ -626,6 +652,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         residuals: Residuals::default(),
         invariant_drift: Named::default(),
         init: None,
+        initialisation: Vec::new(),
         trajectory: Trajectory::default(),
         selector: selector.map(SelectorKind::as_str),
     };
@@ -643,7 +670,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
         mode: spec.init_mode,
         ..InitOptions::default()
     };
-    let consistent = match init::consistent(&sys, spec.t0, &y0, &init_opts) {
+    let consistent = match init::consistent_from(&sys, spec.t0, &start, &init_opts) {
         Ok(c) => c,
         Err(e) => return Ok(fail(record, e)),
     };
@@ -666,6 +693,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
             defaulted,
         });
     }
+    record.initialisation = consistent.report.values;
     let y0 = consistent.y;
     let reference_times = spec.reference.and_then(Reference::times).unwrap_or(&[]);
     let mut output_times: Vec<f64> = spec

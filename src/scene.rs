@@ -13,6 +13,8 @@
 //! y = 0.0
 //! v = 0.0
 //! w = 0.0
+//! [guess]                     # optional: where the computation of an unknown
+//! lambda = 0.0                # not in [initial] starts (see below)
 //! [time]
 //! end = 20.0                  # start = 0.0 unless given
 //! check = [20.0]              # or: check_every = 2.0; neither: check at end
@@ -27,6 +29,23 @@
 //! rtol = 1e-8                 # every unknown; default 1e-8
 //! atol = { x = 1e-10, lambda = 1e-6 }   # or per unknown (the others: 1e-8)
 //! ```
+//!
+//! # Initial values and guesses
+//!
+//! `[initial]` fixes values: the differential unknowns' (positions,
+//! velocities, …) are kept when they satisfy the constraints and otherwise
+//! projected onto them with the least change (reported), or refused with
+//! `--strict-init`. Algebraic unknowns (multipliers) are computed from the
+//! constraints by Newton's method, starting from 0. `[guess]` gives, for
+//! any unknown `[initial]` does not name, only where that computation
+//! starts: where the constraints determine an unknown nonlinearly they may
+//! have several solutions (a multiplier entering as `z²`), and the guess
+//! chooses the one nearest to it. `dae run` reports for every unknown the
+//! value given, the guess, the value used, how far it moved and how it came
+//! about (`fixed`, `guessed`, `defaulted`, `projected`), and warns when an
+//! unknown that enters nonlinearly started from 0 for want of a guess. A
+//! name in `[guess]` that is not an unknown of the model, or that
+//! `[initial]` also gives, is an error with its line.
 //!
 //! # Tolerances of `dae run`
 //!
@@ -392,8 +411,8 @@ pub enum SceneError {
         /// The resolved path.
         path: PathBuf,
     },
-    /// An `[initial]` or per-unknown `[tolerance]` entry the model does
-    /// not have.
+    /// An `[initial]`, `[guess]` or per-unknown `[tolerance]` entry the
+    /// model does not have.
     #[error(
         "{at}: `{section}.{name}`: the model has no variable `{name}`{} (variables: {})",
         hint(name, known),
@@ -402,7 +421,7 @@ pub enum SceneError {
     UnknownVariable {
         /// Where.
         at: Location,
-        /// `initial`, `tolerance.rtol` or `tolerance.atol`.
+        /// `initial`, `guess`, `tolerance.rtol` or `tolerance.atol`.
         section: &'static str,
         /// The name given.
         name: String,
@@ -619,6 +638,9 @@ pub struct Scene {
     pub parameters: Vec<NamedValue>,
     /// Initial values of differential unknowns, in file order.
     pub initial: Vec<NamedValue>,
+    /// Guesses (`[guess]`): where the computation of unknowns `[initial]`
+    /// does not give starts, in file order.
+    pub guess: Vec<NamedValue>,
     /// Horizon and check times.
     pub time: TimeSpec,
     /// Reference solution.
@@ -640,6 +662,23 @@ impl Scene {
     /// what [`crate::runner::RunSpec::initial`] and the reference take.
     pub fn initial_values(&self) -> Vec<(String, f64)> {
         self.initial
+            .iter()
+            .map(|v| (v.name.clone(), v.value))
+            .collect()
+    }
+
+    /// The guesses as `(name, value)` pairs, in the scene's order: what
+    /// [`crate::runner::RunSpec::guess`] takes.
+    ///
+    /// ```
+    /// let text = "name = \"t\"\nmodel = \"pendulum\"\n[initial]\nx = 1\n[guess]\nlambda = 2\n\
+    ///             [time]\nend = 1\n";
+    /// let s = dae::scene::Scene::parse(text, "t.toml", None).unwrap();
+    /// assert_eq!(s.guess_values(), [("lambda".to_string(), 2.0)]);
+    /// assert_eq!(s.locate("guess.lambda").to_string(), "t.toml:6:1");
+    /// ```
+    pub fn guess_values(&self) -> Vec<(String, f64)> {
+        self.guess
             .iter()
             .map(|v| (v.name.clone(), v.value))
             .collect()
@@ -771,8 +810,8 @@ impl Scene {
             .map(|p| p.value)
     }
 
-    /// Check the names in `[initial]` and in `[tolerance]`'s per-unknown
-    /// tables against the model's `variables` and those in `[parameters]`
+    /// Check the names in `[initial]`, `[guess]` and in `[tolerance]`'s
+    /// per-unknown tables against the model's `variables` and those in `[parameters]`
     /// against its `parameters`; the first unknown one is reported with
     /// its line and, when a known name is close, a suggestion.
     ///
@@ -801,6 +840,7 @@ impl Scene {
         }
         let sections = [
             ("initial", self.initial.as_slice()),
+            ("guess", self.guess.as_slice()),
             ("tolerance.rtol", per_unknown(&self.tolerance.rtol)),
             ("tolerance.atol", per_unknown(&self.tolerance.atol)),
         ];
@@ -849,6 +889,8 @@ impl Scene {
         };
         let found = if let Some(name) = field.strip_prefix("initial.") {
             named(&self.initial, name)
+        } else if let Some(name) = field.strip_prefix("guess.") {
+            named(&self.guess, name)
         } else if let Some(name) = field.strip_prefix("parameters.") {
             named(&self.parameters, name)
         } else {
@@ -882,6 +924,7 @@ struct RawScene {
     model: Option<Spanned<String>>,
     parameters: Option<RawNamed>,
     initial: Option<Spanned<RawNamed>>,
+    guess: Option<RawNamed>,
     time: Option<Spanned<RawTime>>,
     reference: Option<Spanned<RawReference>>,
     sweep: Option<RawSweep>,
@@ -1183,6 +1226,26 @@ impl Source<'_> {
                 reason: "must give at least one initial value".into(),
             });
         }
+        let guess = match raw.guess {
+            Some(g) => self.named("guess", g)?,
+            None => Vec::new(),
+        };
+        if let Some(g) = guess
+            .iter()
+            .find(|g| initial.iter().any(|i| i.name == g.name))
+        {
+            return Err(SceneError::InvalidValue {
+                at: Location {
+                    origin: self.origin.to_string(),
+                    line: g.line,
+                    column: g.column,
+                },
+                field: format!("guess.{}", g.name),
+                reason: "is fixed by [initial]; a guess is only for unknowns [initial] does \
+                         not give"
+                    .into(),
+            });
+        }
         let time_raw = raw.time.ok_or_else(|| self.missing("time", None))?;
         place("time", time_raw.span());
         for (field, value) in [
@@ -1223,6 +1286,7 @@ impl Source<'_> {
             model,
             parameters,
             initial,
+            guess,
             time,
             reference,
             sweep,

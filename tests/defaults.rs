@@ -63,6 +63,7 @@ fn bdf_defaults_equal_the_runner_on_the_spherical_pendulum_ggl1() {
         scene: "spherical",
         model: &model,
         initial: &initial,
+        guess: &[],
         t0: 0.0,
         t_end: T_END,
         check: &[T_END],

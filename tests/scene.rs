@@ -698,3 +698,49 @@ fn tolerance_section() {
         expect_err(&format!("{BASE}[tolerance]\n{line}\n"), field, 21);
     }
 }
+
+/// `[guess]`: optional, in file order, located, checked against the
+/// model's unknowns like `[initial]`, and never for a value `[initial]`
+/// fixes.
+#[test]
+fn guesses_parse_with_places_and_are_checked() {
+    let s = parse(BASE).unwrap();
+    assert!(s.guess.is_empty() && s.guess_values().is_empty());
+    let text = with_line(10, "w = 0.0\n[guess]\nlambda = -3.5\nlamda = 1");
+    let s = parse(&text).unwrap();
+    assert_eq!(
+        s.guess_values(),
+        [("lambda".to_string(), -3.5), ("lamda".to_string(), 1.0)]
+    );
+    assert_eq!(s.locate("guess.lambda").to_string(), "t.toml:12:1");
+    let vars = ["x", "y", "v", "w", "lambda"];
+    let err = s.check_names(&vars, &["m", "l", "g"]).unwrap_err();
+    assert!(
+        matches!(&err, SceneError::UnknownVariable { section: "guess", name, .. } if name == "lamda"),
+        "{err}"
+    );
+    assert!(
+        err.to_string().starts_with("t.toml:13:1: `guess.lamda`"),
+        "{err}"
+    );
+    assert_eq!(err.suggestion().as_deref(), Some("lambda"));
+    assert!(err.to_string().contains("did you mean `lambda`?"), "{err}");
+    // Not finite, not a number: the field and its line.
+    expect_err(
+        &with_line(10, "w = 0.0\n[guess]\nlambda = nan"),
+        "guess.lambda",
+        12,
+    );
+    expect_err(
+        &with_line(10, "w = 0.0\n[guess]\nlambda = \"a\""),
+        "guess",
+        12,
+    );
+    // A value [initial] fixes cannot be guessed too.
+    let err = expect_err(
+        &with_line(10, "w = 0.0\n[guess]\nlambda = 1\nx = 2.5"),
+        "guess.x",
+        13,
+    );
+    assert!(err.to_string().contains("fixed by [initial]"), "{err}");
+}

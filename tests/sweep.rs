@@ -54,6 +54,7 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
         residuals: Residuals(vec![Some(1e-9), Some(1e-8), None]),
         invariant_drift: Named(vec![("energy".into(), 1e-7)]),
         init: None,
+        initialisation: Vec::new(),
         trajectory: Trajectory::default(),
         selector: None,
     }
@@ -939,11 +940,17 @@ fn small_s01_sweep_writes_every_output() {
         "wall_s",
         "stats",
         "residuals",
+        "initialisation",
         "tsim_runs",
         "wall_runs",
     ] {
         assert!(runs[0].get(key).is_some(), "run lacks {key}");
     }
+    // Every unknown's start: the paper's values fixed, λ computed from 0.
+    let init = runs[0]["initialisation"].as_array().unwrap();
+    let how: Vec<&str> = init.iter().map(|e| e["how"].as_str().unwrap()).collect();
+    assert_eq!(how, ["fixed", "fixed", "fixed", "fixed", "defaulted"]);
+    assert_eq!(init[4]["name"], "lambda");
     // CPU and wall time of the same integrations, one of each per timing.
     for r in &report.runs {
         assert_eq!(r.tsim_runs.len(), r.wall_runs.len());

@@ -81,6 +81,12 @@ pub enum SolveError {
         /// Its residual.
         residual: f64,
     },
+    /// Consistent initialisation failed in a way the values cannot repair:
+    /// the constraints do not determine the algebraic unknowns, Newton did
+    /// not converge, or the model is not finite at a point it visited
+    /// ([`crate::init::consistent`]).
+    #[error("initialisation: {0}")]
+    Init(#[from] InitError),
     /// The solver cannot integrate this formulation at all
     /// ([`crate::Solver::accepts`]).
     #[error("not applicable: {0}")]
@@ -136,6 +142,7 @@ impl SolveError {
             SolveError::StepLimit { .. } => "step_limit",
             SolveError::InconsistentInitialValues { .. } => "inconsistent_initial_values",
             SolveError::NotApplicable(_) => "not_applicable",
+            SolveError::Init(e) => e.kind(),
             SolveError::ToleranceOutOfRange { .. } => "tolerance_out_of_range",
             SolveError::InvalidInput { .. } => "invalid_input",
             SolveError::OutOfReach { .. } => "out_of_reach",
@@ -150,12 +157,133 @@ impl SolveError {
             | SolveError::SingularMatrix { t, .. }
             | SolveError::NonFinite { t, .. }
             | SolveError::StepLimit { t, .. } => Some(*t),
+            SolveError::Init(e) => Some(e.t()),
             _ => None,
         }
     }
 
     pub(crate) fn invalid(what: impl Into<String>) -> Self {
         SolveError::InvalidInput { what: what.into() }
+    }
+}
+
+/// Why consistent initialisation ([`crate::init::consistent`]) stopped:
+/// the typed failures that name the rows of the constraint chain (in the
+/// model language, `0 = …`) and the unknowns involved.
+///
+/// ```
+/// use dae::dae_solvers::init::{consistent, InitOptions};
+/// use dae::dae_solvers::InitError;
+/// use dae::prelude::*;
+///
+/// dae! {
+///     /// A point on a circle, held by the same constraint written twice.
+///     pub Twice {
+///         differential { x, y, v, w }
+///         algebraic { a, b }
+///         equations {
+///             der(x) = v;
+///             der(y) = w;
+///             der(v) = -2 * x * (a + b);
+///             der(w) = -2 * y * (a + b) - 9.81;
+///             0 = x^2 + y^2 - 1;
+///             0 = 2 * x^2 + 2 * y^2 - 2;
+///         }
+///         formulations { rcd0 }
+///     }
+/// }
+/// let sys = Twice::default().rcd0();
+/// let err = consistent(&sys, 0.0, &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], &InitOptions::default())
+///     .unwrap_err();
+/// let SolveError::Init(InitError::Singular { equations, unknowns, rank, .. }) = &err else {
+///     panic!("{err}");
+/// };
+/// assert_eq!((equations.len(), unknowns.len(), *rank), (1, 2, 1));
+/// assert_eq!(err.kind(), "init_singular");
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error, Serialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum InitError {
+    /// The Jacobian of the rows that determine the algebraic unknowns, with
+    /// respect to those unknowns, is rank deficient at the start: the
+    /// unknowns are not determined (a singular configuration, redundant
+    /// constraints). A column-pivoted QR factorisation of the rows names
+    /// those whose pivots vanished: each is, to `10⁻¹²` relative to the
+    /// largest pivot, a combination of the rows chosen before it.
+    #[error(
+        "the constraints do not determine the algebraic unknowns ({}) at t = {t:e}: the \
+         Jacobian of their {rows} rows with respect to them has rank {rank}; dependent on \
+         the others: {}",
+        unknowns.join(", "),
+        equations.join("; ")
+    )]
+    Singular {
+        /// Start time.
+        t: f64,
+        /// The dependent rows (`0 = …`), in the order of the chain.
+        equations: Vec<String>,
+        /// The algebraic unknowns being solved for.
+        unknowns: Vec<String>,
+        /// Numerical rank of the Jacobian.
+        rank: usize,
+        /// Number of rows solved.
+        rows: usize,
+    },
+    /// Newton's iteration for the algebraic unknowns stopped with a row
+    /// still violated: the largest (scaled) residual row and its value.
+    #[error(
+        "Newton's iteration for the algebraic unknowns did not converge in {iterations} \
+         iterations at t = {t:e}: {equation} has residual {residual:e}"
+    )]
+    NotConverged {
+        /// Start time.
+        t: f64,
+        /// The row with the largest scaled residual (`0 = …`).
+        equation: String,
+        /// Its residual at the last iterate.
+        residual: f64,
+        /// Iterations made.
+        iterations: usize,
+    },
+    /// A row of the constraint chain, or its Jacobian, is NaN or infinite
+    /// at a point initialisation reached.
+    #[error(
+        "{equation} has a non-finite {what} ({value}) at t = {t:e} during initialisation, at {}",
+        values.iter().map(|(n, v)| format!("{n} = {v:e}")).collect::<Vec<_>>().join(", ")
+    )]
+    NonFinite {
+        /// Time.
+        t: f64,
+        /// The first such row (`0 = …`).
+        equation: String,
+        /// `residual` or `Jacobian`.
+        what: &'static str,
+        /// The non-finite value (the residual, or the first non-finite
+        /// entry of the Jacobian row).
+        value: f64,
+        /// Every unknown at that point, by name, in the formulation's order.
+        values: Vec<(String, f64)>,
+    },
+}
+
+impl InitError {
+    /// Machine-readable name: `init_singular`, `init_not_converged`,
+    /// `init_non_finite` (what [`SolveError::kind`] returns for it).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            InitError::Singular { .. } => "init_singular",
+            InitError::NotConverged { .. } => "init_not_converged",
+            InitError::NonFinite { .. } => "init_non_finite",
+        }
+    }
+
+    /// The time of the failure.
+    pub fn t(&self) -> f64 {
+        match self {
+            InitError::Singular { t, .. }
+            | InitError::NotConverged { t, .. }
+            | InitError::NonFinite { t, .. } => *t,
+        }
     }
 }
 

@@ -84,7 +84,7 @@
 //! block, minimum change from the guess otherwise), iterated until the
 //! correction is at round-off level. A block without full row rank (no
 //! unique multipliers: a singular configuration or redundant constraints) is
-//! a [`SolveError::InvalidInput`] naming the constraint. Algebraic unknowns
+//! an [`InitError::Singular`] naming the dependent rows. Algebraic unknowns
 //! that appear in no member of the chain — the GGL multipliers `η`, whose
 //! exact value is `0` — are set to zero.
 //!
@@ -94,6 +94,35 @@
 //! given point and at two slightly perturbed points, so that an accidental
 //! zero (`∂(x² + y²)/∂x = 0` at `x = 0`) is not taken for a structural one.
 //!
+//! # Given values, guesses and the report
+//!
+//! [`consistent_from`] takes for each unknown a [`Start`]: a value given
+//! ([`Start::Fixed`]: kept if consistent, else projected or refused as
+//! above), a guess ([`Start::Guess`]: only where the iteration starts) or
+//! nothing ([`Start::Omitted`]: from 0). The values computed depend only on
+//! where each unknown starts; [`InitReport::values`] says for every unknown
+//! what was given, the guess, the value returned, how far it moved and how
+//! it came about ([`How`]). Where the algebraic rows contain an algebraic
+//! unknown nonlinearly (its column of their Jacobian changes when the
+//! algebraic unknowns move), Newton's answer is one of possibly several
+//! solutions, the one nearest its start in the sense of Newton's basins:
+//! [`InitValue::nonlinear`] says so, and [`InitValue::root_chosen_by_default`]
+//! flags those started from 0 for want of a guess. (In
+//! [`InitMode::Strict`], a guessed differential value that violates a
+//! constraint is refused like a given one.)
+//!
+//! # Typed failures
+//!
+//! A rank-deficient Jacobian of the algebraic rows at the start is
+//! [`InitError::Singular`], naming the rows whose pivots vanish in a QR
+//! factorisation with column pivoting of its transpose (each a combination
+//! of the rows before it, to `10⁻¹²` relative to the first pivot); a Newton
+//! iteration that stops with a violated algebraic row is
+//! [`InitError::NotConverged`], naming the row with the largest scaled
+//! residual; a NaN or ∞ in a row of the chain or its Jacobian at any point
+//! the iteration evaluates is [`InitError::NonFinite`], naming the row and
+//! every unknown's value there. Nothing non-finite is passed on.
+//!
 //! # Initial derivative
 //!
 //! [`initial_derivative`] returns `y'(t0)` for methods that need it (BDF):
@@ -102,7 +131,7 @@
 //! algebraic unknowns) are fixed by the differentiated chain
 //! `G y' + ∂g/∂t = 0`, and otherwise chosen of minimum norm.
 
-use crate::error::SolveError;
+use crate::error::{InitError, SolveError};
 use crate::options::Tolerances;
 use crate::stats::Stats;
 use dae_core::system::{chain_pattern, DaeSystem, VarKind};
@@ -221,9 +250,115 @@ pub struct LevelResidual {
     pub after: f64,
 }
 
+/// Where the value of one unknown starts ([`consistent_from`]).
+///
+/// ```
+/// use dae::dae_solvers::init::Start;
+///
+/// let start = [Start::Fixed(1.0), Start::Omitted, Start::Guess(-1.0)];
+/// assert_eq!(start.map(Start::value), [1.0, 0.0, -1.0]);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Start {
+    /// A value the user gives: kept when it satisfies the constraints,
+    /// otherwise projected ([`InitMode::Project`], reported) or refused
+    /// ([`InitMode::Strict`]). For an algebraic unknown (determined by the
+    /// constraints) it is where Newton starts, and reported as projected
+    /// when the constraints move it.
+    Fixed(f64),
+    /// Only where the iteration starts: the constraints decide the value.
+    Guess(f64),
+    /// Nothing given: starts from 0.
+    Omitted,
+}
+
+impl Start {
+    /// The value the iteration starts from (`0` for [`Start::Omitted`]).
+    pub fn value(self) -> f64 {
+        match self {
+            Start::Fixed(v) | Start::Guess(v) => v,
+            Start::Omitted => 0.0,
+        }
+    }
+}
+
+/// How the initial value of an unknown came about ([`InitValue::how`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum How {
+    /// Given ([`Start::Fixed`]) and kept bit for bit.
+    Fixed,
+    /// Computed from the constraints starting at a guess
+    /// ([`Start::Guess`]).
+    Guessed,
+    /// Nothing given ([`Start::Omitted`]): started from 0 (and moved by the
+    /// constraints where they determine it).
+    Defaulted,
+    /// Given ([`Start::Fixed`]) and moved by the constraints.
+    Projected,
+}
+
+impl How {
+    /// The name used in JSON and text: `fixed`, `guessed`, `defaulted`,
+    /// `projected`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            How::Fixed => "fixed",
+            How::Guessed => "guessed",
+            How::Defaulted => "defaulted",
+            How::Projected => "projected",
+        }
+    }
+}
+
+/// The initial value of one unknown: what was given, where the iteration
+/// started, what it returned.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InitValue {
+    /// Name of the unknown.
+    pub name: String,
+    /// The value given ([`Start::Fixed`]).
+    pub given: Option<f64>,
+    /// The guess given ([`Start::Guess`]).
+    pub guess: Option<f64>,
+    /// The consistent value returned.
+    pub value: f64,
+    /// `|value − start|`, the start being the given value, the guess or 0.
+    pub moved: f64,
+    /// How the value came about.
+    pub how: How,
+    /// `true` for an algebraic unknown that the rows determining it contain
+    /// nonlinearly (its column of their Jacobian changes with the algebraic
+    /// unknowns): those rows may have other solutions, and the one found
+    /// depends on where Newton started. Always `false` for differential
+    /// unknowns.
+    pub nonlinear: bool,
+}
+
+impl InitValue {
+    /// Started from 0 for want of a guess on an unknown the constraints
+    /// determine nonlinearly: the consistent value found is one of possibly
+    /// several.
+    ///
+    /// ```
+    /// use dae::dae_solvers::init::{How, InitValue};
+    ///
+    /// let z = InitValue { name: "z".into(), given: None, guess: None, value: 1.0,
+    ///                     moved: 1.0, how: How::Defaulted, nonlinear: true };
+    /// assert!(z.root_chosen_by_default());
+    /// ```
+    pub fn root_chosen_by_default(&self) -> bool {
+        self.nonlinear && self.how == How::Defaulted
+    }
+}
+
 /// What [`consistent`] did.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct InitReport {
+    /// Every unknown of the formulation, in its order: given, guess,
+    /// returned value, how far it moved and how it came about.
+    pub values: Vec<InitValue>,
     /// Mode in force.
     pub mode: InitMode,
     /// `true` when differential values were moved onto the constraints.
@@ -321,13 +456,57 @@ impl<'a> Chain<'a> {
         self.g.iter().all(|v| v.is_finite()) && self.jac.iter().all(|v| v.is_finite())
     }
 
-    /// Same as [`Chain::eval`], as a typed error.
-    fn eval_or_err(&mut self, y: &[f64], what: &'static str) -> Result<(), SolveError> {
+    /// Same as [`Chain::eval`], as a typed error naming the first
+    /// non-finite row and the point ([`Chain::non_finite`]).
+    fn eval_or_err(&mut self, y: &[f64]) -> Result<(), SolveError> {
         if self.eval(y) {
             Ok(())
         } else {
-            Err(SolveError::NonFinite { t: self.t, what })
+            Err(self.non_finite(y))
         }
+    }
+
+    /// [`InitError::NonFinite`] for the last evaluation at `y`: the first
+    /// row whose residual, else whose Jacobian row, is not finite, and
+    /// every unknown's value. (A non-finite `y` itself names the first
+    /// row, with its residual.)
+    fn non_finite(&self, y: &[f64]) -> SolveError {
+        let info = self.sys.info();
+        let residual = self
+            .g
+            .iter()
+            .position(|v| !v.is_finite())
+            .map(|k| (k, "residual", self.g[k]));
+        let jacobian = || {
+            (0..self.g.len()).find_map(|k| {
+                self.jac
+                    .row(k)
+                    .iter()
+                    .find(|v| !v.is_finite())
+                    .map(|&v| (k, "Jacobian", v))
+            })
+        };
+        let (k, what, value) = residual.or_else(jacobian).unwrap_or((
+            0,
+            "residual",
+            self.g.first().copied().unwrap_or(f64::NAN),
+        ));
+        let equation = info
+            .constraints
+            .get(k)
+            .map_or_else(|| format!("constraint {k}"), |m| equation_text(&m.expr));
+        SolveError::Init(InitError::NonFinite {
+            t: self.t,
+            equation,
+            what,
+            value,
+            values: info
+                .variables
+                .iter()
+                .zip(y)
+                .map(|(v, &x)| (v.name.clone(), x))
+                .collect(),
+        })
     }
 
     /// `s_k = 1 + Σ_j |G_kj| |y_j|` at the last evaluation.
@@ -363,13 +542,12 @@ impl<'a> Chain<'a> {
 /// Which unknowns each member of the chain contains
 /// ([`dae_core::system::chain_pattern`]). Leaves `chain` evaluated at `y`.
 fn structure(chain: &mut Chain<'_>, y: &[f64]) -> Result<Vec<Vec<bool>>, SolveError> {
-    const WHAT: &str = "constraint chain at the initial values";
-    chain.eval_or_err(y, WHAT)?;
+    chain.eval_or_err(y)?;
     let pattern = chain_pattern(chain.sys, chain.t, y).ok_or(SolveError::NonFinite {
         t: chain.t,
-        what: WHAT,
+        what: "constraint chain near the initial values",
     })?;
-    chain.eval_or_err(y, WHAT)?;
+    chain.eval_or_err(y)?;
     Ok(pattern)
 }
 
@@ -487,6 +665,47 @@ fn min_change_step(j: &DMatrix<f64>, g: &[f64], d: &[f64], rank: Rank) -> Option
     })
 }
 
+/// The rows of `j` whose pivots vanish in a QR factorisation of `jᵀ` with
+/// column pivoting (Businger–Golub), by modified Gram–Schmidt with one
+/// re-orthogonalisation: at each step the row with the largest remaining
+/// norm is taken (the first of equal ones); the rows left when that norm
+/// falls to `RCOND` times the first pivot (or is zero) are, to that
+/// accuracy, combinations of the rows taken. Ascending.
+fn dependent_rows(j: &DMatrix<f64>) -> Vec<usize> {
+    let (r, c) = j.shape();
+    let mut rest: Vec<Vec<f64>> = (0..r).map(|i| j.row(i).iter().copied().collect()).collect();
+    let mut left: Vec<usize> = (0..r).collect();
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let mut first = None;
+    while !left.is_empty() {
+        let mut best = 0;
+        let mut best_norm = norm(&rest[left[0]]);
+        for (pos, &i) in left.iter().enumerate().skip(1) {
+            let n = norm(&rest[i]);
+            if n > best_norm {
+                best = pos;
+                best_norm = n;
+            }
+        }
+        let top = *first.get_or_insert(best_norm);
+        if !(best_norm > RCOND * top && best_norm > 0.0) {
+            break;
+        }
+        let pivot = left.remove(best);
+        let q: Vec<f64> = rest[pivot].iter().map(|x| x / best_norm).collect();
+        for &i in &left {
+            for _ in 0..2 {
+                let dot: f64 = (0..c).map(|k| rest[i][k] * q[k]).sum();
+                for (k, qk) in q.iter().enumerate() {
+                    rest[i][k] -= dot * qk;
+                }
+            }
+        }
+    }
+    left.sort_unstable();
+    left
+}
+
 /// Result of one (Gauss–)Newton solve.
 enum Solve {
     /// All rows satisfied; the correction reached round-off level (or the
@@ -594,7 +813,7 @@ fn gauss_newton(
     let mut trial = y.to_vec();
     let mut prev_size = f64::INFINITY;
     let mut iterations = 0;
-    chain.eval_or_err(y, "constraint chain during initialisation")?;
+    chain.eval_or_err(y)?;
     loop {
         let within = rows.iter().all(|&r| chain.satisfied(r, y, opts.tol));
         if iterations >= opts.max_iterations {
@@ -681,10 +900,12 @@ fn gauss_newton(
             alpha *= 0.5;
         }
         if !accepted {
-            return Err(SolveError::NonFinite {
-                t: chain.t,
-                what: "constraint chain during initialisation",
-            });
+            // Name the row at the full step (the first point tried).
+            for (b, &c) in cols.iter().enumerate() {
+                trial[c] = y[c] + delta[b];
+            }
+            chain.eval(&trial);
+            return Err(chain.non_finite(&trial));
         }
         y.copy_from_slice(&trial);
         iterations += 1;
@@ -756,14 +977,23 @@ fn projection_stage(
 /// report, or
 ///
 /// * [`SolveError::InvalidInput`] — wrong length, a non-finite value (named),
-///   invalid options, or multipliers the constraints do not determine
-///   (singular block, naming the constraint);
+///   invalid options;
 /// * [`SolveError::InconsistentInitialValues`] — in [`InitMode::Strict`] a
 ///   violated constraint of the lowest violated level (the worst of that
 ///   level) and its residual at the given values; in [`InitMode::Project`] a
 ///   constraint that cannot be satisfied (e.g. a rank-zero Jacobian at the
 ///   given point);
-/// * [`SolveError::NonFinite`] — the model produced NaN or ∞.
+/// * [`SolveError::Init`] — [`InitError::Singular`]: multipliers the
+///   constraints do not determine, naming the dependent rows;
+///   [`InitError::NotConverged`]: Newton for the algebraic unknowns did not
+///   converge, naming the worst row; [`InitError::NonFinite`]: a row of the
+///   chain is NaN or ∞ at a point reached, naming it and the point;
+/// * [`SolveError::NonFinite`] — the model is not finite near the initial
+///   values (while its structure is read).
+///
+/// Every value of `y0` counts as given: the differential ones are
+/// [`Start::Fixed`], the algebraic ones [`Start::Guess`]
+/// ([`InitReport::values`]); [`consistent_from`] says which is which.
 ///
 /// ```
 /// use dae::dae_solvers::init::{consistent, InitMode, InitOptions};
@@ -790,6 +1020,107 @@ pub fn consistent(
 ) -> Result<Consistent, SolveError> {
     opts.validate()?;
     validate_point(sys, t0, y0)?;
+    let start: Vec<Start> = sys
+        .info()
+        .variables
+        .iter()
+        .zip(y0)
+        .map(|(v, &x)| match v.kind {
+            VarKind::Differential => Start::Fixed(x),
+            VarKind::Algebraic => Start::Guess(x),
+        })
+        .collect();
+    consistent_checked(sys, t0, y0, &start, opts)
+}
+
+/// [`consistent`] with each unknown's start said: a value given
+/// ([`Start::Fixed`]: kept, or projected and reported), a guess
+/// ([`Start::Guess`]: only where the iteration starts) or nothing
+/// ([`Start::Omitted`]: starts from 0). The values computed are those of
+/// [`consistent`] from `y0 = start.map(Start::value)`; the report's
+/// [`InitReport::values`] says for each unknown how its value came about,
+/// and flags an algebraic unknown started from 0 that its rows contain
+/// nonlinearly ([`InitValue::root_chosen_by_default`]): the constraints
+/// may have other solutions there, and a guess chooses among them.
+///
+/// ```
+/// use dae::dae_solvers::init::{consistent_from, How, InitOptions, Start};
+/// use dae::prelude::*;
+///
+/// dae! {
+///     /// `x = exp(t)` held by a multiplier `z` with two consistent values.
+///     pub TwoRoots {
+///         differential { x, y }
+///         algebraic { z }
+///         equations {
+///             der(x) = y * z * (z + 1) / 2;
+///             der(y) = x;
+///             0 = x - exp(t);
+///         }
+///         formulations { rcd1 }
+///     }
+/// }
+/// let sys = TwoRoots::default().rcd1();
+/// let opts = InitOptions::default();
+/// let start = [Start::Fixed(1.0), Start::Fixed(1.0), Start::Omitted];
+/// let first = consistent_from(&sys, 0.0, &start, &opts)?;
+/// let z = &first.report.values[2];
+/// assert!((z.value - 1.0).abs() < 1e-12);
+/// assert!(z.how == How::Defaulted && z.root_chosen_by_default());
+/// let guessed = [Start::Fixed(1.0), Start::Fixed(1.0), Start::Guess(-1.0)];
+/// let other = consistent_from(&sys, 0.0, &guessed, &opts)?;
+/// assert!((other.y[2] + 2.0).abs() < 1e-12);
+/// assert_eq!(other.report.values[2].how, How::Guessed);
+/// # Ok::<(), SolveError>(())
+/// ```
+pub fn consistent_from(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    start: &[Start],
+    opts: &InitOptions,
+) -> Result<Consistent, SolveError> {
+    opts.validate()?;
+    let y0: Vec<f64> = start.iter().map(|s| s.value()).collect();
+    validate_point(sys, t0, &y0)?;
+    consistent_checked(sys, t0, &y0, start, opts)
+}
+
+/// Which of the unknowns `cols` the rows `rows` contain nonlinearly: their
+/// column of the chain's Jacobian at `y` differs from the one at two points
+/// where every unknown of `cols` is moved (by `0.37 (1 + |y_c|)` and
+/// `−0.61 (1 + |y_c|)`), or is not finite there. A column that does not
+/// depend on these unknowns is evaluated from the same expression at every
+/// point and compares equal to round-off.
+fn nonlinear_columns(chain: &Chain<'_>, y: &[f64], rows: &[usize], cols: &[usize]) -> Vec<bool> {
+    let (k, n) = chain.jac.shape();
+    let mut base = DMatrix::zeros(k, n);
+    chain.sys.constraints_jacobian(chain.t, y, &mut base);
+    let mut moved = DMatrix::zeros(k, n);
+    let mut nonlinear = vec![false; cols.len()];
+    for factor in [0.37, -0.61] {
+        let mut yp = y.to_vec();
+        for &c in cols {
+            yp[c] = y[c] + factor * (1.0 + y[c].abs());
+        }
+        chain.sys.constraints_jacobian(chain.t, &yp, &mut moved);
+        for (b, &c) in cols.iter().enumerate() {
+            nonlinear[b] |= rows.iter().any(|&r| {
+                let (u, v) = (base[(r, c)], moved[(r, c)]);
+                !v.is_finite() || (u - v).abs() > 1e-9 * (u.abs() + v.abs())
+            });
+        }
+    }
+    nonlinear
+}
+
+/// [`consistent`] on a checked `y0 = start.map(Start::value)`.
+fn consistent_checked(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    y0: &[f64],
+    start: &[Start],
+    opts: &InitOptions,
+) -> Result<Consistent, SolveError> {
     let info = sys.info();
     let n = info.unknowns();
     let members = &info.constraints;
@@ -817,7 +1148,7 @@ pub fn consistent(
     }
     // The anchor of every least-change problem: the values as given.
     let given = y.clone();
-    chain.eval_or_err(&y, "constraint chain at the initial values")?;
+    chain.eval_or_err(&y)?;
     let before = chain.g.clone();
 
     // Classify the rows: top level per source, containing an algebraic
@@ -877,7 +1208,7 @@ pub fn consistent(
                 .copied()
                 .filter(|&r| members[r].level <= level)
                 .collect();
-            chain.eval_or_err(&y, "constraint chain during initialisation")?;
+            chain.eval_or_err(&y)?;
             if rows.iter().all(|&r| chain.satisfied(r, &y, opts.tol)) {
                 continue;
             }
@@ -932,7 +1263,7 @@ pub fn consistent(
                 done = projection_stage(&mut chain, &mut y, &block, opts, level, &mut progress)?;
             }
             if !done {
-                chain.eval_or_err(&y, "constraint chain during initialisation")?;
+                chain.eval_or_err(&y)?;
                 let failing: Vec<usize> = rows
                     .iter()
                     .copied()
@@ -975,33 +1306,54 @@ pub fn consistent(
                     );
                 }
             }
-            Solve::Failed { .. } => {
-                chain.eval_or_err(&y, "constraint chain during initialisation")?;
+            Solve::Failed { iterations } => {
+                chain.eval_or_err(&y)?;
                 let r = chain.worst(&alg_rows, &y).unwrap_or(alg_rows[0]);
-                return Err(SolveError::InconsistentInitialValues {
+                return Err(SolveError::Init(InitError::NotConverged {
+                    t: t0,
                     equation: equation_text(&members[r].expr),
                     residual: chain.g[r],
-                });
+                    iterations,
+                }));
             }
             Solve::Singular { row, rank } => {
-                let names: Vec<&str> = alg_solve_cols
-                    .iter()
-                    .map(|&a| info.variables[a].name.as_str())
+                // The point where the rank fell is in `y` (the start, unless
+                // it fell during the iteration).
+                chain.eval_or_err(&y)?;
+                let mut jac = DMatrix::zeros(alg_rows.len(), alg_solve_cols.len());
+                for (a, &r) in alg_rows.iter().enumerate() {
+                    for (b, &c) in alg_solve_cols.iter().enumerate() {
+                        jac[(a, b)] = chain.jac[(r, c)];
+                    }
+                }
+                let mut dependent: Vec<usize> = dependent_rows(&jac)
+                    .into_iter()
+                    .map(|a| alg_rows[a])
                     .collect();
-                return Err(SolveError::invalid(format!(
-                    "the constraints do not determine the algebraic unknowns ({}) at t0 = {t0}: \
-                     the Jacobian of {} with respect to them is singular (rank {rank} of {}); \
-                     the configuration is singular or the constraints are redundant",
-                    names.join(", "),
-                    equation_text(&members[row].expr),
-                    alg_rows.len()
-                )));
+                if dependent.is_empty() {
+                    // The QR pivots stayed above the threshold where the
+                    // singular values did not: the SVD's row.
+                    dependent.push(row);
+                }
+                return Err(SolveError::Init(InitError::Singular {
+                    t: t0,
+                    equations: dependent
+                        .iter()
+                        .map(|&r| equation_text(&members[r].expr))
+                        .collect(),
+                    unknowns: alg_solve_cols
+                        .iter()
+                        .map(|&a| info.variables[a].name.clone())
+                        .collect(),
+                    rank,
+                    rows: alg_rows.len(),
+                }));
             }
         }
     }
 
     // Final check of the whole chain.
-    chain.eval_or_err(&y, "constraint chain at the consistent values")?;
+    chain.eval_or_err(&y)?;
     let after = chain.g.clone();
     let unsatisfied: Vec<usize> = (0..k)
         .filter(|&r| !chain.satisfied(r, &y, opts.tol))
@@ -1063,8 +1415,33 @@ pub fn consistent(
         })
         .collect();
 
+    let nonlinear = nonlinear_columns(&chain, &y, &alg_rows, &alg_solve_cols);
+    let values = (0..n)
+        .map(|j| {
+            let (given, guess, how) = match start[j] {
+                Start::Fixed(v) if v.to_bits() == y[j].to_bits() => (Some(v), None, How::Fixed),
+                Start::Fixed(v) => (Some(v), None, How::Projected),
+                Start::Guess(v) => (None, Some(v), How::Guessed),
+                Start::Omitted => (None, None, How::Defaulted),
+            };
+            InitValue {
+                name: info.variables[j].name.clone(),
+                given,
+                guess,
+                value: y[j],
+                moved: (y[j] - start[j].value()).abs(),
+                how,
+                nonlinear: alg_solve_cols
+                    .iter()
+                    .position(|&a| a == j)
+                    .is_some_and(|b| nonlinear[b]),
+            }
+        })
+        .collect();
+
     Ok(Consistent {
         report: InitReport {
+            values,
             mode: opts.mode,
             projected: !changes.is_empty(),
             changes,

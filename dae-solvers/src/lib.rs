@@ -53,8 +53,8 @@ pub mod radau5;
 pub mod solution;
 pub mod stats;
 
-pub use error::{NotApplicable, SolutionError, SolveError};
-pub use init::{consistent, initial_derivative, InitMode, InitOptions};
+pub use error::{InitError, NotApplicable, SolutionError, SolveError};
+pub use init::{consistent, consistent_from, initial_derivative, InitMode, InitOptions, Start};
 pub use integrator::{Integrator, StepOutcome};
 pub use options::{Options, Tol, Tolerances};
 pub use solution::{DenseOutput, Solution};

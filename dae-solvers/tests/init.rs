@@ -8,9 +8,10 @@ use common::{
 };
 use dae_core::system::DaeSystem;
 use dae_solvers::init::{
-    consistent, initial_derivative, Consistent, InitMode, InitOptions, InitReport,
+    consistent, consistent_from, initial_derivative, Consistent, How, InitMode, InitOptions,
+    InitReport, Start,
 };
-use dae_solvers::SolveError;
+use dae_solvers::{InitError, SolveError};
 use nalgebra::{DMatrix, DVector};
 
 fn pendulum(form: Form) -> Pendulum {
@@ -667,7 +668,22 @@ fn model_producing_nan_is_non_finite() {
     let sys = Pendulum::with_parameters(Form::Rcd0, 1.0, f64::NAN, G);
     let y0 = [1.0, 0.0, 0.0, 0.0, 0.0];
     let err = consistent(&sys, 0.0, &y0, &InitOptions::default()).expect_err("NaN model");
-    assert_eq!(err.kind(), "non_finite", "{err:?}");
+    assert_eq!(err.kind(), "init_non_finite", "{err:?}");
+    match &err {
+        SolveError::Init(InitError::NonFinite {
+            equation,
+            what,
+            values,
+            ..
+        }) => {
+            assert_eq!(equation, &format!("0 = {PENDULUM_L0}"));
+            assert_eq!(*what, "residual");
+            let names: Vec<&str> = values.iter().map(|(n, _)| n.as_str()).collect();
+            assert_eq!(names, ["x", "y", "v", "w", "lambda"]);
+            assert_eq!(values[0].1, 1.0);
+        }
+        other => panic!("expected InitError::NonFinite, got {other:?}"),
+    }
     let sys = Pendulum::with_parameters(Form::Rcd0, f64::NAN, 1.0, G);
     assert!(matches!(
         initial_derivative(&sys, 0.0, &y0),
@@ -698,12 +714,21 @@ fn singular_multiplier_block_is_reported() {
     // vanishes there.
     let sys = Pendulum::with_parameters(Form::Rcd0, 1.0, 0.0, G);
     let err = consistent(&sys, 0.0, &[0.0; 5], &InitOptions::default()).expect_err("singular");
+    assert_eq!(err.kind(), "init_singular");
+    assert!(err.to_string().contains(PENDULUM_L2), "{err}");
     match err {
-        SolveError::InvalidInput { what } => {
-            assert!(what.contains(PENDULUM_L2), "{what}");
-            assert!(what.contains("lambda"), "{what}");
+        SolveError::Init(InitError::Singular {
+            equations,
+            unknowns,
+            rank,
+            rows,
+            t,
+        }) => {
+            assert_eq!(equations, [format!("0 = {PENDULUM_L2}")]);
+            assert_eq!(unknowns, ["lambda"]);
+            assert_eq!((rank, rows, t), (0, 1, 0.0));
         }
-        other => panic!("expected InvalidInput, got {other:?}"),
+        other => panic!("expected InitError::Singular, got {other:?}"),
     }
 }
 
@@ -789,4 +814,218 @@ fn report_is_serializable() {
     serializable(&c.report);
     serializable(&c);
     assert_eq!(InitOptions::default().mode, InitMode::Project);
+}
+
+// ---------------------------------------------------------------------------
+// Guesses, the report of every value, typed failures (issue 23, item 4).
+
+dae::dae! {
+    /// Hessenberg index 2 with a multiplier that enters quadratically:
+    /// `x = y = exp(t)`, and `z (z + 1) / 2 = 1`, so `z = 1` or `z = -2`.
+    pub TwoRoots {
+        differential { x, y }
+        algebraic { z }
+        equations {
+            der(x) = y * z * (z + 1) / 2;
+            der(y) = x;
+            0 = x - exp(t);
+        }
+        formulations { rcd1 }
+    }
+}
+
+dae::dae! {
+    /// A point on the unit circle held by the same constraint written
+    /// twice: the two multipliers are not determined.
+    pub Redundant {
+        differential { x, y, v, w }
+        algebraic { a, b }
+        equations {
+            der(x) = v;
+            der(y) = w;
+            der(v) = -2 * x * a - 4 * x * b;
+            der(w) = -2 * y * a - 4 * y * b - 9.81;
+            0 = x^2 + y^2 - 1;
+            0 = 2 * x^2 + 2 * y^2 - 2;
+        }
+        formulations { rcd0 }
+    }
+}
+
+dae::dae! {
+    /// A constraint that is NaN for `x < 0`.
+    pub Root {
+        differential { x, v }
+        algebraic { lambda }
+        equations {
+            der(x) = v;
+            der(v) = -lambda;
+            0 = sqrt(x) - 1;
+        }
+        formulations { rcd0 }
+    }
+}
+
+#[test]
+fn a_guess_chooses_the_root_and_a_default_start_is_flagged() {
+    let sys = TwoRoots::default().rcd1();
+    let opts = InitOptions::default();
+    // No guess: Newton from 0 (z ← 0 + 2, then to 1).
+    let start = [Start::Fixed(1.0), Start::Fixed(1.0), Start::Omitted];
+    let c = consistent_from(&sys, 0.0, &start, &opts).expect("consistent");
+    assert!((c.y[2] - 1.0).abs() < 1e-13, "z = {}", c.y[2]);
+    let v = &c.report.values;
+    let names: Vec<&str> = v.iter().map(|e| e.name.as_str()).collect();
+    assert_eq!(names, ["x", "y", "z"]);
+    for e in &v[..2] {
+        assert_eq!(
+            (e.how, e.given, e.guess, e.moved),
+            (How::Fixed, Some(1.0), None, 0.0)
+        );
+        assert!(!e.nonlinear);
+    }
+    assert_eq!(
+        (v[2].how, v[2].given, v[2].guess),
+        (How::Defaulted, None, None)
+    );
+    assert!(v[2].nonlinear && v[2].root_chosen_by_default());
+    assert_eq!(v[2].moved, c.y[2].abs());
+    // The guess -1 leads Newton to the other root, z = -2.
+    let start = [Start::Fixed(1.0), Start::Fixed(1.0), Start::Guess(-1.0)];
+    let c = consistent_from(&sys, 0.0, &start, &opts).expect("consistent");
+    assert!((c.y[2] + 2.0).abs() < 1e-13, "z = {}", c.y[2]);
+    let z = &c.report.values[2];
+    assert_eq!((z.how, z.guess), (How::Guessed, Some(-1.0)));
+    assert!(z.nonlinear && !z.root_chosen_by_default());
+    assert!((z.moved - 1.0).abs() < 1e-13);
+    // `consistent` takes the algebraic value as a guess: the same root.
+    let c = consistent(&sys, 0.0, &[1.0, 1.0, -1.0], &opts).expect("consistent");
+    assert!((c.y[2] + 2.0).abs() < 1e-13);
+    assert_eq!(c.report.values[2].how, How::Guessed);
+}
+
+#[test]
+fn a_linear_multiplier_is_not_flagged_and_projections_are_named() {
+    // The pendulum's λ enters linearly: one consistent value, no warning.
+    let sys = pendulum(Form::Rcd1);
+    let start = [
+        Start::Fixed(1.1),
+        Start::Omitted,
+        Start::Fixed(0.0),
+        Start::Fixed(0.0),
+        Start::Omitted,
+    ];
+    let c = consistent_from(&sys, 0.0, &start, &InitOptions::default()).expect("consistent");
+    let v = &c.report.values;
+    assert_eq!(v[0].how, How::Projected);
+    assert!((v[0].value - 1.0).abs() < 1e-12 && (v[0].moved - 0.1).abs() < 1e-12);
+    assert_eq!(v[1].how, How::Defaulted);
+    assert_eq!((v[2].how, v[3].how), (How::Fixed, How::Fixed));
+    assert_eq!(v[4].how, How::Defaulted);
+    assert!(v.iter().all(|e| !e.nonlinear), "{v:?}");
+}
+
+#[test]
+fn redundant_constraints_are_named_by_the_pivoted_factorisation() {
+    use dae::prelude::*;
+    let sys = Redundant::default().rcd0();
+    let err = consistent(
+        &sys,
+        0.0,
+        &[0.6, 0.8, 0.0, 0.0, 0.0, 0.0],
+        &InitOptions::default(),
+    )
+    .expect_err("singular");
+    let text = err.to_string();
+    match err {
+        SolveError::Init(InitError::Singular {
+            equations,
+            unknowns,
+            rank,
+            rows,
+            ..
+        }) => {
+            assert_eq!(unknowns, ["a", "b"]);
+            assert_eq!((rank, rows), (1, 2));
+            // The second row is twice the first: its pivot is taken first
+            // (larger norm), the first row's vanishes.
+            let first = sys
+                .info()
+                .constraints
+                .iter()
+                .filter(|m| m.source == 0)
+                .max_by_key(|m| m.level)
+                .expect("a member of the first constraint");
+            assert_eq!(equations.len(), 1, "{equations:?}");
+            assert!(equations[0].ends_with(first.expr.trim()), "{equations:?}");
+        }
+        other => panic!("expected InitError::Singular, got {other:?}"),
+    }
+    assert!(text.contains("rank 1"), "{text}");
+}
+
+#[test]
+fn a_non_finite_row_is_named_with_the_point() {
+    use dae::prelude::*;
+    let sys = Root::default().rcd0();
+    let err = consistent(&sys, 0.0, &[-1.0, 0.5, 0.0], &InitOptions::default())
+        .expect_err("NaN constraint");
+    assert_eq!(err.kind(), "init_non_finite");
+    assert_eq!(err.t(), Some(0.0));
+    match &err {
+        SolveError::Init(InitError::NonFinite {
+            equation,
+            what,
+            value,
+            values,
+            ..
+        }) => {
+            assert!(equation.contains("sqrt(x)"), "{equation}");
+            assert_eq!(*what, "residual");
+            assert!(value.is_nan());
+            assert_eq!(
+                values,
+                &[
+                    ("x".to_string(), -1.0),
+                    ("v".to_string(), 0.5),
+                    ("lambda".to_string(), 0.0)
+                ]
+            );
+        }
+        other => panic!("expected InitError::NonFinite, got {other:?}"),
+    }
+    assert!(err.to_string().contains("x = -1e0"), "{err}");
+}
+
+#[test]
+fn newton_without_a_real_root_names_the_worst_row() {
+    // y = -1: the hidden constraint asks z (z + 1) / 2 = -1, which has no
+    // real solution; Newton wanders until the iteration limit.
+    let sys = TwoRoots::default().rcd1();
+    let opts = InitOptions {
+        max_iterations: 50,
+        ..InitOptions::default()
+    };
+    let err = consistent(&sys, 0.0, &[1.0, -1.0, 0.0], &opts).expect_err("no root");
+    assert_eq!(err.kind(), "init_not_converged");
+    match &err {
+        SolveError::Init(InitError::NotConverged {
+            equation,
+            residual,
+            iterations,
+            t,
+        }) => {
+            let level1 = sys
+                .info()
+                .constraints
+                .iter()
+                .find(|m| m.level == 1)
+                .expect("the hidden constraint");
+            assert!(equation.ends_with(level1.expr.trim()), "{equation}");
+            // |z (z + 1) / 2 + 1| ≥ 7/8 for every real z.
+            assert!(residual.abs() >= 0.875 - 1e-12, "{residual}");
+            assert_eq!((*iterations, *t), (50, 0.0));
+        }
+        other => panic!("expected InitError::NotConverged, got {other:?}"),
+    }
 }

@@ -12,7 +12,7 @@ use super::Failure;
 use crate::inputs::{choose_formulation, inputs, run_tolerances, FormulationChoice};
 use crate::runner::{self, RunRecord, RunSpec, RunTolerances};
 use crate::scene::{did_you_mean, Scene, KNOWN_FORMULATIONS, KNOWN_SOLVERS};
-use dae_solvers::init::InitMode;
+use dae_solvers::init::{InitMode, InitValue};
 use serde::Serialize;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -297,6 +297,7 @@ pub fn text(r: &RunRecord) -> String {
             );
         }
     }
+    initialisation_table(&mut s, &r.initialisation);
     let _ = writeln!(s, "  t_end {}  tsim {:.3e} s", r.t_end, r.tsim_s);
     let vals: Vec<String> = r
         .final_values
@@ -333,6 +334,47 @@ pub fn text(r: &RunRecord) -> String {
         let _ = writeln!(s, "  drift of {k}: {v:.3e}");
     }
     s
+}
+
+/// The start of every unknown as a short table (given, guess, value used,
+/// how far it moved, how), then a warning for each algebraic unknown that
+/// started from 0 for want of a guess although its rows contain it
+/// nonlinearly.
+fn initialisation_table(s: &mut String, values: &[InitValue]) {
+    if values.is_empty() {
+        return;
+    }
+    let width = values
+        .iter()
+        .map(|v| v.name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(4);
+    let _ = writeln!(
+        s,
+        "  initialisation:\n    {:<width$}  {:>10}  {:>10}  {:>10}  {:>9}  how",
+        "name", "given", "guess", "value", "moved"
+    );
+    for v in values {
+        let num = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |x| format!("{x:.3e}"));
+        let _ = writeln!(
+            s,
+            "    {:<width$}  {:>10}  {:>10}  {:>10}  {:>9}  {}",
+            v.name,
+            num(v.given),
+            num(v.guess),
+            num(Some(v.value)),
+            format!("{:.2e}", v.moved),
+            v.how.as_str()
+        );
+    }
+    for v in values.iter().filter(|v| v.root_chosen_by_default()) {
+        let _ = writeln!(
+            s,
+            "  WARNING: {} started from 0 (no [guess]); the DAE may have other consistent values",
+            v.name
+        );
+    }
 }
 
 /// [`text`], with what `dae run` decided: the formulation's choice, the
