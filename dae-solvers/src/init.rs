@@ -1164,8 +1164,54 @@ fn consistent_checked(
     let is_alg_row = |r: usize| {
         members[r].level == top_level(members[r].source) && alg_cols.iter().any(|&a| pattern[r][a])
     };
-    let alg_rows: Vec<usize> = (0..k).filter(|&r| is_alg_row(r)).collect();
-    let diff_rows: Vec<usize> = (0..k).filter(|&r| !is_alg_row(r)).collect();
+    let mut alg_rows: Vec<usize> = (0..k).filter(|&r| is_alg_row(r)).collect();
+    let mut diff_rows: Vec<usize> = (0..k).filter(|&r| !is_alg_row(r)).collect();
+    // An algebraic unknown that a differential row contains is a function
+    // of the state, fixed by an algebraic row of its own (the reaction rate
+    // of a CSTR, `0 = r − k(T)·c`, whose derivative the prescribed output's
+    // chain holds). It is corrected with the differential unknowns in step
+    // 1, and the algebraic rows that hold no other algebraic unknown move
+    // there with it; step 2 solves the rest.
+    let mut with_state: Vec<usize> = alg_cols
+        .iter()
+        .copied()
+        .filter(|&a| diff_rows.iter().any(|&r| pattern[r][a]))
+        .collect();
+    loop {
+        let moving: Vec<usize> = alg_rows
+            .iter()
+            .copied()
+            .filter(|&r| {
+                alg_cols
+                    .iter()
+                    .all(|&a| !pattern[r][a] || with_state.contains(&a))
+            })
+            .collect();
+        if moving.is_empty() || with_state.is_empty() {
+            break;
+        }
+        alg_rows.retain(|r| !moving.contains(r));
+        diff_rows.extend(moving);
+        diff_rows.sort_unstable();
+        let more: Vec<usize> = alg_cols
+            .iter()
+            .copied()
+            .filter(|&a| !with_state.contains(&a) && diff_rows.iter().any(|&r| pattern[r][a]))
+            .collect();
+        with_state.extend(more);
+    }
+    with_state.sort_unstable();
+    let diff_cols: Vec<usize> = {
+        let mut c = diff_cols;
+        c.extend(with_state.iter().copied());
+        c.sort_unstable();
+        c
+    };
+    let alg_cols: Vec<usize> = alg_cols
+        .iter()
+        .copied()
+        .filter(|a| !with_state.contains(a))
+        .collect();
     let alg_touched = touched(&pattern, n, alg_rows.iter().copied(), &alg_cols);
     let alg_solve_cols: Vec<usize> = alg_cols
         .iter()
