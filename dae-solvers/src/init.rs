@@ -1,6 +1,6 @@
 //! Consistent initial values.
 //!
-//! A formulation `E(y) y' = f(t, y)` can only be started from a point that
+//! A formulation `E(t, y) y' = f(t, y)` can only be started from a point that
 //! satisfies every constraint of the model's chain — the original
 //! constraints *and* their hidden derivatives — and whose algebraic unknowns
 //! (Lagrange multipliers) are the ones these constraints determine. The user

@@ -95,7 +95,7 @@ impl<L: Corrector> Integrator<'_, L> {
         }
     }
 
-    /// Evaluate `G = ∂(E(y) y')/∂y − ∂f/∂y + c_J E(y)` at the predictor and
+    /// Evaluate `G = ∂(E(t, y) y')/∂y − ∂f/∂y + c_J E(t, y)` at the predictor and
     /// factor it in place.
     fn form_iteration_matrix(&mut self) -> Result<(), Fail> {
         let sys = &*self.sys;
