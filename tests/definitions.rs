@@ -83,9 +83,13 @@ fn same_numbers(a: &dyn DaeSystem, b: &dyn DaeSystem, points: usize, tol: f64, l
         dense(&|s, o| s.rhs(t, &y, o), m, "rhs");
         dense(&|s, o| s.constraints(t, &y, o), k, "constraints");
         dense(&|s, o| s.invariants(t, &y, o), ni, "invariants");
-        matrix(&|s, o| s.leading(&y, o), m, "leading");
+        matrix(&|s, o| s.leading(t, &y, o), m, "leading");
         matrix(&|s, o| s.rhs_jacobian(t, &y, o), m, "rhs_jacobian");
-        matrix(&|s, o| s.leading_jacobian(&y, &z, o), m, "leading_jacobian");
+        matrix(
+            &|s, o| s.leading_jacobian(t, &y, &z, o),
+            m,
+            "leading_jacobian",
+        );
         matrix(
             &|s, o| s.constraints_jacobian(t, &y, o),
             k,

@@ -144,8 +144,8 @@ fn agree(compiled: &dyn DaeSystem, interpreted: &dyn DaeSystem, rng: &mut Lcg, p
         close_slices(&format!("{name}: residual"), &a, &b);
 
         let (mut a, mut b) = matrix(m);
-        compiled.leading(&y, &mut a);
-        interpreted.leading(&y, &mut b);
+        compiled.leading(t, &y, &mut a);
+        interpreted.leading(t, &y, &mut b);
         close_matrices(&format!("{name}: leading"), &a, &b);
 
         let (mut a, mut b) = matrix(m);
@@ -154,8 +154,8 @@ fn agree(compiled: &dyn DaeSystem, interpreted: &dyn DaeSystem, rng: &mut Lcg, p
         close_matrices(&format!("{name}: rhs_jacobian"), &a, &b);
 
         let (mut a, mut b) = matrix(m);
-        compiled.leading_jacobian(&y, &z, &mut a);
-        interpreted.leading_jacobian(&y, &z, &mut b);
+        compiled.leading_jacobian(t, &y, &z, &mut a);
+        interpreted.leading_jacobian(t, &y, &z, &mut b);
         close_matrices(&format!("{name}: leading_jacobian"), &a, &b);
 
         let (mut a, mut b) = dense(k);

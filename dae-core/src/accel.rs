@@ -8,7 +8,7 @@
 //! the accelerations are eliminated here, numerically:
 //!
 //! ```text
-//!     a   = E_d(y)⁻¹ f_d(t, y)                     (the model's dynamic rows)
+//!     a   = E_d(t, y)⁻¹ f_d(t, y)                     (the model's dynamic rows)
 //!     g   = L(t, y, a)                              (the chain, der() → a)
 //!     ∂g/∂y = ∂L/∂y + ∂L/∂a · E_d⁻¹ (∂f_d/∂y − ∂(E_d a)/∂y)
 //! ```
@@ -28,14 +28,14 @@ use nalgebra::{DMatrix, DVector};
 pub trait AccelParts {
     /// Number of differential unknowns `n_d` (the first `n_d` of `y`).
     fn accel_dim(&self) -> usize;
-    /// `E_d(y)` (n_d × n_d): the model's dynamic rows' der() coefficients.
-    fn accel_leading(&self, y: &[f64], out: &mut DMatrix<f64>);
+    /// `E_d(t, y)` (n_d × n_d): the model's dynamic rows' der() coefficients.
+    fn accel_leading(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>);
     /// `f_d(t, y)` (length n_d): the model's dynamic rows' right-hand sides.
     fn accel_rhs(&self, t: f64, y: &[f64], out: &mut [f64]);
     /// `∂f_d/∂y` (n_d × N).
     fn accel_rhs_jacobian(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>);
-    /// `∂(E_d(y) z)/∂y` (n_d × N).
-    fn accel_leading_jacobian(&self, y: &[f64], z: &[f64], out: &mut DMatrix<f64>);
+    /// `∂(E_d(t, y) z)/∂y` (n_d × N).
+    fn accel_leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], out: &mut DMatrix<f64>);
     /// The chain `L(t, y, y')` with der() read from `yp` (length K).
     fn chain_at(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]);
     /// `∂L/∂y` at fixed `y'` (K × N).
@@ -55,7 +55,7 @@ fn accelerations<S: AccelParts + ?Sized>(
 ) -> Option<(Vec<f64>, nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>)> {
     let nd = s.accel_dim();
     let mut e = DMatrix::zeros(nd, nd);
-    s.accel_leading(y, &mut e);
+    s.accel_leading(t, y, &mut e);
     let mut f = vec![0.0; nd];
     s.accel_rhs(t, y, &mut f);
     let lu = e.lu();
@@ -93,7 +93,7 @@ pub fn constraints_jacobian<S: AccelParts + ?Sized>(
     let mut fy = DMatrix::zeros(nd, n);
     s.accel_rhs_jacobian(t, y, &mut fy);
     let mut ez = DMatrix::zeros(nd, n);
-    s.accel_leading_jacobian(y, &yp, &mut ez);
+    s.accel_leading_jacobian(t, y, &yp, &mut ez);
     fy -= ez;
     // ∂a/∂y = E_d⁻¹ (∂f_d/∂y − ∂(E_d a)/∂y).
     if !lu.solve_mut(&mut fy) {

@@ -70,10 +70,10 @@ pub fn check_jacobians(
             sys.rhs(t, yy, out)
         })?);
         let mut je = DMatrix::zeros(m, n);
-        sys.leading_jacobian(&y, &z, &mut je);
+        sys.leading_jacobian(t, &y, &z, &mut je);
         let ez = |yy: &[f64], out: &mut [f64]| {
             let mut e = DMatrix::zeros(m, n);
-            sys.leading(yy, &mut e);
+            sys.leading(t, yy, &mut e);
             let v = e * DVector::from_column_slice(&z);
             out.copy_from_slice(v.as_slice());
         };
@@ -88,7 +88,7 @@ pub fn check_jacobians(
         let mut r = vec![0.0; m];
         sys.residual(t, &y, &yp, &mut r);
         let mut e = DMatrix::zeros(m, n);
-        sys.leading(&y, &mut e);
+        sys.leading(t, &y, &mut e);
         let mut f = vec![0.0; m];
         sys.rhs(t, &y, &mut f);
         let ey = &e * DVector::from_column_slice(&yp);

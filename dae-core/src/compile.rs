@@ -40,15 +40,16 @@ impl Sparse {
 pub struct Compiled {
     /// Static description.
     pub info: FormulationInfo,
-    /// `E(y) y' − f(t, y)` (inputs `t, y, yp, p`), M outputs.
+    /// `E(t, y) y' − f(t, y)` (inputs `t, y, yp, p`), M outputs.
     pub residual: Tape,
     /// `f(t, y)`, M outputs.
     pub rhs: Tape,
-    /// Entries of `E(y)`.
+    /// Entries of `E(t, y)` (inputs `t, y, p`): a der() coefficient may
+    /// contain the time.
     pub leading: Sparse,
     /// Entries of `∂f/∂y`.
     pub rhs_jacobian: Sparse,
-    /// Entries of `∂(E(y) z)/∂y` (inputs `y, z, p`).
+    /// Entries of `∂(E(t, y) z)/∂y` (inputs `t, y, z, p`).
     pub leading_jacobian: Sparse,
     /// The model's constraint chain, K outputs.
     pub constraints: Tape,
@@ -69,13 +70,13 @@ pub struct Compiled {
 pub struct AccelTapes {
     /// Number of differential unknowns `n_d`.
     pub n_diff: usize,
-    /// Entries of `E_d(y)` (n_d × n_d).
+    /// Entries of `E_d(t, y)` (n_d × n_d).
     pub leading: Sparse,
     /// `f_d(t, y)`, n_d outputs.
     pub rhs: Tape,
     /// Entries of `∂f_d/∂y` (n_d × N).
     pub rhs_jacobian: Sparse,
-    /// Entries of `∂(E_d(y) z)/∂y` (n_d × N).
+    /// Entries of `∂(E_d(t, y) z)/∂y` (n_d × N).
     pub leading_jacobian: Sparse,
     /// Entries of `∂g/∂y'` (K × n_d).
     pub chain_der: Sparse,
@@ -246,5 +247,53 @@ impl Derived {
                 expr: self.model.text(e),
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interp::InterpretedSystem;
+    use crate::system::DaeSystem;
+    use nalgebra::DMatrix;
+    use std::sync::Arc;
+
+    /// A formulation whose row of `E` holds the time: `(1 + t)·x·der(x)`,
+    /// made by hand from the model's `x·der(x)` (the model checker does not
+    /// take `t` in a der() coefficient yet). Its tapes read `t` in `E` and in
+    /// `∂(E z)/∂y`, and the interpreter passes the time it is given.
+    #[test]
+    fn a_time_dependent_leading_matrix_is_evaluated_at_the_given_time() {
+        let d = Derived::from_str(
+            "pub M { differential { x } algebraic { z } \
+             equations { x * der(x) = -x + z; 0 = z - t * x; } }",
+        )
+        .expect("the model derives");
+        let mut f = d.formulations[0].clone();
+        let one_plus_t = expr::add(&Expr::one(), &Expr::sym(Sym::Time));
+        for (_, c) in &mut f.rows[0].e {
+            *c = expr::mul(c, &one_plus_t);
+        }
+        f.constant_leading = false;
+        f.constant_differential_leading = false;
+        let c = compile(&d, &f);
+        let sys = InterpretedSystem::new(Arc::new(c), Vec::new());
+        let y = [2.0, 0.5];
+        let (mut e0, mut e1) = (DMatrix::zeros(2, 2), DMatrix::zeros(2, 2));
+        sys.leading(0.0, &y, &mut e0);
+        sys.leading(1.5, &y, &mut e1);
+        // (1 + t)·x at x = 2: 2 at t = 0, 5 at t = 1.5; the algebraic row
+        // stays zero.
+        assert_eq!((e0[(0, 0)], e1[(0, 0)]), (2.0, 5.0));
+        assert_eq!((e0[(1, 0)], e0[(1, 1)], e1[(1, 1)]), (0.0, 0.0, 0.0));
+        // ∂((1 + t)·x·z_x)/∂x = (1 + t)·z_x.
+        let (mut j0, mut j1) = (DMatrix::zeros(2, 2), DMatrix::zeros(2, 2));
+        sys.leading_jacobian(0.0, &y, &[3.0, 0.0], &mut j0);
+        sys.leading_jacobian(1.5, &y, &[3.0, 0.0], &mut j1);
+        assert_eq!((j0[(0, 0)], j1[(0, 0)]), (3.0, 7.5));
+        // The residual is E(t, y) y' − f(t, y) at the same time, and every
+        // analytic Jacobian matches central differences at random times.
+        let worst = crate::check::check_jacobians(&sys, 10, 3, 1e-7).expect("Jacobians agree");
+        assert!(worst < 1e-7, "{worst:e}");
     }
 }

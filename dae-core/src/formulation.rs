@@ -68,9 +68,9 @@ pub struct Formulation {
     pub s_index: u8,
     /// Maximal constraint level.
     pub c_level: u8,
-    /// `E` independent of `y`.
+    /// `E` independent of `y` and of `t`.
     pub constant_leading: bool,
-    /// The differential rows' part of `E` independent of `y`.
+    /// The differential rows' part of `E` independent of `y` and of `t`.
     pub constant_differential_leading: bool,
 }
 

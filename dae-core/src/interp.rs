@@ -232,14 +232,14 @@ impl DaeSystem for InterpretedSystem {
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
         self.dense(&self.c.residual, self.inputs(t, y, yp, &[]), r)
     }
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
-        self.sparse(&self.c.leading, self.inputs(0.0, y, &[], &[]), e)
+    fn leading(&self, t: f64, y: &[f64], e: &mut DMatrix<f64>) {
+        self.sparse(&self.c.leading, self.inputs(t, y, &[], &[]), e)
     }
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
         self.sparse(&self.c.rhs_jacobian, self.inputs(t, y, &[], &[]), j)
     }
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
-        self.sparse(&self.c.leading_jacobian, self.inputs(0.0, y, &[], z), j)
+    fn leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+        self.sparse(&self.c.leading_jacobian, self.inputs(t, y, &[], z), j)
     }
     fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
         match self.c.accel {
@@ -271,10 +271,10 @@ impl crate::accel::AccelParts for InterpretedSystem {
     fn accel_dim(&self) -> usize {
         self.c.accel.as_ref().map_or(0, |a| a.n_diff)
     }
-    fn accel_leading(&self, y: &[f64], out: &mut DMatrix<f64>) {
+    fn accel_leading(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>) {
         self.sparse(
             &self.accel_tapes().leading,
-            self.inputs(0.0, y, &[], &[]),
+            self.inputs(t, y, &[], &[]),
             out,
         )
     }
@@ -288,10 +288,10 @@ impl crate::accel::AccelParts for InterpretedSystem {
             out,
         )
     }
-    fn accel_leading_jacobian(&self, y: &[f64], z: &[f64], out: &mut DMatrix<f64>) {
+    fn accel_leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], out: &mut DMatrix<f64>) {
         self.sparse(
             &self.accel_tapes().leading_jacobian,
-            self.inputs(0.0, y, &[], z),
+            self.inputs(t, y, &[], z),
             out,
         )
     }

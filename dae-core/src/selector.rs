@@ -134,9 +134,6 @@ pub struct NumericSelector<S> {
     kept: Vec<usize>,
     blocks: RefCell<Vec<Block>>,
     scratch: RefCell<Scratch>,
-    /// The latest time seen (`leading` takes none; `σ` depends on `t`
-    /// through `G` only to stay well conditioned).
-    t: std::cell::Cell<f64>,
 }
 
 impl<S: DaeSystem> std::fmt::Debug for NumericSelector<S> {
@@ -241,7 +238,7 @@ impl<S: DaeSystem> NumericSelector<S> {
         // dynamics row and every such column is looked at.
         if which == Projected::Psi0 {
             let mut e = DMatrix::zeros(src.equations(), n);
-            inner.leading(y0, &mut e);
+            inner.leading(t0, y0, &mut e);
             let free: Vec<usize> = (0..n)
                 .filter(|&j| differential(j) && !q.contains(&j))
                 .collect();
@@ -321,7 +318,6 @@ impl<S: DaeSystem> NumericSelector<S> {
             kept,
             blocks: RefCell::new(blocks),
             scratch: RefCell::new(scratch),
-            t: std::cell::Cell::new(t0),
         };
         sys.refresh(t0, y0);
         Ok(sys)
@@ -390,32 +386,29 @@ impl<S: DaeSystem> DaeSystem for NumericSelector<S> {
         self.inner.parameter_values()
     }
     fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
-        self.t.set(t);
         let mut s = self.scratch.borrow_mut();
         self.inner.rhs(t, y, &mut s.f);
         self.combine_vec(&s.f, f);
     }
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
-        self.t.set(t);
         let mut s = self.scratch.borrow_mut();
         self.inner.residual(t, y, yp, &mut s.f);
         self.combine_vec(&s.f, r);
     }
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
-        self.refresh(self.t.get(), y);
+    fn leading(&self, t: f64, y: &[f64], e: &mut DMatrix<f64>) {
+        self.refresh(t, y);
         let mut s = self.scratch.borrow_mut();
-        self.inner.leading(y, &mut s.mat);
+        self.inner.leading(t, y, &mut s.mat);
         self.combine_mat(&s.mat, e);
     }
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
-        self.t.set(t);
         let mut s = self.scratch.borrow_mut();
         self.inner.rhs_jacobian(t, y, &mut s.mat);
         self.combine_mat(&s.mat, j);
     }
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+    fn leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
         let mut s = self.scratch.borrow_mut();
-        self.inner.leading_jacobian(y, z, &mut s.mat);
+        self.inner.leading_jacobian(t, y, z, &mut s.mat);
         self.combine_mat(&s.mat, j);
     }
     fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {

@@ -3,11 +3,12 @@
 //! A formulation is a quasi-linear DAE
 //!
 //! ```text
-//!     E(y) y' = f(t, y),        E: M×N,  y ∈ ℝᴺ,  M ≥ N
+//!     E(t, y) y' = f(t, y),     E: M×N,  y ∈ ℝᴺ,  M ≥ N
 //! ```
 //!
 //! with `M > N` for the overdetermined formulations (`ovd1`, `ovd0`) and `E`
-//! depending on `y` for the projected ones (`psi1`, `psi0`). Two
+//! depending on `y` for the projected ones (`psi1`, `psi0`); `E` depends on
+//! `t` where a model's der() coefficients contain the time. Two
 //! implementations exist and share one test suite: straight-line code emitted
 //! by the `dae!` macro (fastest, sizes known at compile time, see
 //! [`StaticSize`]) and the interpreter in [`crate::interp`] for models read at
@@ -131,10 +132,11 @@ pub struct FormulationInfo {
     /// Maximal constraint level: the highest level of hidden constraint the
     /// formulation leaves out.
     pub c_level: u8,
-    /// `true` when `E` does not depend on `y`.
+    /// `true` when `E` depends neither on `y` nor on `t` (a solver may
+    /// then evaluate and factor it once).
     pub constant_leading: bool,
-    /// `true` when the differential rows' part of `E` does not depend on
-    /// `y` (always when `constant_leading`). A model with a constant mass
+    /// `true` when the differential rows' part of `E` depends neither on
+    /// `y` nor on `t` (always when `constant_leading`). A model with a constant mass
     /// matrix has it, though its acceleration-level constraint rows keep
     /// `G(q)·v'`: its `E` is constant once those rows are made algebraic,
     /// which the solvers for a constant `E` then do.
@@ -177,7 +179,7 @@ impl FormulationInfo {
     }
 }
 
-/// A formulation `E(y) y' = f(t, y)` ready to integrate.
+/// A formulation `E(t, y) y' = f(t, y)` ready to integrate.
 ///
 /// All methods write into caller-owned buffers and never allocate. Slices
 /// have length `N` (unknowns), `M` (equations), `K` (the constraint chain,
@@ -205,7 +207,7 @@ impl FormulationInfo {
 /// sys.rhs(0.0, &y, &mut f);
 /// assert_eq!(f[3], -Pendulum::default().g); // w' = -2 y lambda / m - g
 /// let mut e = DMatrix::zeros(5, 5);
-/// sys.leading(&y, &mut e); // E: identity on x, y, v, w; zero row for the constraint
+/// sys.leading(0.0, &y, &mut e); // E: identity on x, y, v, w; zero row for the constraint
 /// assert_eq!((e[(0, 0)], e[(4, 4)]), (1.0, 0.0));
 /// let mut g = vec![0.0; info.constraints.len()];
 /// sys.constraints(0.0, &y, &mut g); // the chain: x² + y² − l², 2xv + 2yw, …
@@ -221,18 +223,20 @@ pub trait DaeSystem {
     /// `f(t, y)` into `f` (length M).
     fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]);
 
-    /// The residual `r = E(y) yp − f(t, y)` into `r` (length M).
+    /// The residual `r = E(t, y) yp − f(t, y)` into `r` (length M).
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]);
 
-    /// `E(y)` into `e` (M×N).
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>);
+    /// `E(t, y)` into `e` (M×N): the leading matrix at the time `t` of the
+    /// point `y` (a solver passes the time at which `y` is, e.g. a stage
+    /// time). Independent of both when `info().constant_leading`.
+    fn leading(&self, t: f64, y: &[f64], e: &mut DMatrix<f64>);
 
     /// `∂f/∂y` into `j` (M×N).
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>);
 
-    /// `∂(E(y) z)/∂y` into `j` (M×N); all zeros when
-    /// `info().constant_leading`.
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>);
+    /// `∂(E(t, y) z)/∂y` into `j` (M×N) at the time `t` of `y`; all zeros
+    /// when `info().constant_leading` (or when `E` depends on `t` only).
+    fn leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>);
 
     /// The model's constraint chain `g_k(t, y)` into `g` (length K), in the
     /// order of `info().constraints`.
@@ -261,14 +265,14 @@ macro_rules! forward_dae_system {
             fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
                 (**self).residual(t, y, yp, r)
             }
-            fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
-                (**self).leading(y, e)
+            fn leading(&self, t: f64, y: &[f64], e: &mut DMatrix<f64>) {
+                (**self).leading(t, y, e)
             }
             fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
                 (**self).rhs_jacobian(t, y, j)
             }
-            fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
-                (**self).leading_jacobian(y, z, j)
+            fn leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+                (**self).leading_jacobian(t, y, z, j)
             }
             fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
                 (**self).constraints(t, y, g)

@@ -283,8 +283,9 @@ fn body(tape: &Tape, out: Out<'_>, fields: Params<'_>, avail: Available) -> Body
                         uses.t = true;
                         quote!(t)
                     } else {
-                        // `leading` and `leading_jacobian` take no time;
-                        // the interpreter evaluates them at t = 0.
+                        // Only the derived parameters' values take no
+                        // time: they are functions of the base
+                        // parameters alone.
                         quote!(0.0f64)
                     }
                 }
@@ -968,11 +969,6 @@ fn system_impl(
         yp: false,
         z: false,
     };
-    let no_t = Available {
-        t: false,
-        yp: false,
-        z: false,
-    };
     let dense = |tape: &Tape, avail: Available| body(tape, Out::Dense, fields, avail);
     let sparse =
         |s: &Sparse, avail: Available| body(&s.tape, Out::Sparse(&s.entries), fields, avail);
@@ -1025,20 +1021,11 @@ fn system_impl(
         "residual",
         dense(&c.residual, Available { yp: true, ..all }),
     );
-    let leading = {
-        let b = sparse(&c.leading, no_t);
-        let (y, stmts) = (param("y", b.uses.y), b.stmts);
-        quote! {
-            fn leading(&self, #y: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
-        }
-    };
-    let leading_jacobian = {
-        let b = sparse(&c.leading_jacobian, Available { z: true, ..no_t });
-        let (y, z, stmts) = (param("y", b.uses.y), param("z", b.uses.z), b.stmts);
-        quote! {
-            fn leading_jacobian(&self, #y: &[f64], #z: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
-        }
-    };
+    let leading = t_y_matrix("leading", sparse(&c.leading, all));
+    let leading_jacobian = t_y_z_matrix(
+        "leading_jacobian",
+        sparse(&c.leading_jacobian, Available { z: true, ..all }),
+    );
 
     let values = vec_of(
         (0..fields.fields.len() + n_derived)
@@ -1086,6 +1073,20 @@ fn system_impl(
     }
 }
 
+/// `fn name(&self, t, y, z, out: &mut DMatrix<f64>)` around a tape's body.
+fn t_y_z_matrix(name: &str, b: Body) -> TokenStream {
+    let name = format_ident!("{}", name);
+    let (t, y, z, stmts) = (
+        param("t", b.uses.t),
+        param("y", b.uses.y),
+        param("z", b.uses.z),
+        b.stmts,
+    );
+    quote! {
+        fn #name(&self, #t: f64, #y: &[f64], #z: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
+    }
+}
+
 /// `fn name(&self, t, y, yp, out: &mut [f64])` around a tape's body.
 fn t_y_yp_slice(name: &str, b: Body) -> TokenStream {
     let name = format_ident!("{}", name);
@@ -1125,7 +1126,6 @@ fn accel_impl(
         z: false,
     };
     let with_yp = Available { yp: true, ..all };
-    let no_t = Available { t: false, ..all };
     let constraints = quote! {
         fn constraints(&self, t: f64, y: &[f64], out: &mut [f64]) {
             ::dae::__private::accel::constraints(self, t, y, out)
@@ -1140,20 +1140,11 @@ fn accel_impl(
     let rhs = (emit.t_y_slice)("accel_rhs", (emit.dense)(&a.rhs, all));
     let rhs_jacobian = (emit.t_y_matrix)("accel_rhs_jacobian", (emit.sparse)(&a.rhs_jacobian, all));
     let chain_der = (emit.t_y_matrix)("chain_der", (emit.sparse)(&a.chain_der, all));
-    let leading = {
-        let b = (emit.sparse)(&a.leading, no_t);
-        let (y, stmts) = (param("y", b.uses.y), b.stmts);
-        quote! {
-            fn accel_leading(&self, #y: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
-        }
-    };
-    let leading_jacobian = {
-        let b = (emit.sparse)(&a.leading_jacobian, Available { z: true, ..no_t });
-        let (y, z, stmts) = (param("y", b.uses.y), param("z", b.uses.z), b.stmts);
-        quote! {
-            fn accel_leading_jacobian(&self, #y: &[f64], #z: &[f64], out: &mut ::dae::__private::DMatrix<f64>) { #stmts }
-        }
-    };
+    let leading = (emit.t_y_matrix)("accel_leading", (emit.sparse)(&a.leading, all));
+    let leading_jacobian = t_y_z_matrix(
+        "accel_leading_jacobian",
+        (emit.sparse)(&a.leading_jacobian, Available { z: true, ..all }),
+    );
     let chain_at = t_y_yp_slice("chain_at", (emit.dense)(&c.constraints, with_yp));
     let chain_jacobian_at = {
         let b = (emit.sparse)(&c.constraints_jacobian, with_yp);

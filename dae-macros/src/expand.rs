@@ -373,11 +373,11 @@ impl Stub {
                         fn parameter_values(&self) -> ::dae::__private::Vec<f64> { ::core::unreachable!() }
                         fn rhs(&self, _: f64, _: &[f64], _: &mut [f64]) { ::core::unreachable!() }
                         fn residual(&self, _: f64, _: &[f64], _: &[f64], _: &mut [f64]) { ::core::unreachable!() }
-                        fn leading(&self, _: &[f64], _: &mut ::dae::__private::DMatrix<f64>) { ::core::unreachable!() }
+                        fn leading(&self, _: f64, _: &[f64], _: &mut ::dae::__private::DMatrix<f64>) { ::core::unreachable!() }
                         fn rhs_jacobian(&self, _: f64, _: &[f64], _: &mut ::dae::__private::DMatrix<f64>) {
                             ::core::unreachable!()
                         }
-                        fn leading_jacobian(&self, _: &[f64], _: &[f64], _: &mut ::dae::__private::DMatrix<f64>) {
+                        fn leading_jacobian(&self, _: f64, _: &[f64], _: &[f64], _: &mut ::dae::__private::DMatrix<f64>) {
                             ::core::unreachable!()
                         }
                         fn constraints(&self, _: f64, _: &[f64], _: &mut [f64]) { ::core::unreachable!() }

@@ -320,8 +320,10 @@ pub enum NotApplicable {
         /// The highest level the solver takes.
         max: u8,
     },
-    /// The leading matrix `E(y)` depends on the unknowns, for a method whose
-    /// formulas need a constant one (MEBDF, the linearly implicit Euler).
+    /// The leading matrix `E(t, y)` depends on the unknowns or on time, for
+    /// a method whose formulas need a constant one (MEBDF, the linearly
+    /// implicit Euler). The message names the state (it is recorded in the
+    /// harness snapshot); a time-dependent `E` gets the same reason.
     #[error("state-dependent leading matrix E(y): solver needs a constant one")]
     LeadingMatrixNotConstant,
     /// An unknown has a higher index than the method integrates.

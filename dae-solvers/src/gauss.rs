@@ -20,7 +20,7 @@
 //!
 //! # Discretisation
 //!
-//! The formulation `E(y) y' = f(t, y)` is discretised as in
+//! The formulation `E(t, y) y' = f(t, y)` is discretised as in
 //! [`crate::radau5`] — the collocation conditions `E(Y_i) Y'_i = f(t_n +
 //! c_i h, Y_i)` at the nodes `c = 1/2 ∓ √15/10, 1/2` — except that the
 //! method is not stiffly accurate: the step ends at the collocation

@@ -1,6 +1,6 @@
 //! Consistent initial values.
 //!
-//! A formulation `E(y) y' = f(t, y)` can only be started from a point that
+//! A formulation `E(t, y) y' = f(t, y)` can only be started from a point that
 //! satisfies every constraint of the model's chain — the original
 //! constraints *and* their hidden derivatives — and whose algebraic unknowns
 //! (Lagrange multipliers) are the ones these constraints determine. The user
@@ -1581,7 +1581,7 @@ pub(crate) fn initial_derivative_with(
         return Ok(Vec::new());
     }
     let mut e = DMatrix::zeros(m, n);
-    sys.leading(y0, &mut e);
+    sys.leading(t0, y0, &mut e);
     let mut f = vec![0.0; m];
     sys.rhs(t0, y0, &mut f);
     if !e.iter().all(|v| v.is_finite()) {
@@ -1732,11 +1732,11 @@ pub(crate) fn check_residuals(
     jac.neg_mut();
     if !info.constant_leading {
         let mut lj = DMatrix::zeros(m, n);
-        sys.leading_jacobian(y0, yp0, &mut lj);
+        sys.leading_jacobian(t0, y0, yp0, &mut lj);
         jac += lj;
     }
     let mut lead = DMatrix::zeros(m, n);
-    sys.leading(y0, &mut lead);
+    sys.leading(t0, y0, &mut lead);
     stats.jacobian_evals += 1;
     let scale: Vec<f64> = (0..n)
         .map(|j| tol.atol(j) + tol.rtol(j) * y0[j].abs())

@@ -4,7 +4,7 @@
 //!
 //! # The problem
 //!
-//! `E(y) y' = f(t, y)` with `M ≥ N` rows whose constraint rows include
+//! `E(t, y) y' = f(t, y)` with `M ≥ N` rows whose constraint rows include
 //! every hidden constraint down to the level that fixes the algebraic
 //! unknowns (constraint level 0): `ovd0` (the dynamics with position,
 //! velocity and acceleration constraints), and the square `rcd0` and

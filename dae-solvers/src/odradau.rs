@@ -3,7 +3,7 @@
 //!
 //! # The problem
 //!
-//! `E(y) y' = f(t, y)` with `M ≥ N` rows: the dynamics together with
+//! `E(t, y) y' = f(t, y)` with `M ≥ N` rows: the dynamics together with
 //! constraints of several levels — e.g. `ovd1` (position and velocity
 //! constraints, 6 equations for 5 unknowns in the pendulum) or `ovd0` (all
 //! three levels, 7 equations). No square subsystem is singled out: the

@@ -77,10 +77,10 @@ fn check_jacobians(sys: &dyn DaeSystem, y: &[f64]) {
 
     let z: Vec<f64> = (0..n).map(|i| 0.3 + 0.1 * i as f64).collect();
     let mut j = DMatrix::zeros(m, n);
-    sys.leading_jacobian(y, &z, &mut j);
+    sys.leading_jacobian(0.0, y, &z, &mut j);
     let fd = fd_matrix(m, y, |y, out| {
         let mut e = DMatrix::zeros(m, n);
-        sys.leading(y, &mut e);
+        sys.leading(0.0, y, &mut e);
         let ez = &e * DVector::from_column_slice(&z);
         out.copy_from_slice(ez.as_slice());
     });
@@ -91,7 +91,7 @@ fn check_jacobians(sys: &dyn DaeSystem, y: &[f64]) {
 
     // residual = E yp - f
     let mut e = DMatrix::zeros(m, n);
-    sys.leading(y, &mut e);
+    sys.leading(0.0, y, &mut e);
     let mut f = vec![0.0; m];
     sys.rhs(0.0, y, &mut f);
     let mut r = vec![0.0; m];
@@ -109,7 +109,7 @@ fn check_chain_derivatives(sys: &dyn DaeSystem, y: &[f64], diff_rows: usize) {
     let info = sys.info();
     let (m, n) = (info.equations(), info.unknowns());
     let mut e = DMatrix::zeros(m, n);
-    sys.leading(y, &mut e);
+    sys.leading(0.0, y, &mut e);
     let mut f = vec![0.0; m];
     sys.rhs(0.0, y, &mut f);
     let mut yd = vec![0.0; n];

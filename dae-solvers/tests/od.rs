@@ -157,8 +157,8 @@ fn hand_written_ovd0_is_the_derived_formulation() {
         assert!((&ja - &jb).amax() < 1e-12, "∂f/∂y");
         let fd = fd_matrix(m, y, |u, f| hand.rhs(t, u, f));
         assert!((&ja - fd).amax() < 1e-6, "∂f/∂y against differences");
-        hand.leading(y, &mut ja);
-        gen.leading(y, &mut jb);
+        hand.leading(t, y, &mut ja);
+        gen.leading(t, y, &mut jb);
         assert_eq!(ja, jb, "E");
 
         let (mut ga, mut gb) = (vec![0.0; 3], vec![0.0; 3]);
@@ -374,7 +374,7 @@ impl DaeSystem for Underdetermined {
     fn residual(&self, _t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
         r[0] = yp[0] + y[0];
     }
-    fn leading(&self, _y: &[f64], e: &mut DMatrix<f64>) {
+    fn leading(&self, _t: f64, _y: &[f64], e: &mut DMatrix<f64>) {
         e.fill(0.0);
         e[(0, 0)] = 1.0;
     }
@@ -382,7 +382,7 @@ impl DaeSystem for Underdetermined {
         j.fill(0.0);
         j[(0, 0)] = -1.0;
     }
-    fn leading_jacobian(&self, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
+    fn leading_jacobian(&self, _t: f64, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
         j.fill(0.0);
     }
     fn constraints(&self, _t: f64, _y: &[f64], _g: &mut [f64]) {}
@@ -474,7 +474,7 @@ impl DaeSystem for Oscillator {
             *ri = yp.get(i).copied().unwrap_or(0.0) - *ri;
         }
     }
-    fn leading(&self, _y: &[f64], e: &mut DMatrix<f64>) {
+    fn leading(&self, _t: f64, _y: &[f64], e: &mut DMatrix<f64>) {
         e.fill(0.0);
         e[(0, 0)] = 1.0;
         e[(1, 1)] = 1.0;
@@ -488,7 +488,7 @@ impl DaeSystem for Oscillator {
             j[(2, 1)] = 2.0 * y[1];
         }
     }
-    fn leading_jacobian(&self, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
+    fn leading_jacobian(&self, _t: f64, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
         j.fill(0.0);
     }
     fn constraints(&self, _t: f64, _y: &[f64], _g: &mut [f64]) {}
@@ -1146,14 +1146,14 @@ impl<S: DaeSystem> DaeSystem for NanAfter<S> {
             r.fill(f64::NAN);
         }
     }
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
-        self.inner.leading(y, e)
+    fn leading(&self, t: f64, y: &[f64], e: &mut DMatrix<f64>) {
+        self.inner.leading(t, y, e)
     }
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
         self.inner.rhs_jacobian(t, y, j)
     }
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
-        self.inner.leading_jacobian(y, z, j)
+    fn leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+        self.inner.leading_jacobian(t, y, z, j)
     }
     fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
         self.inner.constraints(t, y, g)
@@ -1292,14 +1292,14 @@ impl<S: DaeSystem> DaeSystem for Repeated<S> {
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
         self.extend(r, |r| self.inner.residual(t, y, yp, r))
     }
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
-        self.extend_matrix(e, |e| self.inner.leading(y, e))
+    fn leading(&self, t: f64, y: &[f64], e: &mut DMatrix<f64>) {
+        self.extend_matrix(e, |e| self.inner.leading(t, y, e))
     }
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
         self.extend_matrix(j, |j| self.inner.rhs_jacobian(t, y, j))
     }
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
-        self.extend_matrix(j, |j| self.inner.leading_jacobian(y, z, j))
+    fn leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+        self.extend_matrix(j, |j| self.inner.leading_jacobian(t, y, z, j))
     }
     fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
         self.inner.constraints(t, y, g)

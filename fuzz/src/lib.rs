@@ -79,9 +79,9 @@ fn evaluate(sys: &dyn DaeSystem) {
     sys.rhs(t, &y, &mut r);
     sys.residual(t, &y, &yp, &mut r);
     let mut a = dae::__private::DMatrix::zeros(m, n);
-    sys.leading(&y, &mut a);
+    sys.leading(t, &y, &mut a);
     sys.rhs_jacobian(t, &y, &mut a);
-    sys.leading_jacobian(&y, &yp, &mut a);
+    sys.leading_jacobian(t, &y, &yp, &mut a);
     let nc = info.constraints.len();
     let mut c = vec![0.0; nc];
     sys.constraints(t, &y, &mut c);

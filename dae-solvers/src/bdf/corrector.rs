@@ -95,14 +95,14 @@ impl<L: Corrector> Integrator<'_, L> {
         }
     }
 
-    /// Evaluate `G = ∂(E(y) y')/∂y − ∂f/∂y + c_J E(y)` at the predictor and
+    /// Evaluate `G = ∂(E(t, y) y')/∂y − ∂f/∂y + c_J E(t, y)` at the predictor and
     /// factor it in place.
     fn form_iteration_matrix(&mut self) -> Result<(), Fail> {
         let sys = &*self.sys;
         sys.rhs_jacobian(self.t, &self.y, self.lu.matrix_mut());
-        sys.leading(&self.y, &mut self.lead);
+        sys.leading(self.t, &self.y, &mut self.lead);
         if !self.constant_leading {
-            sys.leading_jacobian(&self.y, &self.yp, &mut self.lead_jac);
+            sys.leading_jacobian(self.t, &self.y, &self.yp, &mut self.lead_jac);
         }
         self.stats.jacobian_evals += 1;
         let cj = self.cj;

@@ -8,7 +8,7 @@
 //! A square quasi-linear DAE
 //!
 //! ```text
-//!     F(t, y, y') = E(y) y' − f(t, y) = 0,        y ∈ ℝᴺ,
+//!     F(t, y, y') = E(t, y) y' − f(t, y) = 0,        y ∈ ℝᴺ,
 //! ```
 //!
 //! integrated from consistent initial values `y(t₀) = y₀` supplied by the
@@ -47,7 +47,7 @@
 //! Because `c_J` depends on `h` and `k` only, the iteration matrix
 //!
 //! ```text
-//!     G = ∂F/∂y + c_J ∂F/∂y' = ∂(E(y) y')/∂y − ∂f/∂y + c_J E(y)
+//!     G = ∂F/∂y + c_J ∂F/∂y' = ∂(E(t, y) y')/∂y − ∂f/∂y + c_J E(t, y)
 //! ```
 //!
 //! can be reused over many steps of different size (BCP ch. 5, nonlinear

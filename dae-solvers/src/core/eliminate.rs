@@ -64,7 +64,7 @@ pub(crate) struct Eliminated<'a> {
 }
 
 struct Work {
-    /// `E(y)` of the inner system.
+    /// `E(t, y)` of the inner system.
     e: DMatrix<f64>,
     /// `E_Dᵀ` factored (once in the constant presentation, where `E_D` is
     /// constant; at every evaluation otherwise).
@@ -81,32 +81,32 @@ struct Work {
 }
 
 impl<'a> Eliminated<'a> {
-    /// The adapter for `inner` at the consistent start `y0`, or `None` when
-    /// there is nothing to eliminate or the structure does not allow it
-    /// (constraint rows with `E` outside the dynamics' columns, or a
-    /// singular `E_D` at `y0`).
-    pub(crate) fn new(inner: &'a dyn DaeSystem, y0: &[f64]) -> Option<Self> {
-        Self::build(inner, y0, false)
+    /// The adapter for `inner` at the consistent start `(t0, y0)`, or
+    /// `None` when there is nothing to eliminate or the structure does not
+    /// allow it (constraint rows with `E` outside the dynamics' columns, or
+    /// a singular `E_D` at the start).
+    pub(crate) fn new(inner: &'a dyn DaeSystem, t0: f64, y0: &[f64]) -> Option<Self> {
+        Self::build(inner, t0, y0, false)
     }
 
     /// The constant-`E` presentation of `inner` at `y0` (see the [module
     /// documentation](self)), or `None` when its differential rows' `E`
-    /// depends on `y`, or as for [`Eliminated::new`].
-    pub(crate) fn constant(inner: &'a dyn DaeSystem, y0: &[f64]) -> Option<Self> {
+    /// depends on `y` or `t`, or as for [`Eliminated::new`].
+    pub(crate) fn constant(inner: &'a dyn DaeSystem, t0: f64, y0: &[f64]) -> Option<Self> {
         if !inner.info().constant_differential_leading {
             return None;
         }
-        Self::build(inner, y0, true)
+        Self::build(inner, t0, y0, true)
     }
 
-    fn build(inner: &'a dyn DaeSystem, y0: &[f64], constant: bool) -> Option<Self> {
+    fn build(inner: &'a dyn DaeSystem, t0: f64, y0: &[f64], constant: bool) -> Option<Self> {
         let info: &FormulationInfo = inner.info();
         if info.constant_leading {
             return None;
         }
         let (m, n) = (info.equations(), info.unknowns());
         let mut e = DMatrix::zeros(m, n);
-        inner.leading(y0, &mut e);
+        inner.leading(t0, y0, &mut e);
         let nonzero_row = |e: &DMatrix<f64>, i: usize| (0..n).any(|j| e[(i, j)] != 0.0);
         let rows: Vec<usize> = (0..m)
             .filter(|&i| matches!(info.rows[i].kind, RowKind::Constraint { .. }))
@@ -156,13 +156,13 @@ impl<'a> Eliminated<'a> {
         if constant && !adapter.factor_e_d() {
             return None;
         }
-        adapter.update(y0).then_some(adapter)
+        adapter.update(t0, y0).then_some(adapter)
     }
 
-    /// `E(y)` and the factors of `E_Dᵀ` (kept from the start in the
+    /// `E(t, y)` and the factors of `E_Dᵀ` (kept from the start in the
     /// constant presentation); false if `E_D` is singular.
-    fn factor(&self, y: &[f64]) -> bool {
-        self.inner.leading(y, &mut self.work.borrow_mut().e);
+    fn factor(&self, t: f64, y: &[f64]) -> bool {
+        self.inner.leading(t, y, &mut self.work.borrow_mut().e);
         self.constant.is_some() || self.factor_e_d()
     }
 
@@ -174,9 +174,9 @@ impl<'a> Eliminated<'a> {
         w.lu.factor_from(|i, j| w.e[(dr[j], dc[i])]).is_ok()
     }
 
-    /// `L(y) = E_C E_D⁻¹`; false if `E_D` is singular.
-    fn update(&self, y: &[f64]) -> bool {
-        if !self.factor(y) {
+    /// `L(t, y) = E_C E_D⁻¹`; false if `E_D` is singular.
+    fn update(&self, t: f64, y: &[f64]) -> bool {
+        if !self.factor(t, y) {
             return false;
         }
         let w = &mut *self.work.borrow_mut();
@@ -193,11 +193,11 @@ impl<'a> Eliminated<'a> {
         true
     }
 
-    /// `v[rows] −= L(y) v[dyn_rows]`, as `E_C (E_D⁻¹ v[dyn_rows])`: one
-    /// solve instead of one per row of `L`. NaN everywhere if `E_D(y)` is
-    /// singular (the solvers then retry with a smaller step).
-    fn transform(&self, y: &[f64], v: &mut [f64]) {
-        if !self.factor(y) {
+    /// `v[rows] −= L(t, y) v[dyn_rows]`, as `E_C (E_D⁻¹ v[dyn_rows])`: one
+    /// solve instead of one per row of `L`. NaN everywhere if `E_D(t, y)`
+    /// is singular (the solvers then retry with a smaller step).
+    fn transform(&self, t: f64, y: &[f64], v: &mut [f64]) {
+        if !self.factor(t, y) {
             v.fill(f64::NAN);
             return;
         }
@@ -214,8 +214,8 @@ impl<'a> Eliminated<'a> {
     }
 
     /// The same for the rows of an `M × N` matrix.
-    fn transform_rows(&self, y: &[f64], a: &mut DMatrix<f64>) {
-        if self.update(y) {
+    fn transform_rows(&self, t: f64, y: &[f64], a: &mut DMatrix<f64>) {
+        if self.update(t, y) {
             self.combine_rows(a);
         } else {
             a.fill(f64::NAN);
@@ -237,7 +237,7 @@ impl<'a> Eliminated<'a> {
         for (c, &k) in dc.iter().enumerate() {
             w.z[k] = w.col[c];
         }
-        self.inner.leading_jacobian(y, &w.z, &mut w.lam);
+        self.inner.leading_jacobian(t, y, &w.z, &mut w.lam);
         *j -= &w.lam;
     }
 
@@ -267,14 +267,14 @@ impl DaeSystem for Eliminated<'_> {
     }
     fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
         self.inner.rhs(t, y, f);
-        self.transform(y, f);
+        self.transform(t, y, f);
     }
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
         self.inner.residual(t, y, yp, r);
-        self.transform(y, r);
+        self.transform(t, y, r);
     }
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
-        self.inner.leading(y, e);
+    fn leading(&self, t: f64, y: &[f64], e: &mut DMatrix<f64>) {
+        self.inner.leading(t, y, e);
         for &i in &self.rows {
             for j in 0..e.ncols() {
                 e[(i, j)] = 0.0;
@@ -286,15 +286,15 @@ impl DaeSystem for Eliminated<'_> {
         if self.constant.is_some() {
             self.subtract_leading_term(t, y, j);
         }
-        self.transform_rows(y, j);
+        self.transform_rows(t, y, j);
     }
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+    fn leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
         if self.constant.is_some() {
             j.fill(0.0);
             return;
         }
-        self.inner.leading_jacobian(y, z, j);
-        self.transform_rows(y, j);
+        self.inner.leading_jacobian(t, y, z, j);
+        self.transform_rows(t, y, j);
     }
     fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
         self.inner.constraints(t, y, g);
@@ -331,7 +331,7 @@ impl<'a> Deref for Formulation<'a> {
 /// `problem`'s formulation with its derivative-carrying constraint rows
 /// made algebraic ([`Eliminated`]), or itself when there are none.
 pub(crate) fn algebraic_rows<'a>(problem: &Problem<'a>) -> Formulation<'a> {
-    match Eliminated::new(problem.system, problem.y0) {
+    match Eliminated::new(problem.system, problem.t0, problem.y0) {
         Some(e) => Formulation::Eliminated(Rc::new(e)),
         None => Formulation::Given(problem.system),
     }
@@ -344,7 +344,7 @@ pub(crate) fn constant_leading<'a>(problem: &Problem<'a>) -> Result<Formulation<
     if problem.system.info().constant_leading {
         return Ok(Formulation::Given(problem.system));
     }
-    match Eliminated::constant(problem.system, problem.y0) {
+    match Eliminated::constant(problem.system, problem.t0, problem.y0) {
         Some(e) => Ok(Formulation::Eliminated(Rc::new(e))),
         None => Err(NotApplicable::LeadingMatrixNotConstant.into()),
     }
@@ -375,12 +375,12 @@ mod tests {
     fn transformed_rows_have_no_derivative_and_the_same_zeros() {
         for name in ["rcd0", "ovd0"] {
             let (sys, points) = cart(name);
-            let el = Eliminated::new(&sys, &points[0]).expect("rows to eliminate");
+            let el = Eliminated::new(&sys, 0.0, &points[0]).expect("rows to eliminate");
             assert!(!el.rows.is_empty());
             let (m, n) = (sys.info().equations(), sys.info().unknowns());
             for y in &points {
                 let mut e = DMatrix::zeros(m, n);
-                el.leading(y, &mut e);
+                el.leading(0.0, y, &mut e);
                 for &i in &el.rows {
                     assert!((0..n).all(|j| e[(i, j)] == 0.0), "{name}: row {i} of E");
                 }
@@ -411,12 +411,12 @@ mod tests {
     #[test]
     fn iteration_matrix_is_the_jacobian_of_the_new_rows() {
         let (sys, points) = cart("rcd0");
-        let el = Eliminated::new(&sys, &points[0]).expect("rows to eliminate");
+        let el = Eliminated::new(&sys, 0.0, &points[0]).expect("rows to eliminate");
         let (m, n) = (sys.info().equations(), sys.info().unknowns());
         let y = &points[1];
         // z with E_D z = f_D: the dynamics rows solved for the derivative.
         let mut e = DMatrix::zeros(m, n);
-        sys.leading(y, &mut e);
+        sys.leading(0.0, y, &mut e);
         let mut f = vec![0.0; m];
         sys.rhs(0.0, y, &mut f);
         let (dr, dc) = (&el.dyn_rows, &el.dyn_cols);
@@ -429,7 +429,7 @@ mod tests {
         }
         let (mut jac, mut ljac) = (DMatrix::zeros(m, n), DMatrix::zeros(m, n));
         el.rhs_jacobian(0.0, y, &mut jac);
-        el.leading_jacobian(y, &z, &mut ljac);
+        el.leading_jacobian(0.0, y, &z, &mut ljac);
         let formed = &jac - &ljac;
         assert_jacobian_of_rhs(&el, y, &formed, &el.rows);
     }
@@ -465,16 +465,16 @@ mod tests {
     fn a_constant_mass_matrix_gives_a_constant_e_and_the_exact_jacobian() {
         let (sys, points) = cart("rcd0");
         assert!(!sys.info().constant_leading && sys.info().constant_differential_leading);
-        let el = Eliminated::constant(&sys, &points[0]).expect("a constant presentation");
+        let el = Eliminated::constant(&sys, 0.0, &points[0]).expect("a constant presentation");
         assert!(el.info().constant_leading);
         let (m, n) = (sys.info().equations(), sys.info().unknowns());
         let (mut e0, mut e1) = (DMatrix::zeros(m, n), DMatrix::zeros(m, n));
-        el.leading(&points[0], &mut e0);
-        el.leading(&points[1], &mut e1);
+        el.leading(0.0, &points[0], &mut e0);
+        el.leading(1.0, &points[1], &mut e1);
         assert_eq!(e0, e1);
         let y = &points[1];
         let mut lj = DMatrix::from_element(m, n, 1.0);
-        el.leading_jacobian(y, &[0.3; 7], &mut lj);
+        el.leading_jacobian(0.0, y, &[0.3; 7], &mut lj);
         assert!(lj.iter().all(|&v| v == 0.0));
         let mut jac = DMatrix::zeros(m, n);
         el.rhs_jacobian(0.0, y, &mut jac);
@@ -484,6 +484,6 @@ mod tests {
             .expect("the squeezer derives");
         let rcd0 = model.system("rcd0").expect("rcd0");
         assert!(!rcd0.info().constant_differential_leading);
-        assert!(Eliminated::constant(&rcd0, &vec![0.0; rcd0.info().unknowns()]).is_none());
+        assert!(Eliminated::constant(&rcd0, 0.0, &vec![0.0; rcd0.info().unknowns()]).is_none());
     }
 }

@@ -115,7 +115,9 @@ impl<'a> Integrator<'a> {
         let (m, corrections) = (idec.m, idec.j);
         let span = problem.t_end - problem.t0;
         let mut sweep = Sweep::new(info, corrections, m);
-        sys.leading(problem.y0, &mut sweep.e);
+        // `E` is constant in `t` and `y` (`eliminate::constant_leading`):
+        // evaluated once, at the start.
+        sys.leading(problem.t0, problem.y0, &mut sweep.e);
         if sweep.e.iter().any(|v| !v.is_finite()) {
             return Err(SolveError::NonFinite {
                 t: problem.t0,

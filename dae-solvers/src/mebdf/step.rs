@@ -164,7 +164,9 @@ impl<'a> Integrator<'a> {
         let estimated: Vec<bool> = info.variables.iter().map(|v| v.index <= 2).collect();
         let count = estimated.iter().filter(|&&b| b).count().max(1);
         let mut lead = DMatrix::zeros(n, n);
-        sys.leading(&vec![0.0; n], &mut lead);
+        // `E` is constant (in `t` and `y`: `eliminate::constant_leading`
+        // made it so or refused), so any point serves.
+        sys.leading(0.0, &vec![0.0; n], &mut lead);
         Integrator {
             sys: sys.clone(),
             cfg,

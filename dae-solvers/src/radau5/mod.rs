@@ -2,8 +2,8 @@
 //!
 //! # Discretisation
 //!
-//! The formulation `E(y) y' = f(t, y)` (square; `E` may be singular and may
-//! depend on `y`) is discretised by the three-stage Radau IIA collocation
+//! The formulation `E(t, y) y' = f(t, y)` (square; `E` may be singular and may
+//! depend on `t` and `y`) is discretised by the three-stage Radau IIA collocation
 //! method (Hairer & Wanner, *Solving Ordinary Differential Equations II*,
 //! §IV.5, §IV.8 and §VII.8 — "HW" below). With the stage increments
 //! `Z_i = Y_i − y_n` and the derivatives of the collocation polynomial at the

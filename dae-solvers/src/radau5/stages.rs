@@ -166,12 +166,13 @@ pub(super) enum Newton {
 }
 
 impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
-    /// `J = ∂f/∂y − ∂(E z)/∂y` and `E₀` at `(t, y_n)`.
+    /// `J = ∂f/∂y − ∂(E z)/∂y` and `E₀` at `(t, y_n)` (`E₀` is `E(t_n, y_n)`
+    /// from the step point's evaluation).
     pub(super) fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
         let w = &mut self.w;
         self.sys.rhs_jacobian(t, &w.y, &mut w.jac);
         if !self.constant_leading {
-            self.sys.leading_jacobian(&w.y, &w.yp, &mut w.ljac);
+            self.sys.leading_jacobian(t, &w.y, &w.yp, &mut w.ljac);
             for (j, l) in w.jac.as_mut_slice().iter_mut().zip(w.ljac.as_slice()) {
                 *j -= l;
             }

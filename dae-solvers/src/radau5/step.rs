@@ -180,7 +180,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         }
     }
 
-    /// `f(t, y_n)` into `f0`, and `E(y_n)` when it is not constant (or
+    /// `f(t, y_n)` into `f0`, and `E(t, y_n)` when it is not constant (or
     /// `first`).
     fn evaluate_at_step_point(&mut self, t: f64, first: bool) -> Result<(), SolveError> {
         self.sys.rhs(t, &self.w.y, &mut self.w.f0);
@@ -192,7 +192,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             });
         }
         if first || !self.constant_leading {
-            self.sys.leading(&self.w.y, &mut self.w.e_n);
+            self.sys.leading(t, &self.w.y, &mut self.w.e_n);
             if !all_finite(self.w.e_n.as_slice()) {
                 return Err(SolveError::NonFinite {
                     t,

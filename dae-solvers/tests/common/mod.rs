@@ -377,7 +377,7 @@ impl DaeSystem for Pendulum {
         }
     }
 
-    fn leading(&self, u: &[f64], e: &mut DMatrix<f64>) {
+    fn leading(&self, _t: f64, u: &[f64], e: &mut DMatrix<f64>) {
         e.fill(0.0);
         let m = self.m;
         match self.form {
@@ -478,7 +478,7 @@ impl DaeSystem for Pendulum {
         }
     }
 
-    fn leading_jacobian(&self, _u: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+    fn leading_jacobian(&self, _t: f64, _u: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
         j.fill(0.0);
         let m = self.m;
         match self.form {
@@ -618,7 +618,7 @@ impl DaeSystem for PendulumOvd0 {
         }
     }
 
-    fn leading(&self, _u: &[f64], e: &mut DMatrix<f64>) {
+    fn leading(&self, _t: f64, _u: &[f64], e: &mut DMatrix<f64>) {
         e.fill(0.0);
         e[(0, 0)] = 1.0;
         e[(1, 1)] = 1.0;
@@ -647,7 +647,7 @@ impl DaeSystem for PendulumOvd0 {
         }
     }
 
-    fn leading_jacobian(&self, _u: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
+    fn leading_jacobian(&self, _t: f64, _u: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
         j.fill(0.0);
     }
 
@@ -913,7 +913,7 @@ impl DaeSystem for Simple {
             *ri = e * ypi - *ri;
         }
     }
-    fn leading(&self, _y: &[f64], e: &mut DMatrix<f64>) {
+    fn leading(&self, _t: f64, _y: &[f64], e: &mut DMatrix<f64>) {
         e.fill(0.0);
         for (i, &d) in self.e_diag.iter().enumerate() {
             e[(i, i)] = d;
@@ -923,7 +923,7 @@ impl DaeSystem for Simple {
         j.fill(0.0);
         (self.jac)(t, y, j)
     }
-    fn leading_jacobian(&self, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
+    fn leading_jacobian(&self, _t: f64, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
         j.fill(0.0);
     }
     fn constraints(&self, _t: f64, _y: &[f64], _g: &mut [f64]) {}
@@ -1137,13 +1137,13 @@ impl<H: Hand> DaeSystem for Sys<H> {
             *ri = ey - *ri;
         }
     }
-    fn leading(&self, y: &[f64], e: &mut DMatrix<f64>) {
+    fn leading(&self, _t: f64, y: &[f64], e: &mut DMatrix<f64>) {
         self.0.e(y, e)
     }
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
         self.0.fy(t, y, j)
     }
-    fn leading_jacobian(&self, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
+    fn leading_jacobian(&self, _t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
         self.0.ey(y, z, j)
     }
     fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
