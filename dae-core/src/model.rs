@@ -689,7 +689,7 @@ struct Lowered {
 
 /// Phase 4: every equation lowered; those without der() are constraints,
 /// the others dynamic equations whose der() terms are checked (linear, with
-/// coefficients free of der(), `t` and algebraic unknowns).
+/// coefficients free of der() and of algebraic unknowns; they may depend on `t`, the leading matrix is `E(t, y)`).
 fn lower_equations(
     ast: &ModelAst,
     scope: &Scope<'_>,
@@ -739,10 +739,6 @@ fn lower_equations(
                 } else {
                     format!("`der({name})` must appear linearly: write `a*der({name}) + b*der(…) = rhs` with coefficients free of der()")
                 })
-            } else if coef.contains(Sym::Time) {
-                Some(format!(
-                    "the coefficient of `der({name})` may not depend on time `t`"
-                ))
             } else if coef.is_zero() {
                 Some(format!("the coefficient of `der({name})` vanishes"))
             } else {
