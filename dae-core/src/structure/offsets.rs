@@ -23,10 +23,10 @@ pub(crate) fn smallest(p: &Pattern, t: &[usize]) -> Result<(Vec<i64>, Vec<i64>),
     let bound = n + 1;
     for _ in 0..bound {
         d.iter_mut().for_each(|x| *x = i64::MIN);
-        for i in 0..n {
+        for (i, &ci) in c.iter().enumerate() {
             for e in p.range(i) {
                 let j = p.unknown[e];
-                d[j] = d[j].max(i64::from(p.order[e]) + c[i]);
+                d[j] = d[j].max(i64::from(p.order[e]) + ci);
             }
         }
         let mut changed = false;
