@@ -68,8 +68,8 @@
 //! Everything runs on the row patterns: a Hopcroft–Karp maximum matching
 //! (O(√n · nnz)) to detect singularity, successive shortest augmenting paths
 //! for the highest-value transversal (O(n · nnz · log n) at worst, local on
-//! mechanical chains), the fixed-point iteration for the offsets (one
-//! O(nnz) sweep per level of the longest chain of differentiations), and
+//! mechanical chains), the fixed-point iteration for the offsets on a
+//! worklist (re-reading only rows whose offset rose), and
 //! Tarjan's algorithm for the blocks (O(nnz)). No step recurses, so the
 //! stack use does not grow with the model.
 
@@ -478,12 +478,12 @@ pub enum Singular {
         equation: usize,
     },
     /// Internal: the offset iteration still changed after this many
-    /// sweeps, which cannot happen for a highest-value transversal. A bug
-    /// in `dae-core`.
-    #[error("internal error: the offsets still changed after {sweeps} sweeps (a bug in dae-core)")]
+    /// updates (`n² + n`), which cannot happen for a highest-value
+    /// transversal. A bug in `dae-core`.
+    #[error("internal error: the offsets still changed after {steps} updates (a bug in dae-core)")]
     OffsetsDidNotConverge {
-        /// Sweeps done.
-        sweeps: usize,
+        /// Updates done.
+        steps: usize,
     },
 }
 
