@@ -526,9 +526,9 @@ fn brute_force_value(s: &SigmaMatrix) -> Option<i64> {
 fn valid_offsets(s: &SigmaMatrix, t: &[usize], c: &[i64]) -> bool {
     let (n, _) = s.size();
     let mut d = vec![i64::MIN; n];
-    for i in 0..n {
+    for (i, &ci) in c.iter().enumerate() {
         for j in s.row(i) {
-            d[j] = d[j].max(i64::from(s.sigma(i, j).unwrap()) + c[i]);
+            d[j] = d[j].max(i64::from(s.sigma(i, j).unwrap()) + ci);
         }
     }
     (0..n).all(|i| d[t[i]] - c[i] == i64::from(s.sigma(i, t[i]).unwrap()))

@@ -36,10 +36,10 @@ pub(crate) fn highest_value(p: &Pattern) -> Result<Matching, Singular> {
         of_equation: vec![NONE; n],
         of_unknown: vec![NONE; n],
     };
-    for i in 0..n {
+    for (i, &ui) in u.iter().enumerate() {
         for e in p.range(i) {
             let j = p.unknown[e];
-            if m.of_unknown[j] == NONE && cost(e) == u[i] {
+            if m.of_unknown[j] == NONE && cost(e) == ui {
                 m.of_equation[i] = j;
                 m.of_unknown[j] = i;
                 break;
@@ -53,7 +53,7 @@ pub(crate) fn highest_value(p: &Pattern) -> Result<Matching, Singular> {
     let mut from = vec![NONE; n];
     let mut touched: Vec<usize> = Vec::new();
     let mut settled: Vec<usize> = Vec::new();
-    let mut heap: BinaryHeap<Reverse<(i64, usize)>> = BinaryHeap::new();
+    let mut heap: BinaryHeap<Reverse<(i64, bool, usize)>> = BinaryHeap::new();
     for root in 0..n {
         if m.of_equation[root] != NONE {
             continue;
@@ -65,7 +65,7 @@ pub(crate) fn highest_value(p: &Pattern) -> Result<Matching, Singular> {
                      from: &mut [usize],
                      done: &[bool],
                      touched: &mut Vec<usize>,
-                     heap: &mut BinaryHeap<Reverse<(i64, usize)>>| {
+                     heap: &mut BinaryHeap<Reverse<(i64, bool, usize)>>| {
             for e in p.range(i) {
                 let j = p.unknown[e];
                 if done[j] {
@@ -78,7 +78,9 @@ pub(crate) fn highest_value(p: &Pattern) -> Result<Matching, Singular> {
                     }
                     dist[j] = d;
                     from[j] = i;
-                    heap.push(Reverse((d, j)));
+                    // Among equal distances a free unknown comes first: it
+                    // ends the search without settling the ties.
+                    heap.push(Reverse((d, m.of_unknown[j] != NONE, j)));
                 }
             }
         };
@@ -92,7 +94,7 @@ pub(crate) fn highest_value(p: &Pattern) -> Result<Matching, Singular> {
             &mut heap,
         );
         let mut sink = None;
-        while let Some(Reverse((d, j))) = heap.pop() {
+        while let Some(Reverse((d, _, j))) = heap.pop() {
             if done[j] || d > dist[j] {
                 continue;
             }

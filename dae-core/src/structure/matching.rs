@@ -51,12 +51,12 @@ pub(crate) fn maximum(p: &Pattern) -> Matching {
     loop {
         // Breadth-first layering of equations from the free ones.
         queue.clear();
-        for i in 0..n {
+        for (i, l) in layer.iter_mut().enumerate() {
             if m.of_equation[i] == NONE {
-                layer[i] = 0;
+                *l = 0;
                 queue.push(i);
             } else {
-                layer[i] = unreached;
+                *l = unreached;
             }
         }
         let mut found = false;
@@ -203,7 +203,8 @@ mod tests {
     fn pattern(rows: &[&[usize]]) -> Pattern {
         let s = SigmaMatrix::from_rows(
             rows.len(),
-            rows.iter().map(|r| r.iter().map(|&j| (j, 0)).collect()),
+            rows.iter()
+                .map(|r| r.iter().map(|&j| (j, 0)).collect::<Vec<_>>()),
         )
         .unwrap();
         Pattern::read(&s).unwrap()
@@ -230,7 +231,7 @@ mod tests {
         let s = SigmaMatrix::from_rows(
             n,
             rows.into_iter()
-                .map(|r| r.into_iter().map(|j| (j, 0)).collect()),
+                .map(|r| r.into_iter().map(|j| (j, 0)).collect::<Vec<_>>()),
         )
         .unwrap();
         let m = maximum(&Pattern::read(&s).unwrap());

@@ -68,10 +68,17 @@
 //! Everything runs on the row patterns: a Hopcroft–Karp maximum matching
 //! (O(√n · nnz)) to detect singularity, successive shortest augmenting paths
 //! for the highest-value transversal (O(n · nnz · log n) at worst, local on
-//! mechanical chains), the fixed-point iteration for the offsets (one
-//! O(nnz) sweep per level of the longest chain of differentiations), and
+//! mechanical chains), the fixed-point iteration for the offsets on a
+//! worklist (re-reading only rows whose offset rose), and
 //! Tarjan's algorithm for the blocks (O(nnz)). No step recurses, so the
 //! stack use does not grow with the model.
+
+// `Singular::NoTransversal` carries the two Dulmage–Mendelsohn parts as
+// six index lists (144 bytes), over clippy's 128-byte default for an error.
+// It is returned at most once per analysis, on a cold path, and the lists are
+// the point of the error, so the size is accepted rather than boxed away
+// from the field names callers match on.
+#![allow(clippy::result_large_err)]
 
 mod assign;
 mod blocks;
@@ -471,12 +478,12 @@ pub enum Singular {
         equation: usize,
     },
     /// Internal: the offset iteration still changed after this many
-    /// sweeps, which cannot happen for a highest-value transversal. A bug
-    /// in `dae-core`.
-    #[error("internal error: the offsets still changed after {sweeps} sweeps (a bug in dae-core)")]
+    /// updates (`n² + n`), which cannot happen for a highest-value
+    /// transversal. A bug in `dae-core`.
+    #[error("internal error: the offsets still changed after {steps} updates (a bug in dae-core)")]
     OffsetsDidNotConverge {
-        /// Sweeps done.
-        sweeps: usize,
+        /// Updates done.
+        steps: usize,
     },
 }
 
