@@ -558,7 +558,7 @@ fn diagnose(model: &Model, singular: &Singular) -> syn::Error {
         Singular::NoTransversal {
             equations,
             unknowns,
-            unmatched_unknowns,
+            underdetermined_unknowns,
             ..
         } => {
             for &e in equations.iter().filter(|&&e| e >= n_dyn) {
@@ -592,7 +592,7 @@ fn diagnose(model: &Model, singular: &Singular) -> syn::Error {
                     );
                 }
             }
-            for &j in unmatched_unknowns {
+            for &j in underdetermined_unknowns {
                 errors.push(
                     model.vars[j].span,
                     format!(
