@@ -233,3 +233,58 @@ fn reference_tables_are_the_closed_forms() {
         }
     }
 }
+
+// ------------------------------------------- transamp: the implied rows
+
+/// The transistor amplifier's `M` is singular: rows 1 + 2, 4 + 5 and 7 + 8
+/// cancel their der() terms, and the three combinations join the chain as
+/// implied constraints (issue 23, "done when" 3).
+#[test]
+fn transamp_implies_three_row_combinations() {
+    let d = derive("transamp");
+    let implied: Vec<Vec<usize>> = d
+        .analysis
+        .implied
+        .iter()
+        .map(|i| i.rows.iter().map(|(u, _)| *u).collect())
+        .collect();
+    assert_eq!(implied, vec![vec![0, 1], vec![3, 4], vec![6, 7]]);
+    assert!(d
+        .analysis
+        .implied
+        .iter()
+        .all(|i| i.rows.iter().all(|(_, w)| w.is_one())));
+}
+
+/// An inconsistent start of `M y' = f` (y2 off by 0.5 V) is projected onto
+/// the implied constraints and reported, or refused naming one of them with
+/// `InitMode::Strict` — never a non-finite residual.
+#[test]
+fn transamp_inconsistent_start_is_projected_or_refused() {
+    use dae::dae_solvers::init::{How, InitMode};
+    let scene = Scene::load(scenes_dir().join("transamp.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let inputs = inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let mut initial = scene.initial_values();
+    let y2 = initial.iter_mut().find(|(n, _)| n == "y2").unwrap();
+    y2.1 += 0.5;
+    let mut spec = inputs.spec(&scene, "radau5", "rcd0", 1e-6);
+    spec.initial = &initial;
+    let r = runner::run(&spec).unwrap();
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    let projected: Vec<&str> = r
+        .initialisation
+        .iter()
+        .filter(|v| v.how == How::Projected)
+        .map(|v| v.name.as_str())
+        .collect();
+    assert!(projected.contains(&"y2"), "{projected:?}");
+    spec.init_mode = InitMode::Strict;
+    let r = runner::run(&spec).unwrap();
+    let e = r.error.expect("refused");
+    assert_eq!(e.kind, "inconsistent_initial_values", "{}", e.message);
+    assert!(
+        e.message.contains("exp("),
+        "names an implied row: {}",
+        e.message
+    );
+}

@@ -1057,10 +1057,10 @@ pub fn consistent(
 ///             der(y) = x;
 ///             0 = x - exp(t);
 ///         }
-///         formulations { rcd1 }
+///         formulations { ori2 }
 ///     }
 /// }
-/// let sys = TwoRoots::default().rcd1();
+/// let sys = TwoRoots::default().ori2();
 /// let opts = InitOptions::default();
 /// let start = [Start::Fixed(1.0), Start::Fixed(1.0), Start::Omitted];
 /// let first = consistent_from(&sys, 0.0, &start, &opts)?;

@@ -830,7 +830,7 @@ dae::dae! {
             der(y) = x;
             0 = x - exp(t);
         }
-        formulations { rcd1 }
+        formulations { ori2 }
     }
 }
 
@@ -868,7 +868,7 @@ dae::dae! {
 
 #[test]
 fn a_guess_chooses_the_root_and_a_default_start_is_flagged() {
-    let sys = TwoRoots::default().rcd1();
+    let sys = TwoRoots::default().ori2();
     let opts = InitOptions::default();
     // No guess: Newton from 0 (z ← 0 + 2, then to 1).
     let start = [Start::Fixed(1.0), Start::Fixed(1.0), Start::Omitted];
@@ -1001,7 +1001,7 @@ fn a_non_finite_row_is_named_with_the_point() {
 fn newton_without_a_real_root_names_the_worst_row() {
     // y = -1: the hidden constraint asks z (z + 1) / 2 = -1, which has no
     // real solution; Newton wanders until the iteration limit.
-    let sys = TwoRoots::default().rcd1();
+    let sys = TwoRoots::default().ori2();
     let opts = InitOptions {
         max_iterations: 50,
         ..InitOptions::default()

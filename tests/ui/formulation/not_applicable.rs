@@ -1,6 +1,6 @@
 // An index-2 model (the constraint determines `mu` after one
-// differentiation): the GGL and projected formulations need position-level
-// constraints of a mechanical system.
+// differentiation): `rcd1` would be `ori2` again, and the GGL and projected
+// formulations need position-level constraints of a mechanical system.
 dae::dae! {
     pub Index2 {
         differential { x, y }
