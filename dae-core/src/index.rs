@@ -559,6 +559,7 @@ fn diagnose(model: &Model, singular: &Singular) -> syn::Error {
             equations,
             unknowns,
             underdetermined_unknowns,
+            underdetermined_equations,
             ..
         } => {
             for &e in equations.iter().filter(|&&e| e >= n_dyn) {
@@ -592,14 +593,34 @@ fn diagnose(model: &Model, singular: &Singular) -> syn::Error {
                     );
                 }
             }
-            for &j in underdetermined_unknowns {
-                errors.push(
-                    model.vars[j].span,
-                    format!(
-                        "structurally singular: no equation determines `{}`",
-                        model.vars[j].name
-                    ),
-                );
+            // The under-determined part follows from the over-determined
+            // one when there is one (an equation that fixes nothing leaves
+            // an unknown to nobody): named only when it is the cause.
+            if errors.is_empty() {
+                let names: Vec<String> = underdetermined_unknowns
+                    .iter()
+                    .map(|&j| format!("`{}`", model.vars[j].name))
+                    .collect();
+                let fewer = underdetermined_equations.len();
+                for &j in underdetermined_unknowns {
+                    let why = if fewer == 0 {
+                        "no equation contains it".to_string()
+                    } else {
+                        format!(
+                            "the {fewer} equation{} containing {} cannot determine all {} of them",
+                            if fewer == 1 { "" } else { "s" },
+                            names.join(", "),
+                            names.len()
+                        )
+                    };
+                    errors.push(
+                        model.vars[j].span,
+                        format!(
+                            "structurally singular: nothing determines `{}` ({why})",
+                            model.vars[j].name
+                        ),
+                    );
+                }
             }
         }
         other => errors.push(model.name_span, format!("structurally singular: {other}")),
