@@ -535,24 +535,28 @@ fn declare_names<'a>(ast: &'a ModelAst, errors: &mut Errors) -> Declared<'a> {
             derived_asts.push(d);
         }
     }
+    // Differential unknowns first, then algebraic ones.
     let mut vars = Vec::new();
-    for n in &ast.differential {
-        if declare(n, "differential unknown", errors) {
-            vars.push(VarDef {
-                name: n.name.clone(),
-                kind: VarKind::Differential,
-                span: n.span,
-            });
+    let mut n_diff = 0;
+    for (names, kind, what) in [
+        (
+            &ast.differential,
+            VarKind::Differential,
+            "differential unknown",
+        ),
+        (&ast.algebraic, VarKind::Algebraic, "algebraic unknown"),
+    ] {
+        for n in names {
+            if declare(n, what, errors) {
+                vars.push(VarDef {
+                    name: n.name.clone(),
+                    kind,
+                    span: n.span,
+                });
+            }
         }
-    }
-    let n_diff = vars.len();
-    for n in &ast.algebraic {
-        if declare(n, "algebraic unknown", errors) {
-            vars.push(VarDef {
-                name: n.name.clone(),
-                kind: VarKind::Algebraic,
-                span: n.span,
-            });
+        if kind == VarKind::Differential {
+            n_diff = vars.len();
         }
     }
     if n_diff == 0 {

@@ -13,6 +13,9 @@ use dae_core::Derived;
 /// prescribed (Brenan, Campbell & Petzold's form): `c` and `temp`
 /// differential, the reaction rate `r` algebraic with its own equation, the
 /// coolant temperature `tc` the control that makes `c = u(t)`. Index 3.
+mod common;
+use common::{assert_same, derive};
+
 const CSTR: &str = "
 pub Cstr {
     parameters { k1 = 1.0, k2 = 1.0, k3 = 1.0, k4 = 1.0, k5 = 1.0, c0 = 2.0, t0 = 1.0 }
@@ -25,21 +28,6 @@ pub Cstr {
         0 = c - (1 + sin(t)/2);
     }
 }";
-
-fn derive(src: &str) -> Derived {
-    Derived::from_str(src).unwrap_or_else(|e| panic!("model does not derive: {e}"))
-}
-
-fn assert_same(d: &Derived, derived: &expr::Expr, hand: &str) {
-    let h = d.model.parse_expr(hand).unwrap();
-    let diff = expr::sub(derived, &h);
-    assert!(
-        diff.is_zero(),
-        "derived `{}` differs from `{hand}` by `{}`",
-        d.model.text(derived),
-        d.model.text(&diff)
-    );
-}
 
 #[test]
 fn cstr_offsets_chains_and_index() {

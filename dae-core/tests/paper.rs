@@ -7,30 +7,13 @@ use dae_core::check::{check_jacobians, Lcg};
 use dae_core::expr::{self, Sym};
 use dae_core::interp::InterpretedModel;
 use dae_core::system::{DaeSystem, Model, RowKind};
-use dae_core::Derived;
+
+mod common;
+use common::{assert_same, derive};
 
 const PENDULUM: &str = include_str!("../../scenes/pendulum.dae");
 const DOUBLE: &str = include_str!("../../scenes/double_pendulum.dae");
 const SPHERICAL: &str = include_str!("../../scenes/spherical_pendulum.dae");
-
-fn derive(src: &str) -> Derived {
-    Derived::from_str(src).unwrap_or_else(|e| panic!("model does not derive: {e}"))
-}
-
-/// `derived − hand` simplifies to zero exactly.
-fn assert_same(d: &Derived, derived: &expr::Expr, hand: &str) {
-    let h = d
-        .model
-        .parse_expr(hand)
-        .unwrap_or_else(|e| panic!("bad hand expression {hand}: {e}"));
-    let diff = expr::sub(derived, &h);
-    assert!(
-        diff.is_zero(),
-        "derived `{}` differs from `{hand}` by `{}`",
-        d.model.text(derived),
-        d.model.text(&diff)
-    );
-}
 
 #[test]
 fn pendulum_hidden_constraints_are_paper_3a_3b() {
