@@ -174,14 +174,7 @@ pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
         .filter(|&j| st.d[j] >= 1)
         .collect();
     let (rates, definers) = algebraic_rates(model, &st, &needed)?;
-    let rate_of = |s: Sym| -> Result<Option<Expr>, Sym> {
-        if let Sym::Var(j) = s {
-            if let Some((_, r)) = rates.iter().find(|(k, _)| *k == j as usize) {
-                return Ok(Some(r.clone()));
-            }
-        }
-        model.rate(s)
-    };
+    let rate_of = |s: Sym| rate_with(model, &rates, s);
 
     let mut chains = Vec::new();
     for (i, c) in model.constraints.iter().enumerate() {
@@ -279,26 +272,29 @@ pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
             );
         }
     }
-    let implied = implied_constraints(model).map_err(|(span, msg)| syn::Error::new(span, msg));
-    match implied {
-        Ok(implied) => errors.finish(Analysis {
-            chains,
-            matching,
-            structure: st,
-            rates,
-            implied,
-        }),
-        Err(e) => {
-            errors.push_error(e);
-            errors.finish(Analysis {
-                chains,
-                matching,
-                structure: st,
-                rates,
-                implied: Vec::new(),
-            })
+    let implied = implied_constraints(model).unwrap_or_else(|(span, msg)| {
+        errors.push(span, msg);
+        Vec::new()
+    });
+    errors.finish(Analysis {
+        chains,
+        matching,
+        structure: st,
+        rates,
+        implied,
+    })
+}
+
+/// The rate of `s` for the total time derivative: an algebraic unknown's
+/// from `rates` (see [`algebraic_rates`]), anything else the model's
+/// ([`Model::rate`]).
+fn rate_with(model: &Model, rates: &[(usize, Expr)], s: Sym) -> Result<Option<Expr>, Sym> {
+    if let Sym::Var(j) = s {
+        if let Some((_, r)) = rates.iter().find(|(k, _)| *k == j as usize) {
+            return Ok(Some(r.clone()));
         }
     }
+    model.rate(s)
 }
 
 /// Largest block of a mass matrix whose left null space is computed
@@ -490,15 +486,10 @@ fn algebraic_rates(
         for k in pending {
             let r = needed[k];
             let g = &model.constraints[definer[k]].expr;
-            let known = |s: Sym| -> Result<Option<Expr>, Sym> {
-                match s {
-                    Sym::Var(j) if j as usize == r => Ok(Some(Expr::der(r))),
-                    Sym::Var(j) => match rates.iter().find(|(q, _)| *q == j as usize) {
-                        Some((_, e)) => Ok(Some(e.clone())),
-                        None => model.rate(s),
-                    },
-                    _ => model.rate(s),
-                }
+            // `r` keeps its der(), which the derivative is solved for.
+            let known = |s: Sym| match s {
+                Sym::Var(j) if j as usize == r => Ok(Some(Expr::der(r))),
+                _ => rate_with(model, &rates, s),
             };
             match expr::time_derivative(g, &known) {
                 Ok(dg) => {
@@ -546,8 +537,7 @@ fn algebraic_rates(
         }
         pending = blocked;
     }
-    let definers = definer.clone();
-    Ok((rates, definers))
+    Ok((rates, definer))
 }
 
 /// Located errors for a model the Σ-method finds structurally singular.
@@ -585,13 +575,16 @@ fn diagnose(model: &Model, singular: &Singular) -> syn::Error {
                     );
                 }
             }
-            for &e in equations.iter().filter(|&&e| e < n_dyn) {
-                if errors.is_empty() {
-                    errors.push(
-                        model.dynamics[e].span,
-                        "structurally singular: this equation competes with others for the same unknowns",
-                    );
-                }
+            // Only dynamic rows compete: name the first of them.
+            if let Some(&e) = equations
+                .iter()
+                .find(|&&e| e < n_dyn)
+                .filter(|_| errors.is_empty())
+            {
+                errors.push(
+                    model.dynamics[e].span,
+                    "structurally singular: this equation competes with others for the same unknowns",
+                );
             }
             // The under-determined part follows from the over-determined
             // one when there is one (an equation that fixes nothing leaves

@@ -327,12 +327,6 @@ impl Model {
         !self.coupled.is_empty()
     }
 
-    /// `true` when `e` depends on any symbol `pred` selects, directly or
-    /// through a mass matrix (see [`Model::involves`]).
-    pub fn involves_any(&self, e: &Expr, pred: &dyn Fn(Sym) -> bool) -> bool {
-        e.any_sym(pred) || self.involves_through_mass(e, pred)
-    }
-
     /// Whether `e` holds the der() of a mass-matrix unknown whose block's
     /// equations contain a symbol of `pred`.
     fn involves_through_mass(&self, e: &Expr, pred: &dyn Fn(Sym) -> bool) -> bool {

@@ -1172,35 +1172,23 @@ fn consistent_checked(
     // chain holds). It is corrected with the differential unknowns in step
     // 1, and the algebraic rows that hold no other algebraic unknown move
     // there with it; step 2 solves the rest.
-    let mut with_state: Vec<usize> = alg_cols
+    // (Ascending, as `alg_cols` is. One pass suffices: a row that moves
+    // holds no algebraic unknown outside `with_state`, so none joins it.)
+    let with_state: Vec<usize> = alg_cols
         .iter()
         .copied()
         .filter(|&a| diff_rows.iter().any(|&r| pattern[r][a]))
         .collect();
-    loop {
-        let moving: Vec<usize> = alg_rows
-            .iter()
-            .copied()
-            .filter(|&r| {
-                alg_cols
-                    .iter()
-                    .all(|&a| !pattern[r][a] || with_state.contains(&a))
-            })
-            .collect();
-        if moving.is_empty() || with_state.is_empty() {
-            break;
-        }
-        alg_rows.retain(|r| !moving.contains(r));
+    if !with_state.is_empty() {
+        let (moving, staying): (Vec<usize>, Vec<usize>) = alg_rows.iter().partition(|&&r| {
+            alg_cols
+                .iter()
+                .all(|&a| !pattern[r][a] || with_state.contains(&a))
+        });
+        alg_rows = staying;
         diff_rows.extend(moving);
         diff_rows.sort_unstable();
-        let more: Vec<usize> = alg_cols
-            .iter()
-            .copied()
-            .filter(|&a| !with_state.contains(&a) && diff_rows.iter().any(|&r| pattern[r][a]))
-            .collect();
-        with_state.extend(more);
     }
-    with_state.sort_unstable();
     let diff_cols: Vec<usize> = {
         let mut c = diff_cols;
         c.extend(with_state.iter().copied());
