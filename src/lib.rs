@@ -68,6 +68,7 @@ pub mod prelude {
 #[doc(hidden)]
 pub mod __private {
     pub use dae_core::accel;
+    pub use dae_core::dummy::boxed as dummy_boxed;
     pub use dae_core::system::{
         check_parameter, BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo,
         Model, ModelInfo, ParamInfo, ParameterError, RowInfo, RowKind, StaticSize, VarInfo,

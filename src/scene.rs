@@ -22,7 +22,7 @@
 //! kind = "exact"              # the pendulum's closed form; see below
 //! [sweep]                     # optional; defaults: every solver, formulation,
 //! solvers = ["radau5", "bdf", "odradau", "odbdf", "mebdf", "idec", "gauss"] # and the tolerances 1e-5 … 1e-12
-//! formulations = ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0"]
+//! formulations = ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0", "mex0"]
 //! tolerances = [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
 //! max_steps = 2000000         # optional: steps (accepted + rejected) per run
 //! [tolerance]                 # optional, `dae run` only (the sweep takes its list)

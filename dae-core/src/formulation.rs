@@ -1,4 +1,4 @@
-//! The eight formulations of a semi-explicit mechanical model, built
+//! The nine formulations of a semi-explicit mechanical model, built
 //! symbolically as quasi-linear systems `E(y) y' = f(t, y)`.
 //!
 //! | name | rows | applies to |
@@ -11,6 +11,7 @@
 //! | `ggl1` | `c u' = f − c Σ η_i ∂g_i/∂u`, levels 0 and 1 | mechanical (`d_i = 2`) |
 //! | `psi1` | position rows projected by a selector, levels 0, 1 | mechanical |
 //! | `psi0` | position and velocity rows projected, levels 0, 1, 2 | mechanical |
+//! | `mex0` | dynamics of the states not chosen as dummies + levels `0 … d_i` (square, chosen at run time, [`crate::dummy`]) | some `d_i ≥ 1`, one derivative per row |
 //!
 //! `d_i` is the level at which constraint `i` determines the multipliers
 //! (see [`crate::index`]); for a mechanical system with position
@@ -140,6 +141,7 @@ pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String
             "`{name}` needs position-level constraints of a mechanical system (each constraint determining its multiplier after two differentiations)"
         )),
         "ggl1" => Ok(()),
+        "mex0" => crate::dummy::symbolic_blocks(model, an).map(|_| ()),
         "psi0" if model.has_mass_matrix() => Err(
             "`psi0` projects the multipliers out of the velocity rows and finds them in the acceleration-level constraint; with a mass matrix that constraint holds `v'`, not the multipliers (`M` is not inverted symbolically), so nothing would determine them: use `psi1`, `rcd0` or `ovd0`".into(),
         ),
@@ -277,7 +279,7 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
                 "rcd1" => vec![d.saturating_sub(1)],
                 "rcd0" => vec![d],
                 "ovd1" => (0..d.max(1)).collect(),
-                "ovd0" | "psi0" => (0..=d).collect(),
+                "ovd0" | "psi0" | "mex0" => (0..=d).collect(),
                 _ => vec![0, 1], // ggl1, psi1
             }
         })
@@ -419,6 +421,22 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         .iter()
         .filter(|r| r.kind == RowKind::Differential)
         .all(constant_row);
+    if name == crate::dummy::NAME {
+        // The rows `mex0` selects from at run time (those of `ovd0`); the
+        // numbers are those of the square formulation it selects
+        // (`crate::dummy`).
+        return Ok(Formulation {
+            name,
+            vars,
+            extra_names,
+            rows,
+            d_index: Some(1),
+            s_index: 0,
+            c_level: 0,
+            constant_leading: false,
+            constant_differential_leading: false,
+        });
+    }
     Ok(Formulation {
         name,
         vars,

@@ -13,6 +13,7 @@ pub mod check;
 pub mod compile;
 pub mod derive;
 pub mod dsl;
+pub mod dummy;
 pub mod expr;
 pub mod formulation;
 pub mod index;

@@ -110,8 +110,59 @@ pub struct FormulationReport {
     pub s_index: u8,
     /// Maximal constraint level.
     pub c_level: u8,
-    /// Rows in the model language.
+    /// Rows in the model language (for `mex0`, the rows it chooses from).
     pub rows: Vec<String>,
+    /// `mex0`: the dummy derivatives to choose, per order (empty for the
+    /// other formulations, and then left out of the JSON).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dummies: Vec<DummyReport>,
+}
+
+/// The dummy derivatives one order of `mex0`'s rows chooses.
+#[derive(Clone, Debug, Serialize)]
+pub struct DummyReport {
+    /// Differentiations still below the top of the rows' chains.
+    pub order: u8,
+    /// How many dummies.
+    pub count: usize,
+    /// The differential unknowns they are chosen among.
+    pub among: Vec<String>,
+    /// Algebraic unknowns these rows also determine.
+    pub algebraic: Vec<String>,
+    /// `true` when one choice serves everywhere (as many candidates as
+    /// dummies, or a constant Jacobian): made once; otherwise re-chosen at
+    /// run time where it degenerates.
+    pub fixed: bool,
+}
+
+/// `mex0`'s dummy derivatives, read off the symbolic chain.
+fn dummies(d: &Derived) -> Vec<DummyReport> {
+    let m = &d.model;
+    let Ok(blocks) = crate::dummy::symbolic_blocks(m, &d.analysis) else {
+        return Vec::new();
+    };
+    let flat = d.analysis.flat();
+    let names = |js: &[usize]| js.iter().map(|&j| m.vars[j].name.clone()).collect();
+    blocks
+        .iter()
+        .map(|b| {
+            let constant = b.members.iter().all(|&r| {
+                b.algebraic.iter().chain(&b.candidates).all(|&j| {
+                    let entry = crate::expr::diff(flat[r].2, crate::expr::Sym::Var(j as u32));
+                    !entry.any_sym(&|s| {
+                        matches!(s, crate::expr::Sym::Var(_) | crate::expr::Sym::Time)
+                    })
+                })
+            });
+            DummyReport {
+                order: b.order,
+                count: b.dummies(),
+                among: names(&b.candidates),
+                algebraic: names(&b.algebraic),
+                fixed: constant || b.candidates.len() == b.dummies(),
+            }
+        })
+        .collect()
 }
 
 impl Report {
@@ -147,17 +198,26 @@ impl Report {
                 .formulations
                 .iter()
                 .map(|f| {
-                    let diff = f.differential_rows();
+                    let mut diff = f.differential_rows();
+                    let mut equations = f.rows.len();
+                    let mut dummy = Vec::new();
+                    if f.name == crate::dummy::NAME {
+                        // Square: the dummies' dynamics rows are dropped.
+                        dummy = dummies(d);
+                        diff -= dummy.iter().map(|b| b.count).sum::<usize>();
+                        equations = f.vars.len();
+                    }
                     FormulationReport {
                         name: f.name.to_string(),
                         unknowns: f.vars.len(),
-                        equations: f.rows.len(),
+                        equations,
                         differential_equations: diff,
-                        algebraic_equations: f.rows.len() - diff,
+                        algebraic_equations: equations - diff,
                         d_index: f.d_index,
                         s_index: f.s_index,
                         c_level: f.c_level,
                         rows: (0..f.rows.len()).map(|i| f.row_text(m, i)).collect(),
+                        dummies: dummy,
                     }
                 })
                 .collect(),
@@ -263,6 +323,31 @@ pub fn text(d: &Derived) -> String {
             "\n{} ({} unknowns, {} equations)",
             f.name, f.unknowns, f.equations
         );
+        for b in &f.dummies {
+            let also = if b.algebraic.is_empty() {
+                String::new()
+            } else {
+                format!(", with {}", b.algebraic.join(", "))
+            };
+            let how = if b.fixed {
+                "chosen once"
+            } else {
+                "chosen at run time and re-chosen where the choice degenerates"
+            };
+            let _ = writeln!(
+                s,
+                "  dummy derivatives of order {}: {} of {}{also}, {how}",
+                b.order,
+                b.count,
+                b.among.join(", "),
+            );
+        }
+        if !f.dummies.is_empty() {
+            let _ = writeln!(
+                s,
+                "  rows (the dummies' dynamics rows are dropped, every other row kept):"
+            );
+        }
         for row in &f.rows {
             let _ = writeln!(s, "  {row}");
         }
@@ -324,7 +409,7 @@ mod tests {
 
     #[test]
     fn derive_says_why_a_formulation_is_not_offered() {
-        // All eight apply to the pendulum: nothing left out.
+        // All nine apply to the pendulum: nothing left out.
         let d = Derived::from_str(&PENDULUM.replace("FORMS", "")).unwrap();
         assert!(not_offered(&d).is_empty());
         // A list leaves the others out, and says so.
@@ -332,7 +417,10 @@ mod tests {
             Derived::from_str(&PENDULUM.replace("FORMS", "formulations { ggl1, rcd0 }")).unwrap();
         let n = not_offered(&d);
         let names: Vec<&str> = n.iter().map(|x| x.name.as_str()).collect();
-        assert_eq!(names, ["ori2", "rcd1", "ovd1", "ovd0", "psi1", "psi0"]);
+        assert_eq!(
+            names,
+            ["ori2", "rcd1", "ovd1", "ovd0", "psi1", "psi0", "mex0"]
+        );
         assert!(
             n.iter().all(|x| x.reason.contains("leaves it out")),
             "{n:?}"

@@ -376,9 +376,9 @@ pub enum ParameterError {
 /// Why a formulation could not be built.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum FormulationError {
-    /// The name is not one of the eight formulations.
+    /// The name is not one of the nine formulations.
     #[error(
-        "unknown formulation `{name}` (known: ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0)"
+        "unknown formulation `{name}` (known: ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0, mex0)"
     )]
     Unknown {
         /// Name asked for.
@@ -449,14 +449,8 @@ pub fn chain_pattern(sys: &dyn DaeSystem, t: f64, y: &[f64]) -> Option<Vec<Vec<b
     let mut pattern: Vec<Vec<bool>> = (0..k)
         .map(|r| (0..n).map(|c| jac[(r, c)] != 0.0).collect())
         .collect();
-    let mut probe = y.to_vec();
     for p in 0..STRUCTURE_PROBES {
-        for (j, (pj, &yj)) in probe.iter_mut().zip(y).enumerate() {
-            // Deterministic, irregular factors in ±[0.5, 1.5) · 1e-3.
-            let h = ((j * 7919 + p * 104_729 + 17) % 1000) as f64 / 1000.0 + 0.5;
-            let sign = if (j + p) % 2 == 0 { 1.0 } else { -1.0 };
-            *pj = yj + sign * h * 1e-3 * (1.0 + yj.abs());
-        }
+        let probe = perturbed(y, p);
         if eval(&probe, &mut jac) {
             for (r, row) in pattern.iter_mut().enumerate() {
                 for (c, e) in row.iter_mut().enumerate() {
@@ -468,9 +462,23 @@ pub fn chain_pattern(sys: &dyn DaeSystem, t: f64, y: &[f64]) -> Option<Vec<Vec<b
     Some(pattern)
 }
 
-/// The eight formulation names, in the paper's order.
-pub const FORMULATION_NAMES: [&str; 8] = [
-    "ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0",
+/// `y` at [`chain_pattern`]'s probe `p`: deterministic, irregular relative
+/// perturbations of ±[0.5, 1.5)·10⁻³ (`y_j + s h 10⁻³ (1 + |y_j|)`).
+pub fn perturbed(y: &[f64], p: usize) -> Vec<f64> {
+    y.iter()
+        .enumerate()
+        .map(|(j, &yj)| {
+            let h = ((j * 7919 + p * 104_729 + 17) % 1000) as f64 / 1000.0 + 0.5;
+            let sign = if (j + p).is_multiple_of(2) { 1.0 } else { -1.0 };
+            yj + sign * h * 1e-3 * (1.0 + yj.abs())
+        })
+        .collect()
+}
+
+/// The formulation names: the paper's eight in its order, then `mex0`
+/// (dummy derivatives, [`crate::dummy`]).
+pub const FORMULATION_NAMES: [&str; 9] = [
+    "ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0", "mex0",
 ];
 
 /// Check a parameter value (shared by generated and interpreted models).

@@ -733,7 +733,12 @@ pub fn emit(d: &Derived, compiled: &[Compiled], spans: Spans) -> Result<TokenStr
             });
         }
         let name = &info.name;
-        arms.extend(quote!(#name => ::core::result::Result::Ok(::dae::__private::Box::new(self.#method())),));
+        if name == dae_core::dummy::NAME {
+            // `mex0` selects its rows at run time from these (dae_core::dummy).
+            arms.extend(quote!(#name => ::dae::__private::dummy_boxed(self.#method(), Self::model_info_static()),));
+        } else {
+            arms.extend(quote!(#name => ::core::result::Result::Ok(::dae::__private::Box::new(self.#method())),));
+        }
         impls.extend(system_impl(
             c,
             &ty,

@@ -63,6 +63,10 @@ pub(super) struct Work<S> {
     pub(super) e_jac: DMatrix<f64>,
     /// `E(y_n)`.
     pub(super) e_n: DMatrix<f64>,
+    /// `E(t_n, y_n)` of the step just taken (a method that is not stiffly
+    /// accurate, whose end-point projection keeps that step's differential
+    /// part; unused with a constant `E`).
+    pub(super) e_step: DMatrix<f64>,
     /// `γ/h E₀ − J` and `(α + iβ)/h E₀ − J`, factorised.
     pub(super) stages: S,
     /// The algebraic rows (constraint rows whose row of `E` is zero at
@@ -118,6 +122,11 @@ impl<S: StageSystems> Work<S> {
             ljac: mat(),
             e_jac: mat(),
             e_n: mat(),
+            e_step: if K::END.is_some() {
+                mat()
+            } else {
+                DMatrix::zeros(0, 0)
+            },
             stages: S::new(m, n),
             algebraic: Vec::new(),
             projection: DenseLu::new(if K::END.is_some() { n } else { 0 }, Pivoting::Checked),
@@ -352,21 +361,30 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// updated to `f + J δ` instead (exact where `f` is linear in the
     /// algebraic unknowns, as in `rcd0`; it only feeds the next error
     /// estimate).
-    pub(super) fn project(&mut self, t: f64, h: f64) -> Result<bool, SolveError> {
+    ///
+    /// Also returns the weighted norm of `δ`, by which a caller iterates a
+    /// nonlinear algebraic part (constraints kept as rows, `psi0`, `mex0`)
+    /// to convergence.
+    pub(super) fn project(&mut self, t: f64, h: f64) -> Result<(bool, f64), SolveError> {
         let w = &mut self.w;
         if w.algebraic.is_empty() {
-            return Ok(false);
+            return Ok((false, 0.0));
         }
         if !w.algebraic_unknowns.is_empty() {
             self.project_algebraic_unknowns(t, h)?;
-            return Ok(false);
+            return Ok((false, 0.0));
         }
         // Column-major: the rows of `E`, then the algebraic rows of `J`.
         let n = self.n;
+        let e = if self.constant_leading {
+            &w.e_n
+        } else {
+            &w.e_step
+        };
         w.projection
             .matrix_mut()
             .as_mut_slice()
-            .copy_from_slice(w.e_n.as_slice());
+            .copy_from_slice(e.as_slice());
         let p = w.projection.matrix_mut().as_mut_slice();
         let jac = w.jac.as_slice();
         for &i in &w.algebraic {
@@ -386,14 +404,15 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         for k in 0..self.n {
             w.correct(k, w.delta[k], self.compensated);
         }
+        let size = w.weights.norm(&w.delta[..self.n]);
         if !self.constant_leading {
-            return Ok(true);
+            return Ok((true, size));
         }
         mat_vec(&w.jac, &w.delta, &mut w.fm);
         for (f, d) in w.f0.iter_mut().zip(&w.fm) {
             *f += d;
         }
-        Ok(false)
+        Ok((false, size))
     }
 
     /// [`Integrator::project`] when `E` is constant and its zero columns

@@ -90,6 +90,10 @@ impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
     }
 }
 
+/// Most simplified Newton steps of the end-point projection (a method that
+/// is not stiffly accurate).
+const PROJECTION_STEPS: usize = 4;
+
 impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
     /// The integrator of `problem` on its formulation `sys` (the problem's,
     /// or a presentation of it) at `t₀`, its buffers allocated; nothing is
@@ -182,15 +186,11 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
 
     /// `f(t, y_n)` into `f0`, and `E(t, y_n)` when it is not constant (or
     /// `first`).
+    ///
+    /// `E` comes first: a formulation may choose its rows where `E` is
+    /// evaluated (`mex0`'s dummy derivatives, a numerical selector), and
+    /// `f` must be those rows'.
     fn evaluate_at_step_point(&mut self, t: f64, first: bool) -> Result<(), SolveError> {
-        self.sys.rhs(t, &self.w.y, &mut self.w.f0);
-        self.stats.residual_evals += 1;
-        if !all_finite(&self.w.f0) {
-            return Err(SolveError::NonFinite {
-                t,
-                what: "residual",
-            });
-        }
         if first || !self.constant_leading {
             self.sys.leading(t, &self.w.y, &mut self.w.e_n);
             if !all_finite(self.w.e_n.as_slice()) {
@@ -199,6 +199,14 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                     what: "leading matrix",
                 });
             }
+        }
+        self.sys.rhs(t, &self.w.y, &mut self.w.f0);
+        self.stats.residual_evals += 1;
+        if !all_finite(&self.w.f0) {
+            return Err(SolveError::NonFinite {
+                t,
+                what: "residual",
+            });
         }
         Ok(())
     }
@@ -371,10 +379,29 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 });
             }
             if K::END.is_some() {
-                // Not stiffly accurate: the end point is made consistent.
+                // Not stiffly accurate: the end point is made consistent,
+                // keeping the differential part of the step just taken:
+                // `E(y_n)`, not `E(y_{n+1})`, where the rows a formulation
+                // chooses may change (`mex0`).
+                if !self.constant_leading {
+                    self.w.e_step.copy_from(&self.w.e_n);
+                }
                 self.evaluate_at_step_point(t, false)?;
-                if self.project(t, h)? && !self.c.last {
+                // One simplified Newton step makes a linear algebraic part
+                // consistent (λ in rcd0). Constraints kept as rows (psi0,
+                // mex0) are nonlinear in the state and take a few, with `f`
+                // and `E` evaluated again after each; a dummy state left
+                // one step off its constraint loses the method's order.
+                for _ in 0..PROJECTION_STEPS {
+                    let (again, size) = self.project(t, h)?;
+                    let converged = size <= self.newton_floor;
+                    if !again || (converged && self.c.last) {
+                        break;
+                    }
                     self.evaluate_at_step_point(t, false)?;
+                    if converged {
+                        break;
+                    }
                 }
             }
             if self.c.last {
