@@ -415,6 +415,15 @@ fn a_stopped_run_reports_its_work() {
                 "{case:?}: {}",
                 stopped.t
             );
+            // An accepted state, not a failed attempt's iterate: on the
+            // circle (`x² + y² = l² = 1`; a few accepted steps at tol 1e-8
+            // drift far less than 1e-6, whatever the formulation).
+            let (x, y) = (stopped.y[0], stopped.y[1]);
+            assert!(
+                (x * x + y * y - 1.0).abs() < 1e-6,
+                "{case:?}: {:?}",
+                stopped.y
+            );
             // The stepper by hand, to the same failure.
             let mut integ = solver.integrator(problem, &options).unwrap();
             let mut accepted = 0;
