@@ -5,7 +5,8 @@
 
 use crate::reference::data::{Reference, Scaling, UseError};
 use dae_core::selector::SelectorKind;
-use dae_core::system::{DaeSystem, Model, VarKind};
+use dae_core::system::{DaeSystem, FormulationInfo, Model, VarKind};
+use dae_solvers::error::Failure;
 use dae_solvers::init::{self, InitMode, InitOptions, InitValue, Start};
 use dae_solvers::options::{check_relative, Tol, ToleranceIssue};
 use dae_solvers::{Options, Problem, SolveError, Stats, Tolerances};
@@ -139,9 +140,12 @@ pub struct RunRecord {
     pub status: &'static str,
     /// Why it failed.
     pub error: Option<ErrorInfo>,
-    /// Time reached (the end of the horizon on success).
+    /// Time reached: the end of the horizon on success; for a run that
+    /// stopped, the time of its last accepted step (`t0` when it accepted
+    /// none; the error names where it failed).
     pub t_end: f64,
-    /// Values at `t_end` by unknown name.
+    /// Values at `t_end` by unknown name (for a run that stopped, those of
+    /// its last accepted step; empty when initialisation failed).
     #[serde(rename = "final")]
     pub final_values: Named,
     /// Max over the reference's times of the largest error of the
@@ -187,7 +191,9 @@ pub struct RunRecord {
     /// the repeats): what a user waits, and what grows with the machine's
     /// load.
     pub wall_s: f64,
-    /// Work counters.
+    /// Work counters; for a run that stopped, the work done until then,
+    /// its failed attempts included (zero when it stopped before its first
+    /// step).
     pub stats: Stats,
     /// Constraint residuals per level.
     pub residuals: Residuals,
@@ -553,20 +559,39 @@ pub enum RunError {
 /// selector computed numerically ([`dae_core::selector`]). The record's
 /// `selector` says which.
 pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
-    let first = run_with(spec, false)?;
-    let singular = first.error.as_ref().is_some_and(|e| {
-        matches!(
-            e.kind.as_str(),
-            "singular_matrix" | "newton_failure" | "step_size_too_small"
-        )
-    });
-    if singular && first.selector == Some(SelectorKind::Symbolic.as_str()) {
-        return run_with(spec, true);
+    let (first, failure) = run_with(spec, false)?;
+    match Retry::after(&first, failure) {
+        Retry::NumericalSelector => Ok(run_with(spec, true)?.0),
+        Retry::No => Ok(first),
     }
-    Ok(first)
 }
 
-fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> {
+/// Whether a run is made again, and how.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Retry {
+    /// The record stands.
+    No,
+    /// Again with a selector computed numerically.
+    NumericalSelector,
+}
+
+impl Retry {
+    /// After `record`, which stopped with `failure` (or finished: `None`):
+    /// a run with the symbolic selector whose iteration broke down is made
+    /// again with the numerical one.
+    fn after(record: &RunRecord, failure: Option<Failure>) -> Self {
+        let symbolic = record.selector == Some(SelectorKind::Symbolic.as_str());
+        if symbolic && failure == Some(Failure::Breakdown) {
+            Retry::NumericalSelector
+        } else {
+            Retry::No
+        }
+    }
+}
+
+/// One run with the symbolic selector, or the numerical one when
+/// `numerical`: its record, and the class of its failure when it stopped.
+fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<(RunRecord, Option<Failure>), RunError> {
     let solver = dae_solvers::solver_by_name(spec.solver)
         .ok_or_else(|| RunError::UnknownSolver(spec.solver.into()))?;
     match spec.tolerances {
@@ -664,7 +689,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
             message: e.to_string(),
             t: e.t(),
         });
-        record
+        (record, Some(e.failure()))
     };
     let init_opts = InitOptions {
         mode: spec.init_mode,
@@ -727,15 +752,21 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
     let mut walls = Vec::new();
     let mut solution = None;
     for _ in 0..spec.repeats.max(1) {
-        let (result, cpu, wall) = timed(|| solver.solve(&problem, &options));
+        let (result, cpu, wall) = timed(|| solver.run(&problem, &options));
         times.push(cpu);
         walls.push(wall);
         match result {
             Ok(s) => solution = Some(s),
-            Err(e) => {
+            Err(stopped) => {
                 record.tsim_s = cpu;
                 record.wall_s = wall;
-                return Ok(fail(record, e));
+                // The work done and where it got to: the last accepted
+                // step's time and values (the error keeps its own time).
+                record.stats = stopped.stats;
+                record.final_values = named(&info, &stopped.y);
+                let (mut record, failure) = fail(record, stopped.error);
+                record.t_end = stopped.t;
+                return Ok((record, failure));
             }
         }
     }
@@ -754,13 +785,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
     record.stats = sol.stats;
     record.t_end = sol.t.last().copied().unwrap_or(spec.t_end);
     if let Some(last) = sol.last() {
-        record.final_values = Named(
-            info.variables
-                .iter()
-                .zip(last)
-                .map(|(v, x)| (v.name.clone(), *x))
-                .collect(),
-        );
+        record.final_values = named(&info, last);
     }
     if spec.record_steps {
         let first = sol.steps.first().map(|(t, _)| *t);
@@ -772,7 +797,18 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<RunRecord, RunError> 
     if spec.record_steps {
         record.trajectory.steps.extend(sol.steps);
     }
-    Ok(record)
+    Ok((record, None))
+}
+
+/// The values `y` of the unknowns of `info`, by name.
+fn named(info: &FormulationInfo, y: &[f64]) -> Named {
+    Named(
+        info.variables
+            .iter()
+            .zip(y)
+            .map(|(v, x)| (v.name.clone(), *x))
+            .collect(),
+    )
 }
 
 /// Run `f` on this thread and measure it: its result, the CPU time this

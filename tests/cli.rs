@@ -365,6 +365,27 @@ fn sweep_max_steps_bounds_every_run() {
     let run = &v["runs"][0];
     assert_eq!(run["status"], "error", "{run}");
     assert_eq!(run["error"]["kind"], "step_limit", "{run}");
+    // The stopped run records its work and where it got to (issue 27,
+    // defect 3: it used to report zero steps and no final values).
+    let steps = run["stats"]["steps"].as_u64().unwrap();
+    assert!(steps > 0 && steps <= 50, "{run}");
+    assert!(
+        run["stats"]["residual_evals"].as_u64().unwrap() > 0,
+        "{run}"
+    );
+    let t = run["t_end"].as_f64().unwrap();
+    assert!(t > 0.0 && t < 20.0, "{run}");
+    assert_eq!(run["final"].as_object().unwrap().len(), 5, "{run}");
+    assert!(run["final"]["x"].as_f64().unwrap().is_finite(), "{run}");
+    // The CSV too: its `steps` column.
+    let mut csv = csv::Reader::from_path(out.join("results.csv")).unwrap();
+    let col = csv.headers().unwrap().iter().position(|h| h == "steps");
+    let row = csv.records().next().unwrap().unwrap();
+    assert_eq!(
+        row.get(col.unwrap()),
+        Some(steps.to_string().as_str()),
+        "{row:?}"
+    );
     let o = bounded("0");
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--max-steps 0"), "{}", stderr(&o));

@@ -162,9 +162,111 @@ impl SolveError {
         }
     }
 
+    /// What the failure says about the run ([`Failure`]): whether it was
+    /// refused before any step, whether the iteration broke down, ran out of
+    /// budget, met a non-finite value, or could not start.
+    ///
+    /// ```
+    /// use dae::dae_solvers::error::Failure;
+    /// use dae::dae_solvers::SolveError;
+    ///
+    /// let e = SolveError::SingularMatrix { t: 0.5, h: 1e-3 };
+    /// assert_eq!(e.failure(), Failure::Breakdown);
+    /// let e = SolveError::StepLimit { t: 0.5, max_steps: 10 };
+    /// assert_eq!(e.failure(), Failure::Budget);
+    /// ```
+    pub fn failure(&self) -> Failure {
+        match self {
+            SolveError::StepSizeTooSmall { .. }
+            | SolveError::NewtonFailure { .. }
+            | SolveError::SingularMatrix { .. } => Failure::Breakdown,
+            SolveError::StepLimit { .. } => Failure::Budget,
+            SolveError::NonFinite { .. } => Failure::NonFinite,
+            SolveError::InconsistentInitialValues { .. } | SolveError::Init(_) => {
+                Failure::Initialisation
+            }
+            SolveError::NotApplicable(_)
+            | SolveError::ToleranceOutOfRange { .. }
+            | SolveError::InvalidInput { .. }
+            | SolveError::OutOfReach { .. } => Failure::Refused,
+        }
+    }
+
     pub(crate) fn invalid(what: impl Into<String>) -> Self {
         SolveError::InvalidInput { what: what.into() }
     }
+}
+
+/// The classes of [`SolveError`] ([`SolveError::failure`]): what a caller
+/// deciding what to do next needs to know of a failure, without matching
+/// its kind by name.
+///
+/// ```
+/// use dae::dae_solvers::error::Failure;
+/// use dae::dae_solvers::radau5::Radau5;
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().rcd0();
+/// let y0 = [1.0, 0.0, 0.0, 0.0, 0.0];
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &y0, t_end: 20.0 };
+/// let options = Options { max_steps: 10, ..Options::with_tol(1e-8) };
+/// let err = Radau5.solve(&problem, &options).unwrap_err();
+/// assert_eq!(err.failure(), Failure::Budget);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Failure {
+    /// Refused before any step: invalid input, a tolerance out of range, a
+    /// formulation the solver cannot take, a time out of reach.
+    Refused,
+    /// Consistent initialisation failed, or the values given are
+    /// inconsistent.
+    Initialisation,
+    /// The iteration broke down: a singular iteration matrix, Newton
+    /// failures or a step size collapsing below round-off, each after the
+    /// retries of its budget — how a rank-deficient formulation (a selector
+    /// that loses rank) or a singularity of the problem shows.
+    Breakdown,
+    /// The step budget ([`crate::Options::max_steps`]) ran out.
+    Budget,
+    /// A NaN or infinity in the residual, the solution or a matrix.
+    NonFinite,
+}
+
+/// A run that stopped before the end of its horizon: why, and the work it
+/// did until then — what [`crate::Solver::run`] and
+/// [`crate::Integrator::run`] return, so that a failed run reports its cost
+/// and where it got to, not only its error.
+///
+/// ```
+/// use dae::dae_solvers::radau5::Radau5;
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().rcd0();
+/// let y0 = [1.0, 0.0, 0.0, 0.0, 0.0];
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &y0, t_end: 20.0 };
+/// let options = Options { max_steps: 10, ..Options::with_tol(1e-8) };
+/// let stopped = Radau5.run(&problem, &options).unwrap_err();
+/// assert_eq!(stopped.error.kind(), "step_limit");
+/// assert!(stopped.stats.steps > 0);
+/// // The values of the last accepted step, at its time.
+/// assert!(stopped.t > 0.0 && stopped.t < 20.0);
+/// assert!(stopped.y.iter().all(|v| v.is_finite()));
+/// assert!(stopped.to_string().starts_with("step limit of 10"));
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error, Serialize)]
+#[error("{error}")]
+pub struct Stopped {
+    /// Why the run stopped.
+    pub error: SolveError,
+    /// The work done until then, the failed attempts included.
+    pub stats: crate::Stats,
+    /// Time of the last accepted step (`t0` when none was accepted).
+    pub t: f64,
+    /// The solution there.
+    pub y: Vec<f64>,
 }
 
 /// Why consistent initialisation ([`crate::init::consistent`]) stopped:

@@ -2,7 +2,7 @@
 //! [`Solver::integrator`](crate::Solver::integrator).
 
 use crate::core::driver::{Method, Record};
-use crate::{Options, Problem, Solution, SolveError, Stats};
+use crate::{Options, Problem, Solution, SolveError, Stats, Stopped};
 
 /// What one call of [`Integrator::step`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -199,8 +199,48 @@ impl<'a> Integrator<'a> {
     /// [`Options::output_times`], the step points and dense output when
     /// asked, and the work counters — what
     /// [`Solver::solve`](crate::Solver::solve) returns.
-    pub fn finish(mut self) -> Result<Solution, SolveError> {
-        while let StepOutcome::Accepted { .. } = self.step()? {}
+    pub fn finish(self) -> Result<Solution, SolveError> {
+        self.run().map_err(|stopped| stopped.error)
+    }
+
+    /// Run to `t_end` as [`Integrator::finish`] does, and when the run stops
+    /// before it, return with the error the work done until then: the work
+    /// counters (the failed attempts included) and the time and values of
+    /// the last accepted step ([`Stopped`]) — what
+    /// [`Solver::run`](crate::Solver::run) returns.
+    ///
+    /// ```
+    /// use dae::dae_solvers::radau5::Radau5;
+    /// use dae::models::builtin::Pendulum;
+    /// use dae::prelude::*;
+    ///
+    /// let sys = Pendulum::default().rcd0();
+    /// let y0 = [1.0, 0.0, 0.0, 0.0, 0.0];
+    /// let problem = Problem { system: &sys, t0: 0.0, y0: &y0, t_end: 20.0 };
+    /// let options = Options { max_steps: 30, ..Options::with_tol(1e-8) };
+    /// let stopped = Radau5.integrator(&problem, &options)?.run().unwrap_err();
+    /// assert!(matches!(stopped.error, SolveError::StepLimit { max_steps: 30, .. }));
+    /// // Thirty attempts allowed: the accepted ones are counted.
+    /// assert!(stopped.stats.steps > 0 && stopped.stats.steps <= 30);
+    /// assert!(stopped.t > 0.0 && stopped.t < 20.0);
+    /// assert_eq!(stopped.y.len(), 5);
+    /// # Ok::<(), SolveError>(())
+    /// ```
+    pub fn run(mut self) -> Result<Solution, Box<Stopped>> {
+        loop {
+            match self.step() {
+                Ok(StepOutcome::Accepted { .. }) => {}
+                Ok(StepOutcome::Finished { .. }) => break,
+                Err(error) => {
+                    return Err(Box::new(Stopped {
+                        error,
+                        stats: self.method.stats(),
+                        t: self.method.t(),
+                        y: self.method.y().to_vec(),
+                    }))
+                }
+            }
+        }
         let stats = self.method.stats();
         Ok(self.record.finish(stats, self.names))
     }

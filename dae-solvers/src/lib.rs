@@ -53,7 +53,7 @@ pub mod radau5;
 pub mod solution;
 pub mod stats;
 
-pub use error::{InitError, NotApplicable, SolutionError, SolveError};
+pub use error::{InitError, NotApplicable, SolutionError, SolveError, Stopped};
 pub use init::{consistent, consistent_from, initial_derivative, InitMode, InitOptions, Start};
 pub use integrator::{Integrator, StepOutcome};
 pub use options::{Options, Tol, Tolerances};
@@ -159,6 +159,38 @@ pub trait Solver {
     /// to the end ([`Integrator::finish`]).
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
         self.integrator(problem, options)?.finish()
+    }
+
+    /// [`Solver::solve`], and when the run stops before `t_end`, the error
+    /// with the work done until then ([`Stopped`]: the work counters, the
+    /// time and values of the last accepted step). A run refused before
+    /// its first step (invalid input, a start that cannot be evaluated)
+    /// reports no work, at `t0` with `y0`.
+    ///
+    /// ```
+    /// use dae::dae_solvers::bdf::Bdf;
+    /// use dae::models::builtin::Pendulum;
+    /// use dae::prelude::*;
+    ///
+    /// let sys = Pendulum::default().rcd0();
+    /// let y0 = [1.0, 0.0, 0.0, 0.0, 0.0];
+    /// let problem = Problem { system: &sys, t0: 0.0, y0: &y0, t_end: 20.0 };
+    /// let options = Options { max_steps: 40, ..Options::with_tol(1e-6) };
+    /// let stopped = Bdf.run(&problem, &options).unwrap_err();
+    /// assert_eq!(stopped.error.kind(), "step_limit");
+    /// assert!(stopped.stats.steps > 0 && stopped.stats.residual_evals > 0);
+    /// assert!(stopped.t > 0.0);
+    /// ```
+    fn run(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, Box<Stopped>> {
+        match self.integrator(problem, options) {
+            Ok(integrator) => integrator.run(),
+            Err(error) => Err(Box::new(Stopped {
+                error,
+                stats: Stats::default(),
+                t: problem.t0,
+                y: problem.y0.to_vec(),
+            })),
+        }
     }
 }
 

@@ -370,3 +370,93 @@ fn a_failure_is_sticky() {
         },
     );
 }
+
+/// A run that stops reports the work it did and where it got to, for
+/// every solver (issue 27, defect 3: failed runs used to report nothing):
+/// a step-limited run's `Stopped` carries the steps, evaluations and
+/// Newton iterations the stepper counted, and the time and values of its
+/// last accepted step — the same the stepper shows when stepped by hand
+/// to the same failure. Constant-step runs are left out: their step
+/// count is known before the first step, so a limit below it is refused at
+/// `t0` with nothing done.
+#[test]
+fn a_stopped_run_reports_its_work() {
+    const MAX_STEPS: usize = 25;
+    for case in cases().into_iter().filter(|c| c.2.is_none()) {
+        with_case(case, 1e-8, vec![], |solver, problem, options| {
+            let options = Options {
+                max_steps: MAX_STEPS,
+                ..options.clone()
+            };
+            let stopped = solver.run(problem, &options).unwrap_err();
+            assert!(
+                matches!(
+                    stopped.error,
+                    SolveError::StepLimit {
+                        max_steps: MAX_STEPS,
+                        ..
+                    }
+                ),
+                "{case:?}: {}",
+                stopped.error
+            );
+            let st = stopped.stats;
+            assert!(st.steps > 0, "{case:?}: {st:?}");
+            // Step attempts are bounded by the limit; idec counts a step per
+            // grid point of its intervals and the limit in intervals.
+            if case.0 != "idec" {
+                assert!(st.steps + st.rejected <= MAX_STEPS, "{case:?}: {st:?}");
+            }
+            assert!(st.residual_evals >= st.steps, "{case:?}: {st:?}");
+            // idec is linearly implicit: no Newton iterations.
+            assert!(st.factorizations > 0, "{case:?}: {st:?}");
+            assert!(
+                stopped.t > 0.0 && stopped.t < T_END,
+                "{case:?}: {}",
+                stopped.t
+            );
+            // An accepted state, not a failed attempt's iterate: on the
+            // circle (`x² + y² = l² = 1`; a few accepted steps at tol 1e-8
+            // drift far less than 1e-6, whatever the formulation).
+            let (x, y) = (stopped.y[0], stopped.y[1]);
+            assert!(
+                (x * x + y * y - 1.0).abs() < 1e-6,
+                "{case:?}: {:?}",
+                stopped.y
+            );
+            // The stepper by hand, to the same failure.
+            let mut integ = solver.integrator(problem, &options).unwrap();
+            let mut accepted = 0;
+            while integ.step().is_ok() {
+                accepted += 1;
+            }
+            assert_eq!(integ.stats(), st, "{case:?}");
+            assert_eq!(integ.t(), stopped.t, "{case:?}");
+            assert_eq!(integ.y(), stopped.y.as_slice(), "{case:?}");
+            assert!(accepted > 0 && accepted <= st.steps, "{case:?}");
+            // `solve` is the same run: the same error.
+            assert_eq!(solver.solve(problem, &options).unwrap_err(), stopped.error);
+        });
+    }
+}
+
+/// A run refused before its first step reports no work, at `t0` with
+/// `y0`.
+#[test]
+fn a_refused_run_reports_no_work() {
+    with_case(
+        ("bdf", "rcd0", None),
+        1e-8,
+        vec![],
+        |solver, problem, options| {
+            let options = Options {
+                tol: dae_solvers::Tolerances::uniform(-1.0),
+                ..options.clone()
+            };
+            let stopped = solver.run(problem, &options).unwrap_err();
+            assert_eq!(stopped.error.kind(), "invalid_input");
+            assert_eq!(stopped.stats, dae_solvers::Stats::default());
+            assert_eq!((stopped.t, stopped.y.as_slice()), (problem.t0, problem.y0));
+        },
+    );
+}

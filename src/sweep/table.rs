@@ -465,7 +465,8 @@ pub fn efficiency_rows<R: Borrow<RunRecord>>(runs: &[R]) -> Vec<Vec<String>> {
             },
             (None, false) => r.status.to_string(),
         };
-        let num = |v: usize| if ok { v.to_string() } else { "-".into() };
+        // A run that stopped shows the work it did until then.
+        let num = |v: usize| v.to_string();
         let val = |v: Option<f64>| if ok { sci(v) } else { "-".into() };
         let mut row = vec![
             format!("{}({})", r.solver, r.formulation),

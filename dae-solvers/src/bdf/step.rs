@@ -3,9 +3,8 @@
 //! one accepted step with its retries after failed attempts (block 6).
 
 use super::corrector::JacState;
-use super::order::ErrorTest;
 use super::NCOL;
-use crate::core::control::{self, Budget, Failure as Fail};
+use crate::core::control::{self, Budget, Failure as Fail, Rejection};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, Rows};
@@ -16,15 +15,6 @@ use nalgebra::DMatrix;
 
 /// Settings of one integrator (the order in this method's count).
 pub(super) use crate::core::control::StepConfig as Config;
-
-/// Why a step attempt was rejected.
-#[derive(Clone, Copy, Debug)]
-enum Failure {
-    /// The corrector did not converge.
-    Newton(Fail),
-    /// The local error estimate exceeded the tolerance.
-    ErrorTest(ErrorTest),
-}
 
 /// State and workspace of the DASSL step (`N` unknowns, `M ≥ N` rows).
 pub(super) struct Integrator<'a, L> {
@@ -259,9 +249,9 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                         self.budget.accepted();
                         return Ok(());
                     }
-                    Failure::ErrorTest(test)
+                    Rejection::ErrorTest(test)
                 }
-                Err(fail) => Failure::Newton(fail),
+                Err(fail) => Rejection::Newton(fail),
             };
 
             // Block 6: the step failed.
@@ -272,17 +262,16 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             let h_failed = self.h;
             let hmin = self.hmin();
             match failure {
-                Failure::Newton(fail) => {
-                    if self.cfg.fixed_step {
-                        return Err(self.newton_error(fail, h_failed));
-                    }
-                    self.h *= 0.25;
-                    let limit_hit = self.budget.failed(fail);
-                    if limit_hit || self.h < hmin {
-                        return Err(self.newton_error(fail, h_failed));
+                Rejection::Newton(fail) => {
+                    match self
+                        .budget
+                        .retry_after(fail, self.h, hmin, self.cfg.fixed_step)
+                    {
+                        Some(h) => self.h = h,
+                        None => return Err(self.newton_error(fail, h_failed)),
                     }
                 }
-                Failure::ErrorTest(test) => {
+                Rejection::ErrorTest(test) => {
                     nef += 1;
                     if nef == 1 {
                         self.k = test.knew;

@@ -36,6 +36,18 @@ pub(crate) enum Failure {
     NonFinite(&'static str),
 }
 
+/// Why a step attempt was rejected: a failure before the error test, or the
+/// error test with the method's estimate `E` (BDF's order selection, MEBDF's
+/// norm).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Rejection<E> {
+    /// The corrector did not converge (or met a singular or non-finite
+    /// value).
+    Newton(Failure),
+    /// The local error estimate exceeded the tolerance.
+    ErrorTest(E),
+}
+
 /// Failure counters of the current step and the attempt budget.
 #[derive(Clone, Debug)]
 pub(crate) struct Budget {
@@ -87,6 +99,25 @@ impl Budget {
         };
         *count += 1;
         *count >= limit
+    }
+
+    /// After an attempt with step `h` rejected by `failure` before its
+    /// error test: the step to retry with, a quarter of it, or `None` when
+    /// the run stops with [`Budget::error`] — a constant step (nothing to
+    /// shrink), the failure's budget spent (it is counted), or the retry
+    /// below `h_min`.
+    pub(crate) fn retry_after(
+        &mut self,
+        failure: Failure,
+        h: f64,
+        h_min: f64,
+        fixed_step: bool,
+    ) -> Option<f64> {
+        if fixed_step || self.failed(failure) {
+            return None;
+        }
+        let h = 0.25 * h;
+        (h >= h_min).then_some(h)
     }
 
     /// The typed error for `failure` at `t` with step `h` after

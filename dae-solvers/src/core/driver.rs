@@ -17,6 +17,27 @@
 //! two runs of one integration: [`Startup`] is one [`Method`] made of the
 //! start-up method and the run that its values at the handover times
 //! build, so the stepper and the records see one integration.
+//!
+//! A run that stops is reported from here too, once for every method:
+//! [`crate::Integrator::run`] returns with the error the method's work
+//! counters and its time and values ([`Method::t`], [`Method::y`]: the last
+//! accepted step), so a method keeps its counters current through failed
+//! attempts and leaves `t` and `y` at the last accepted step until it
+//! accepts another.
+//!
+//! The contract on the leading matrix: a formulation whose
+//! `FormulationInfo::constant_leading` is false gets `leading(t, y, e)`
+//! evaluated at the start of the step attempts and before every iteration
+//! matrix, at the point the attempt or the matrix is for — the numerical
+//! selector (`dae_core::selector`) and run-time wrappers that re-choose a
+//! selection do it there, so a method that cached `E` across steps would
+//! integrate with a stale selection. Where each method keeps it: Radau IIA,
+//! Gauss and odradau at every step point (the start of the attempts from
+//! it, where the iteration matrix is also formed); bdf and odbdf with every
+//! iteration matrix, at the predictor; mebdf and idec take only an `E`
+//! that is constant (once the constraint rows that carry derivatives are
+//! made algebraic) and refuse the others
+//! (`NotApplicable::LeadingMatrixNotConstant`).
 
 use super::output::OutputGrid;
 use crate::solution::DenseOutput;

@@ -5,7 +5,7 @@
 use super::coeffs::{Coefficients, MAX_ORDER};
 use super::history::History;
 use super::stages::JacState;
-use crate::core::control::{self, Budget, Failure};
+use crate::core::control::{self, Budget, Rejection};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, SquareLu};
@@ -34,15 +34,6 @@ const STALLED_FALL: f64 = 0.5;
 /// every tolerance, restarted on every other step and crawled to the end
 /// with 2.4 million steps and an energy drift of 6e-3 at tol 1e-7).
 const RESTART_SPACING: usize = 20;
-
-/// Why a step attempt was rejected.
-#[derive(Clone, Copy, Debug)]
-pub(super) enum Rejection {
-    /// A stage did not converge.
-    Newton(Failure),
-    /// The local error estimate exceeded the tolerance (its norm).
-    ErrorTest(f64),
-}
 
 /// State and workspace of the MEBDF step (`N` unknowns).
 pub(super) struct Integrator<'a> {
@@ -293,12 +284,13 @@ impl<'a> Integrator<'a> {
                 error_failures += 1;
             }
             match rejection {
-                Rejection::Newton(fail) => {
-                    if fixed || self.budget.failed(fail) || 0.25 * self.h < hmin {
-                        return Err(Budget::error(fail, self.t, h_failed, self.last_iterations));
+                Rejection::Newton(fail) => match self.budget.retry_after(fail, self.h, hmin, fixed)
+                {
+                    Some(h) => self.h = h,
+                    None => {
+                        return Err(Budget::error(fail, self.t, h_failed, self.last_iterations))
                     }
-                    self.h *= 0.25;
-                }
+                },
                 Rejection::ErrorTest(err) => {
                     self.reject(err, error_failures);
                     if self.h < hmin {
