@@ -7,6 +7,8 @@ use crate::expr::{self, Expr, Sym};
 use crate::formulation::Formulation;
 use crate::system::{ConstraintInfo, FormulationInfo, RowInfo};
 use crate::tape::{Tape, TapeBuilder};
+use std::collections::HashMap;
+use std::rc::Rc;
 
 /// A sparse matrix whose entries are the outputs of a tape.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -83,7 +85,93 @@ pub struct AccelTapes {
 }
 
 /// Lower formulation `f` of `d`.
+///
+/// To lower several formulations of one model, [`compile_all`] is cheaper:
+/// it differentiates each distinct row once.
+///
+/// ```
+/// use dae_core::compile::compile;
+/// use dae_core::derive::Derived;
+///
+/// let d = Derived::from_str(
+///     "pub M { differential { x } algebraic { z } equations { der(x) = -z; 0 = z - x; } }",
+/// )
+/// .unwrap();
+/// let c = compile(&d, &d.formulations[0]);
+/// assert_eq!(c.info.variables.len(), 2);
+/// ```
 pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
+    compile_with(d, f, &mut Gradients::default())
+}
+
+/// Lower every formulation `d` provides, in its order.
+///
+/// The formulations of a model share most of their rows (the dynamics, the
+/// constraint chain, whose level-2 members are a mechanical model's largest
+/// expressions): each distinct row is differentiated once here, not once
+/// per formulation. The result is that of [`compile`] on each formulation.
+///
+/// ```
+/// use dae_core::compile::{compile, compile_all};
+/// use dae_core::derive::Derived;
+///
+/// let d = Derived::from_str(
+///     "pub M { differential { x, v } algebraic { la } \
+///      equations { der(x) = v; der(v) = -la*x; 0 = x^2 - 1; } }",
+/// )
+/// .unwrap();
+/// let all = compile_all(&d);
+/// assert_eq!(all.len(), d.formulations.len());
+/// assert_eq!(all[1], compile(&d, &d.formulations[1]));
+/// ```
+pub fn compile_all(d: &Derived) -> Vec<Compiled> {
+    let mut grads = Gradients::default();
+    d.formulations
+        .iter()
+        .map(|f| compile_with(d, f, &mut grads))
+        .collect()
+}
+
+/// The non-zero partial derivatives of expressions with respect to the
+/// unknowns, each expression differentiated once (the key's hash is cached
+/// in the expression, so a look-up does not walk it).
+#[derive(Default)]
+struct Gradients {
+    memo: HashMap<Expr, Rc<[(usize, Expr)]>>,
+}
+
+impl Gradients {
+    /// `(k, ∂e/∂y_k)` for every unknown `y_k` that `e` contains, ascending
+    /// in `k`.
+    fn of(&mut self, e: &Expr) -> Rc<[(usize, Expr)]> {
+        if let Some(g) = self.memo.get(e) {
+            return g.clone();
+        }
+        let g: Rc<[(usize, Expr)]> = e
+            .symbols()
+            .into_iter()
+            .filter_map(|s| match s {
+                Sym::Var(k) => Some((k as usize, expr::diff(e, s))),
+                _ => None,
+            })
+            .collect();
+        self.memo.insert(e.clone(), g.clone());
+        g
+    }
+
+    /// Row `i` of `∂f/∂y` into `out`: `(i, k, ∂f/∂y_k)` for the unknowns
+    /// `y_k`, `k < n`, that `f` contains (only those have non-zero
+    /// derivatives: a row costs its own size, not the model's).
+    fn row(&mut self, i: usize, f: &Expr, n: usize, out: &mut Vec<(usize, usize, Expr)>) {
+        for (k, d) in self.of(f).iter() {
+            if *k < n {
+                out.push((i, *k, d.clone()));
+            }
+        }
+    }
+}
+
+fn compile_with(d: &Derived, f: &Formulation, grads: &mut Gradients) -> Compiled {
     let model = &d.model;
     let n = f.vars.len();
     let m = f.rows.len();
@@ -118,7 +206,7 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
         for (j, c) in &row.e {
             e_cells.push((i, *j, c.clone()));
         }
-        gradient_cells(i, &row.f, n, &mut fj_cells);
+        grads.row(i, &row.f, n, &mut fj_cells);
         if !f.constant_leading {
             leading_jacobian_cells(i, &row.e, n, &mut ej_cells);
         }
@@ -128,7 +216,7 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
     let mut cj_cells = Vec::new();
     for (r, (_, _, e)) in chain.iter().enumerate() {
         cons.output(e);
-        gradient_cells(r, e, n, &mut cj_cells);
+        grads.row(r, e, n, &mut cj_cells);
     }
     // The accelerations are eliminated only where the chain holds der():
     // the implied constraints of a singular mass matrix (which has no
@@ -136,7 +224,7 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
     let holds_der = chain
         .iter()
         .any(|(_, _, e)| e.any_sym(&|s| matches!(s, Sym::Der(_))));
-    let accel = (model.has_mass_matrix() && holds_der).then(|| accel_tapes(d, n));
+    let accel = (model.has_mass_matrix() && holds_der).then(|| accel_tapes(d, n, grads));
     let mut inv = TapeBuilder::new();
     for i in &model.invariants {
         inv.output(&i.expr);
@@ -158,7 +246,7 @@ pub fn compile(d: &Derived, f: &Formulation) -> Compiled {
 
 /// The model's dynamic rows and the chain's der() coefficients, for a model
 /// with a mass matrix (`n` unknowns in the formulation).
-fn accel_tapes(d: &Derived, n: usize) -> AccelTapes {
+fn accel_tapes(d: &Derived, n: usize, grads: &mut Gradients) -> AccelTapes {
     let model = &d.model;
     let mut e_cells = Vec::new();
     let mut rhs = TapeBuilder::new();
@@ -170,7 +258,7 @@ fn accel_tapes(d: &Derived, n: usize) -> AccelTapes {
             e_cells.push((i, *j, c.clone()));
         }
         rhs.output(&dy.rhs);
-        gradient_cells(i, &dy.rhs, n, &mut fj_cells);
+        grads.row(i, &dy.rhs, n, &mut fj_cells);
         leading_jacobian_cells(i, &terms, n, &mut ej_cells);
     }
     let mut cd_cells = Vec::new();
@@ -189,15 +277,6 @@ fn accel_tapes(d: &Derived, n: usize) -> AccelTapes {
         rhs_jacobian: Sparse::build(fj_cells),
         leading_jacobian: Sparse::build(ej_cells),
         chain_der: Sparse::build(cd_cells),
-    }
-}
-
-/// Row `i` of `∂f/∂y`: `(i, k, ∂f/∂y_k)` for the unknowns `f` contains
-/// (only those have non-zero derivatives: a row costs its own size, not the
-/// model's).
-fn gradient_cells(i: usize, f: &Expr, n: usize, out: &mut Vec<(usize, usize, Expr)>) {
-    for k in unknowns(std::iter::once(f), n) {
-        out.push((i, k, expr::diff(f, Sym::Var(k as u32))));
     }
 }
 

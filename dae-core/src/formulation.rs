@@ -130,9 +130,15 @@ pub const SELECTOR_MAX_CONSTRAINTS: usize = 8;
 
 /// Why a formulation does not apply to a model, or `Ok`.
 pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String> {
+    check(model, an, name).map(|_| ())
+}
+
+/// [`applicable`], with the selector split it derives for `psi1`/`psi0`
+/// (for [`build`] to use instead of deriving it again).
+fn check(model: &Model, an: &Analysis, name: &str) -> Result<Option<SelectorSplit>, String> {
     match name {
-        "ori2" | "rcd0" | "ovd0" => Ok(()),
-        "rcd1" | "ovd1" if an.max_level() >= 2 => Ok(()),
+        "ori2" | "rcd0" | "ovd0" => Ok(None),
+        "rcd1" | "ovd1" if an.max_level() >= 2 => Ok(None),
         "rcd1" | "ovd1" if an.max_level() == 1 => Err(format!(
             "`{name}` would repeat `ori2`: no constraint is differentiated more than once (d-index 2)"
         )),
@@ -140,8 +146,8 @@ pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String
         "ggl1" | "psi1" | "psi0" if !an.is_mechanical() => Err(format!(
             "`{name}` needs position-level constraints of a mechanical system (each constraint determining its multiplier after two differentiations)"
         )),
-        "ggl1" => Ok(()),
-        "mex0" => crate::dummy::symbolic_blocks(model, an).map(|_| ()),
+        "ggl1" => Ok(None),
+        "mex0" => crate::dummy::symbolic_blocks(model, an).map(|_| None),
         "psi0" if model.has_mass_matrix() => Err(
             "`psi0` projects the multipliers out of the velocity rows and finds them in the acceleration-level constraint; with a mass matrix that constraint holds `v'`, not the multipliers (`M` is not inverted symbolically), so nothing would determine them: use `psi1`, `rcd0` or `ovd0`".into(),
         ),
@@ -154,7 +160,7 @@ pub fn applicable(model: &Model, an: &Analysis, name: &str) -> Result<(), String
                     &name[3..]
                 ));
             }
-            Ok(())
+            Ok(Some(split))
         }
         other => Err(format!("unknown formulation `{other}`")),
     }
@@ -260,7 +266,7 @@ fn differentiations_to_determine(
 
 /// Build formulation `name` (must be applicable).
 pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, String> {
-    applicable(model, an, name)?;
+    let split = check(model, an, name)?;
     let &name = FORMULATION_NAMES
         .iter()
         .find(|f| **f == name)
@@ -286,6 +292,7 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         .collect();
 
     let through = differentiations_to_determine(model, an, &levels);
+    let firsts: Vec<_> = an.chains.iter().map(|c| c.first_levels(model)).collect();
     let mut vars: Vec<VarInfo> = model
         .vars
         .iter()
@@ -296,8 +303,9 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
                 .chains
                 .iter()
                 .zip(&levels)
-                .filter_map(|(c, ls)| {
-                    let first = c.first_level(model, s)?;
+                .zip(&firsts)
+                .filter_map(|((_, ls), firsts)| {
+                    let first = *firsts.get(&s)?;
                     let h = *ls.iter().max()?;
                     Some(first.saturating_sub(h))
                 })
@@ -370,7 +378,7 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
 
     let rows_dyn = match name {
         "psi1" | "psi0" => {
-            let split = selector_split(model, an)?;
+            let split = split.ok_or("a projected formulation without a selector")?;
             let mut rows = Vec::new();
             let mut emitted_q = false;
             let mut emitted_v = false;

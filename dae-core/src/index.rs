@@ -27,6 +27,7 @@ use crate::dsl::Errors;
 use crate::expr::{self, Expr, Sym};
 use crate::model::{Dynamic, Model};
 use crate::structure::{self, Sigma, SigmaMatrix, Singular, Structure};
+use std::collections::HashMap;
 
 /// Most differentiations of one constraint.
 pub const MAX_LEVEL: usize = 4;
@@ -51,6 +52,20 @@ impl Chain {
     /// through a mass matrix, behind a der(); see [`Model::involves`]).
     pub fn first_level(&self, model: &Model, s: Sym) -> Option<usize> {
         self.levels.iter().position(|e| model.involves(e, s))
+    }
+
+    /// [`Chain::first_level`] of every symbol the chain involves, from one
+    /// walk of each level: asking [`Chain::first_level`] for each of a
+    /// model's unknowns would walk every level once per unknown, quadratic
+    /// in the size of a large model.
+    pub fn first_levels(&self, model: &Model) -> HashMap<Sym, usize> {
+        let mut first = HashMap::new();
+        for (l, e) in self.levels.iter().enumerate() {
+            for s in model.involved(e) {
+                first.entry(s).or_insert(l);
+            }
+        }
+        first
     }
 }
 

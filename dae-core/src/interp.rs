@@ -2,7 +2,7 @@
 //! run time: the same tapes the macro turns into straight-line code,
 //! evaluated node by node.
 
-use crate::compile::{compile, Compiled, Sparse};
+use crate::compile::{compile_all, Compiled, Sparse};
 use crate::derive::Derived;
 use crate::expr::Expr;
 use crate::system::{
@@ -41,11 +41,7 @@ impl InterpretedModel {
                 }
                 b.finish()
             },
-            formulations: d
-                .formulations
-                .iter()
-                .map(|f| Arc::new(compile(d, f)))
-                .collect(),
+            formulations: compile_all(d).into_iter().map(Arc::new).collect(),
         }
     }
 

@@ -19,7 +19,7 @@ use crate::dsl::{Ast, BinOp, Errors, ModelAst, Name};
 use crate::expr::{self, Expr, Func, Sym};
 use crate::system::{VarKind, FORMULATION_NAMES};
 use proc_macro2::Span;
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeSet, HashMap, HashSet};
 
 /// A parameter with its default.
 #[derive(Clone, Debug)]
@@ -403,6 +403,30 @@ impl Model {
     /// equations of its block contain.
     pub fn involves(&self, e: &Expr, s: Sym) -> bool {
         e.contains(s) || self.involves_through_mass(e, &|x| x == s)
+    }
+
+    /// Every symbol `s` with [`Model::involves`]`(e, s)`, ascending: those
+    /// of `e`, and through a mass matrix those of the dynamic rows of the
+    /// coupled blocks whose der() `e` holds.
+    pub fn involved(&self, e: &Expr) -> BTreeSet<Sym> {
+        let mut out: BTreeSet<Sym> = e.symbols().into_iter().collect();
+        if self.has_mass_matrix() {
+            for d in e.symbols() {
+                let Sym::Der(j) = d else { continue };
+                if !self.is_coupled(j as usize) {
+                    continue;
+                }
+                for k in self.block(j as usize) {
+                    if let Some(row) = self.dynamic(k) {
+                        out.extend(row.rhs.symbols());
+                        for (_, c) in row.terms() {
+                            out.extend(c.symbols());
+                        }
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// Number of algebraic unknowns.

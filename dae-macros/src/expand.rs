@@ -6,7 +6,7 @@
 //! compiler (unit tests, the expansion benchmark in `examples/`).
 
 use super::codegen::{self, Spans};
-use dae_core::compile::{compile, Compiled};
+use dae_core::compile::{compile_all, Compiled};
 use dae_core::derive::Derived;
 use dae_core::dsl::ModelAst;
 use dae_core::system::FORMULATION_NAMES;
@@ -53,10 +53,6 @@ fn try_expand(input: TokenStream, stub: &mut TokenStream) -> Result<TokenStream,
     };
     *stub = TokenStream::new();
     Ok(items)
-}
-
-fn compile_all(d: &Derived) -> Vec<Compiled> {
-    d.formulations.iter().map(|f| compile(d, f)).collect()
 }
 
 /// `include "path"`: the path literal, if the body is one.
