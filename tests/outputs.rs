@@ -151,7 +151,7 @@ fn only_staging_of_dead_processes_is_removed() {
         std::fs::create_dir(d).unwrap();
         std::fs::write(d.join("results.csv"), "partial").unwrap();
     }
-    assert_eq!(clean_leftovers(&out).unwrap(), [dead.clone()]);
+    assert_eq!(clean_leftovers(&out).unwrap(), std::slice::from_ref(&dead));
     assert!(live.is_dir());
     assert!(!dead.exists());
 }
