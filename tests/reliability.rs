@@ -449,9 +449,14 @@ fn killed_sweep_leaves_the_previous_output_intact() {
             let json = std::fs::read_to_string(out.join("results.json")).unwrap();
             assert!(serde_json::from_str::<serde_json::Value>(&json).is_ok());
         }
-        // Only clearly named leftovers beside it.
+        // Only clearly named leftovers beside it: staging directories and
+        // the lock file (its lock died with the process; the next sweep
+        // takes it and removes it).
         for n in entries(root.path()) {
-            assert!(n == "s01" || n.starts_with(".s01.dae-sweep-"), "{n}");
+            assert!(
+                n == "s01" || n.starts_with(".s01.dae-sweep-") || n == ".s01.dae-lock",
+                "{n}"
+            );
         }
     }
     let o = dae(&tiny);
