@@ -372,14 +372,14 @@ pub fn interrupt() -> bool {
 /// releases the lock and removes the lock file.
 ///
 /// ```
-/// use dae::sweep::write::{OutputLock, PublishError};
+/// use dae::sweep::write::OutputLock;
 /// let dir = tempfile::tempdir()?;
 /// let dest = dir.path().join("s01");
 /// let lock = OutputLock::acquire(&dest)?;
 /// assert_eq!(lock.dest(), dest);
 /// drop(lock);
 /// assert!(OutputLock::acquire(&dest).is_ok());
-/// # Ok::<(), PublishError>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug)]
 pub struct OutputLock {
@@ -594,7 +594,7 @@ fn unescape_mountinfo(s: &str) -> String {
 /// let dest = root.path().join("out");
 /// let n = dae::sweep::write::publish_dir(&dest, None, |staging| {
 ///     std::fs::write(staging.join("results.csv"), "t\n")?;
-///     Ok::<_, dae::sweep::write::PublishError>(1)
+///     Ok::<_, Box<dyn std::error::Error>>(1)
 /// })?;
 /// assert_eq!(n, 1);
 /// assert!(dest.join("results.csv").is_file());
