@@ -577,25 +577,6 @@ fn declare_names<'a>(ast: &'a ModelAst, errors: &mut Errors) -> Declared<'a> {
     }
 }
 
-/// The value of `name(arg)` when `arg` is a constant (no parameter, no
-/// unknown, no time) and the value is not finite; `None` otherwise.
-fn constant_call(name: &str, arg: &Expr) -> Option<f64> {
-    if arg.any_sym(&|_| true) {
-        return None;
-    }
-    let v = arg.eval(&|_| f64::NAN);
-    let value = match name {
-        "sin" => v.sin(),
-        "cos" => v.cos(),
-        "tan" => v.tan(),
-        "exp" => v.exp(),
-        "ln" => v.ln(),
-        "sqrt" => v.sqrt(),
-        _ => return None,
-    };
-    (!value.is_finite()).then_some(value)
-}
-
 /// Phase 2: derived parameters, in order, each an expression of the base
 /// parameters (earlier derived ones substituted), with its default.
 fn derive_parameters(decl: &mut Declared<'_>, errors: &mut Errors) {
@@ -1364,18 +1345,6 @@ impl Scope<'_> {
                     };
                 }
                 let arg = self.lower(&args[0], errors)?;
-                if let Some(value) = constant_call(name, &arg) {
-                    // `sqrt(-1)`, `ln(0)`: refused here, located, rather
-                    // than failing every run with `non_finite`.
-                    errors.push(
-                        *span,
-                        format!(
-                            "`{name}(…)` of the constant {} is {value}: not a finite real number",
-                            arg.eval(&|_| f64::NAN)
-                        ),
-                    );
-                    return None;
-                }
                 let f = match name.as_str() {
                     "sin" => Func::Sin,
                     "cos" => Func::Cos,
