@@ -9,7 +9,12 @@ use std::io::Write;
 #[command(
     name = "dae",
     version,
-    about = "Constrained dynamics: every formulation, measured"
+    about = "Constrained dynamics: every formulation, measured",
+    after_help = "Exit codes: 0 done (dae sweep: the new complete set is in --out); 2 bad input \
+                  (nothing run, --out untouched); 3 dae run: the solver stopped before the end or \
+                  could not start (the record is printed); 4 dae sweep: the outputs could not be \
+                  written, or another sweep holds --out (the previous set is kept); 130 \
+                  interrupted (the previous set is kept)."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -42,6 +47,14 @@ fn sweep(args: &cli::sweep::SweepArgs) -> Result<String, Failure> {
 }
 
 fn main() {
+    // SIGINT: a sweep's staging directory is removed and the previous
+    // output set kept (exit 130); once the new set is in place the
+    // command finishes with its own code.
+    let _ = ctrlc::set_handler(|| {
+        if dae::sweep::write::interrupt() {
+            std::process::exit(cli::EXIT_INTERRUPTED);
+        }
+    });
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Derive { model, format }) => cli::derive::run(&model, format),

@@ -195,9 +195,12 @@ pub struct RunRecord {
     /// its failed attempts included (zero when it stopped before its first
     /// step).
     pub stats: Stats,
-    /// Constraint residuals per level.
+    /// Constraint residuals per level: the largest over the solution (every
+    /// output time, and [`VERIFY_SAMPLES`] equidistant points of the
+    /// horizon), not only at the check times.
     pub residuals: Residuals,
-    /// Largest `|I(t) − I(t0)|` over the check times per invariant.
+    /// Largest `|I(t) − I(t0)|` per invariant, over the same points as
+    /// [`RunRecord::residuals`].
     pub invariant_drift: Named,
     /// What consistent initialisation did (projected values), if anything.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -502,7 +505,7 @@ pub enum RunError {
     /// A tolerance outside [`dae_solvers::options::check_uniform`].
     #[error(
         "tolerance {tol:e} {issue}; tolerances (RTOL = ATOL) must be in {}",
-        dae_solvers::options::uniform_range()
+        crate::runner::tolerance_range()
     )]
     Tolerance {
         /// The value given.
@@ -548,6 +551,18 @@ pub enum RunError {
     Reference(#[from] UseError),
 }
 
+/// The accepted range of a uniform tolerance, for messages, with its
+/// lower bound `100 ε` written in full: `[2.220446049250313e-14, 1)`. A
+/// rounded bound (`2.2e-14`) would name a value that is itself refused.
+///
+/// ```
+/// assert_eq!(dae::runner::tolerance_range(), "[2.220446049250313e-14, 1)");
+/// ```
+pub fn tolerance_range() -> String {
+    use dae_solvers::options::{RTOL_MAX, RTOL_MIN};
+    format!("[{RTOL_MIN:e}, {RTOL_MAX})")
+}
+
 /// Run one integration. `Err` only for bad input; solver failures are an
 /// `Ok` record with `status = "error"`.
 ///
@@ -561,7 +576,10 @@ pub enum RunError {
 pub fn run(spec: &RunSpec<'_>) -> Result<RunRecord, RunError> {
     let (first, failure) = run_with(spec, false)?;
     match Retry::after(&first, failure) {
-        Retry::NumericalSelector => Ok(run_with(spec, true)?.0),
+        // A second attempt only: where the numerical selector cannot be
+        // built (the model lists no ovd1/ovd0, or its rank fails at t0),
+        // the answer is the first run's solver failure, not bad input.
+        Retry::NumericalSelector => Ok(run_with(spec, true).map_or(first, |(r, _)| r)),
         Retry::No => Ok(first),
     }
 }
@@ -730,6 +748,13 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<(RunRecord, Option<Fa
         .collect();
     output_times.sort_by(f64::total_cmp);
     output_times.dedup();
+    // What the record's trajectory shows; the residuals and the drift are
+    // measured at the verification samples as well (dense output: output
+    // times never shorten a step, so the statistics do not move).
+    let shown = output_times.clone();
+    output_times.extend(verification_samples(spec.t0, spec.t_end));
+    output_times.sort_by(f64::total_cmp);
+    output_times.dedup();
     let defaults = Options::default();
     let options = Options {
         tol: tolerances,
@@ -793,7 +818,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<(RunRecord, Option<Fa
             record.trajectory.steps.push((spec.t0, y0.clone()));
         }
     }
-    measure(spec, &*sys, &y0, &sol, &mut record);
+    measure(spec, &*sys, &y0, &sol, &shown, &mut record);
     if spec.record_steps {
         record.trajectory.steps.extend(sol.steps);
     }
@@ -983,11 +1008,37 @@ struct Errors {
 }
 
 /// Errors, residuals and drift from the solution at the output times.
+/// Equidistant points strictly inside the horizon at which every run's
+/// constraint residuals and invariant drift are measured besides its output
+/// times ([`verification_samples`]).
+pub const VERIFY_SAMPLES: usize = 100;
+
+/// The [`VERIFY_SAMPLES`] points `t0 + k (t_end − t0) / (VERIFY_SAMPLES +
+/// 1)`, `k = 1 …`: a run whose check times say little (only `t_end`, or
+/// only the start) is still measured along its whole solution.
+///
+/// ```
+/// let s = dae::runner::verification_samples(0.0, 1.0);
+/// assert_eq!(s.len(), dae::runner::VERIFY_SAMPLES);
+/// assert!(s.iter().all(|&t| 0.0 < t && t < 1.0));
+/// ```
+pub fn verification_samples(t0: f64, t_end: f64) -> Vec<f64> {
+    let n = VERIFY_SAMPLES;
+    (1..=n)
+        .map(|k| t0 + (t_end - t0) * (k as f64 / (n + 1) as f64))
+        .filter(|t| t.is_finite() && *t > t0 && *t < t_end)
+        .collect()
+}
+
+/// Errors, residuals and drift of `sol`: the errors at the reference's
+/// (or the check) times, the residuals and the drift at every output time;
+/// the trajectory keeps the output times in `shown` and the last.
 fn measure(
     spec: &RunSpec<'_>,
     sys: &dyn DaeSystem,
     y0: &[f64],
     sol: &dae_solvers::Solution,
+    shown: &[f64],
     record: &mut RunRecord,
 ) {
     let info = sys.info();
@@ -1004,23 +1055,29 @@ fn measure(
     let mut inv = vec![0.0; n_inv];
     sys.invariants(spec.t0, y0, &mut inv0);
     let is_check = check_flags(&sol.t, spec.check);
+    let mut is_shown = check_flags(&sol.t, shown);
+    if let Some(last) = is_shown.last_mut() {
+        *last = true;
+    }
     let reference = spec.reference.map(|r| (r, Components::new(r, info)));
     let is_ref_time = match spec.reference.and_then(Reference::times) {
         Some(times) => check_flags(&sol.t, times),
-        None => is_check.clone(),
+        None => is_check,
     };
     let mut exact = vec![0.0; spec.reference.map_or(0, |r| r.names().len())];
     let (mut err, mut err_sum, mut err_sq, mut err_alg, mut worst) =
         (0.0f64, 0.0f64, 0.0f64, None::<f64>, 0.0f64);
     let mut compared = false;
+    // A comparison after the start: one at t0 only verifies nothing.
+    let mut compared_later = false;
     // Largest verdict measure over the reference's times, and where.
     let (mut err_scaled, mut worst_t) = (0.0f64, spec.t0);
     let mut res = vec![None::<f64>; levels];
     let mut drift = vec![0.0f64; n_inv];
     let traj = &mut record.trajectory;
     traj.names = info.variables.iter().map(|v| v.name.clone()).collect();
-    for (((t, y), &is_check), &is_ref_time) in
-        sol.t.iter().zip(&sol.y).zip(&is_check).zip(&is_ref_time)
+    for (((t, y), &is_shown), &is_ref_time) in
+        sol.t.iter().zip(&sol.y).zip(&is_shown).zip(&is_ref_time)
     {
         sys.constraints(*t, y, &mut g);
         let mut lev = vec![0.0f64; levels];
@@ -1035,6 +1092,7 @@ fn measure(
                 traj.err.push((*t, e.main));
                 if is_ref_time {
                     compared = true;
+                    compared_later |= *t > spec.t0;
                     if e.verdict > err_scaled || e.verdict.is_nan() {
                         err_scaled = e.verdict;
                         worst_t = *t;
@@ -1049,15 +1107,18 @@ fn measure(
                 }
             }
         }
-        if is_check {
-            for (l, slot) in res.iter_mut().enumerate() {
-                if info.constraints.iter().any(|c| usize::from(c.level) == l) {
-                    *slot = Some(slot.unwrap_or(0.0).max(lev[l]));
-                }
+        // Along the whole solution, not only at the check times (a scene
+        // checked at t0 alone measured nothing).
+        for (l, slot) in res.iter_mut().enumerate() {
+            if info.constraints.iter().any(|c| usize::from(c.level) == l) {
+                *slot = Some(max_or_nan(slot.unwrap_or(0.0), lev[l]));
             }
-            for (d, (a, b)) in drift.iter_mut().zip(inv.iter().zip(&inv0)) {
-                *d = d.max((a - b).abs());
-            }
+        }
+        for (d, (a, b)) in drift.iter_mut().zip(inv.iter().zip(&inv0)) {
+            *d = max_or_nan(*d, (a - b).abs());
+        }
+        if !is_shown {
+            continue;
         }
         traj.t.push(*t);
         traj.y.push(y.clone());
@@ -1078,21 +1139,33 @@ fn measure(
     record.residuals = Residuals(res);
     record.invariant_drift = Named(info.invariants.iter().cloned().zip(drift).collect());
     let inv_scale: Vec<f64> = inv0.iter().map(|v| v.abs().max(1.0)).collect();
-    let (accuracy, note) = verdict(spec, record, err_scaled, worst_t, &inv_scale);
+    let (accuracy, note) = verdict(
+        spec,
+        record,
+        compared_later.then_some((err_scaled, worst_t)),
+        &inv_scale,
+    );
     record.accuracy = Some(accuracy);
     record.accuracy_note = Some(note);
 }
 
 /// The accuracy verdict and its one-line reason (see [`Accuracy`]).
+/// `compared`: the largest scaled error and where, if the reference was
+/// compared after the start (a comparison at `t0` alone verifies nothing:
+/// the verdict is then the one without a reference).
 fn verdict(
     spec: &RunSpec<'_>,
     record: &RunRecord,
-    err_scaled: f64,
-    worst_t: f64,
+    compared: Option<(f64, f64)>,
     inv_scale: &[f64],
 ) -> (Accuracy, String) {
     let tol = record.tol;
-    if spec.reference.is_some() {
+    let unused = if spec.reference.is_some() && compared.is_none() {
+        "the reference is compared at no time after the start"
+    } else {
+        "no reference"
+    };
+    if let Some((err_scaled, worst_t)) = compared {
         let bound = ACCURATE_FACTOR * tol;
         // NaN compares false: a NaN error is not accurate.
         return if err_scaled <= bound {
@@ -1129,14 +1202,14 @@ fn verdict(
         (
             Accuracy::Unverified,
             format!(
-                "no reference; constraint residuals and invariant drift below {SUSPECT_FACTOR:.0e}·tol"
+                "{unused}; constraint residuals and invariant drift below {SUSPECT_FACTOR:.0e}·tol"
             ),
         )
     } else {
         (
             Accuracy::Suspect,
             format!(
-                "no reference, but {} at or above {SUSPECT_FACTOR:.0e}·tol (scaled)",
+                "{unused}, but {} at or above {SUSPECT_FACTOR:.0e}·tol (scaled)",
                 excess.join(", ")
             ),
         )

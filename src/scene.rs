@@ -242,6 +242,20 @@ pub enum SceneError {
         /// The value.
         value: f64,
     },
+    /// A literal that is not zero but rounds to 0 in double precision
+    /// (`1e-400`), refused like one that rounds to infinity.
+    #[error(
+        "{at}: `{field}` = {literal} underflows to 0 in double precision (the smallest positive \
+         value is 4.9e-324); write 0 if 0 is meant"
+    )]
+    Underflow {
+        /// Where.
+        at: Location,
+        /// `section.key`.
+        field: String,
+        /// The literal as written.
+        literal: String,
+    },
     /// A finite number too large to be used ([`MAX_ABS_VALUE`]).
     #[error(
         "{at}: `{field}` = {value:e} is too large: scene values must have magnitude at most {max:e} so that \
@@ -272,7 +286,7 @@ pub enum SceneError {
     /// positive, below `100 ε` or not below 1.
     #[error(
         "{at}: `sweep.tolerances`: tolerance {value:e} {issue}; tolerances (RTOL = ATOL) must be in {}",
-        dae_solvers::options::uniform_range()
+        crate::runner::tolerance_range()
     )]
     InvalidTolerance {
         /// Where.
@@ -324,6 +338,19 @@ pub enum SceneError {
         field: String,
         /// What is wrong (with the CSV line where there is one).
         reason: String,
+    },
+    /// Check times that are all the start: a verdict there verifies
+    /// nothing (the solution is the initial values).
+    #[error(
+        "{at}: `time.check`: the only check time is the start {start}, where the solution is the \
+         initial values and a verdict verifies nothing; give a check time after it, or leave \
+         `check` out to check at the end"
+    )]
+    VacuousChecks {
+        /// Where (the list).
+        at: Location,
+        /// The start of the horizon.
+        start: f64,
     },
     /// Both `check` and `check_every`.
     #[error("{at}: `time.check` and `time.check_every` are exclusive; give one of them")]
@@ -1157,6 +1184,15 @@ impl Source<'_> {
         }
     }
 
+    /// Whether the number literal at `span` has a non-zero digit before
+    /// its exponent (so that a value of 0 is an underflow).
+    fn nonzero_literal(&self, span: &Range<usize>) -> bool {
+        let literal = self.text.get(span.clone()).unwrap_or_default();
+        let mantissa = literal.split(['e', 'E']).next().unwrap_or_default();
+        // Hexadecimal, octal and binary integers are exact: no underflow.
+        !mantissa.contains(['x', 'o', 'b']) && mantissa.chars().any(|c| ('1'..='9').contains(&c))
+    }
+
     /// A finite number of magnitude at most [`MAX_ABS_VALUE`].
     fn finite(&self, field: &str, v: &Spanned<f64>) -> Result<f64, SceneError> {
         let value = *v.get_ref();
@@ -1165,6 +1201,17 @@ impl Source<'_> {
                 at: self.at(&v.span()),
                 field: field.to_string(),
                 value,
+            })
+        } else if value == 0.0 && self.nonzero_literal(&v.span()) {
+            Err(SceneError::Underflow {
+                at: self.at(&v.span()),
+                field: field.to_string(),
+                literal: self
+                    .text
+                    .get(v.span())
+                    .unwrap_or_default()
+                    .trim()
+                    .to_string(),
             })
         } else if value.abs() > MAX_ABS_VALUE {
             Err(SceneError::TooLarge {
@@ -1740,6 +1787,12 @@ impl Source<'_> {
                 }
             }
             out.push(t);
+        }
+        if out.iter().all(|&t| t <= start) {
+            return Err(SceneError::VacuousChecks {
+                at: self.at(&list_span),
+                start,
+            });
         }
         Ok(out)
     }

@@ -708,9 +708,14 @@ fn colour_of(class: Class) -> RGBColor {
 
 /// Write `map.txt`, `map.json`, `map.svg` and `map.png` into `dir` as one
 /// set ([`crate::sweep::publish`]: `dir` is replaced only when every file is
-/// written, and only if it holds nothing but sweep outputs).
-pub fn write(map: &StabilityMap, dir: &Path) -> Result<Vec<PathBuf>, SweepError> {
-    let names = sweep::publish(dir, |staging| {
+/// written, and only if it holds nothing but sweep outputs). `lock`: the
+/// destination's lock if the caller took it before the work, else `None`.
+pub fn write(
+    map: &StabilityMap,
+    dir: &Path,
+    lock: Option<&sweep::write::OutputLock>,
+) -> Result<Vec<PathBuf>, SweepError> {
+    let names = sweep::publish(dir, lock, |staging| {
         let io = |name: &str| {
             let path = dir.join(name);
             move |source| SweepError::Write { path, source }

@@ -280,7 +280,7 @@ fn failed_sweep_write_leaves_the_previous_output_whole() {
     std::fs::create_dir_all(out.join("index.html")).unwrap();
     std::fs::write(out.join("results.csv"), "old csv").unwrap();
     std::fs::write(out.join("results.json"), "old json").unwrap();
-    assert!(sweep::write_outputs(&report, &summary, &out).is_err());
+    assert!(sweep::write_outputs(&report, &summary, &out, None).is_err());
     assert_eq!(
         std::fs::read_to_string(out.join("results.csv")).unwrap(),
         "old csv"
@@ -320,10 +320,10 @@ fn publish_dir_keeps_the_old_set_when_the_fill_fails() {
     let dest = root.path().join("out");
     std::fs::create_dir(&dest).unwrap();
     std::fs::write(dest.join("results.csv"), "old").unwrap();
-    let r: Result<(), std::io::Error> = publish_dir(&dest, |staging| {
+    let r: Result<(), Box<dyn std::error::Error>> = publish_dir(&dest, None, |staging| {
         std::fs::write(staging.join("results.csv"), "new")?;
         std::fs::write(staging.join("results.json"), "{\"half\":")?;
-        Err(std::io::Error::other("injected: disk full"))
+        Err(std::io::Error::other("injected: disk full").into())
     });
     assert!(r.is_err());
     assert_eq!(entries(&dest), ["results.csv"]);
@@ -341,7 +341,7 @@ fn publish_dir_replaces_the_whole_set() {
     let dest = root.path().join("out");
     std::fs::create_dir(&dest).unwrap();
     std::fs::write(dest.join("stale.svg"), "old figure").unwrap();
-    let r: Result<u8, std::io::Error> = publish_dir(&dest, |staging| {
+    let r: Result<u8, Box<dyn std::error::Error>> = publish_dir(&dest, None, |staging| {
         std::fs::write(staging.join("index.html"), "new")?;
         Ok(7)
     });
@@ -358,10 +358,10 @@ fn sweep_output_leftovers_are_cleaned_and_foreign_directories_kept() {
     let (report, summary) = tiny_sweep();
     let root = tempfile::tempdir().unwrap();
     let out = root.path().join("s01");
-    let killed = root.path().join(".s01.dae-sweep-new-99999-0");
+    let killed = root.path().join(".s01.dae-sweep-new-4000000000-0");
     std::fs::create_dir(&killed).unwrap();
-    std::fs::write(killed.join(".solution.svg.tmp-99999-3.svg"), "<svg").unwrap();
-    let written = sweep::write_outputs(&report, &summary, &out).unwrap();
+    std::fs::write(killed.join(".solution.svg.tmp-4000000000-3.svg"), "<svg").unwrap();
+    let written = sweep::write_outputs(&report, &summary, &out, None).unwrap();
     assert!(written
         .files
         .iter()
@@ -375,7 +375,7 @@ fn sweep_output_leftovers_are_cleaned_and_foreign_directories_kept() {
     let mine = root.path().join("mine");
     std::fs::create_dir(&mine).unwrap();
     std::fs::write(mine.join("notes.txt"), "my notes").unwrap();
-    let err = sweep::write_outputs(&report, &summary, &mine).unwrap_err();
+    let err = sweep::write_outputs(&report, &summary, &mine, None).unwrap_err();
     assert!(matches!(err, sweep::SweepError::NotOurs { .. }), "{err}");
     assert!(err.to_string().contains("notes.txt"), "{err}");
     assert_eq!(entries(&mine), ["notes.txt"]);
@@ -449,9 +449,14 @@ fn killed_sweep_leaves_the_previous_output_intact() {
             let json = std::fs::read_to_string(out.join("results.json")).unwrap();
             assert!(serde_json::from_str::<serde_json::Value>(&json).is_ok());
         }
-        // Only clearly named leftovers beside it.
+        // Only clearly named leftovers beside it: staging directories and
+        // the lock file (its lock died with the process; the next sweep
+        // takes it and removes it).
         for n in entries(root.path()) {
-            assert!(n == "s01" || n.starts_with(".s01.dae-sweep-"), "{n}");
+            assert!(
+                n == "s01" || n.starts_with(".s01.dae-sweep-") || n == ".s01.dae-lock",
+                "{n}"
+            );
         }
     }
     let o = dae(&tiny);
@@ -708,7 +713,7 @@ fn sweep_tables_show_the_verdict() {
     assert!(text.contains("INACCURATE"), "{text}");
     let root = tempfile::tempdir().unwrap();
     let out = root.path().join("s01");
-    sweep::write_outputs(&report, &summary, &out).unwrap();
+    sweep::write_outputs(&report, &summary, &out, None).unwrap();
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     assert_eq!(&head[4..6], ["status", "accuracy"]);

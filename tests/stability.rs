@@ -112,7 +112,7 @@ fn every_case_is_a_typed_outcome_and_the_wrong_answers_are_flagged() {
     assert!(counts.runs >= 4 * 2 * 6, "{counts:?}");
     // Every output is written, as one set.
     let dir = std::env::temp_dir().join(format!("dae-stability-{}", std::process::id()));
-    let files = stability::write(&map, &dir).unwrap();
+    let files = stability::write(&map, &dir, None).unwrap();
     assert_eq!(files.len(), 4);
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("map.json")).unwrap()).unwrap();

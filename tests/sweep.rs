@@ -906,7 +906,7 @@ fn small_s01_sweep_writes_every_output() {
     let summary = sweep::Summary::of(&report);
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("s01");
-    let written = sweep::write_outputs(&report, &summary, &out).unwrap();
+    let written = sweep::write_outputs(&report, &summary, &out, None).unwrap();
     expect_files(
         &out,
         &[
@@ -1053,7 +1053,7 @@ fn sweep_without_reference_reports_residuals_not_errors() {
     assert!(summary.pareto.is_empty() && summary.paper.is_none() && summary.paper_l2.is_none());
     assert!(summary.targets.iter().all(|t| t.best.is_none()));
     let dir = tempfile::tempdir().unwrap();
-    let written = sweep::write_outputs(&report, &summary, dir.path()).unwrap();
+    let written = sweep::write_outputs(&report, &summary, dir.path(), None).unwrap();
     expect_files(
         dir.path(),
         &[

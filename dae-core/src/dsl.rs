@@ -460,6 +460,17 @@ fn parse_parameters(tokens: &[TokenTree], errors: &mut Errors) -> Vec<ParamDecl>
             [TokenTree::Literal(lit)] => match number(&lit.to_string()) {
                 Some(v) => {
                     let f = crate::expr::q_to_f64(&v);
+                    if f == 0.0 && v != Q::from_integer(0.into()) {
+                        // `1e-400` would silently become 0, where `1e400`
+                        // is refused as not finite.
+                        errors.push(
+                            lit.span(),
+                            format!(
+                                "default of `{name}` underflows to 0 in double precision (the smallest positive value is 4.9e-324); write 0 if 0 is meant"
+                            ),
+                        );
+                        continue;
+                    }
                     if negative {
                         -f
                     } else {

@@ -40,12 +40,12 @@ pub struct RunArgs {
     /// the output says which and why).
     #[arg(long)]
     pub formulation: Option<String>,
-    /// Tolerance RTOL = ATOL for every unknown, in [2.2e-14, 1) like scene
+    /// Tolerance RTOL = ATOL for every unknown, in [100 ε, 1) = [2.220446049250313e-14, 1) like scene
     /// tolerances: the same as `--rtol T --atol T`, and refused beside
     /// either. Default: the scene's `[tolerance]`, else 1e-8.
     #[arg(long, allow_negative_numbers = true, conflicts_with_all = ["rtol", "atol"])]
     pub tol: Option<f64>,
-    /// Relative tolerance of every unknown (0, or in [2.2e-14, 1)); a
+    /// Relative tolerance of every unknown (0, or in [100 ε, 1) = [2.220446049250313e-14, 1)); a
     /// scene's per-unknown `[tolerance] rtol` entries stay.
     #[arg(long, allow_negative_numbers = true)]
     pub rtol: Option<f64>,
@@ -75,7 +75,7 @@ pub fn check_tol(tol: f64, flag: &str) -> Result<(), Failure> {
     dae_solvers::options::check_uniform(tol).map_err(|issue| {
         Failure::input(format!(
             "{flag} {tol:e}: the tolerance {issue}; tolerances (RTOL = ATOL) must be in {}",
-            dae_solvers::options::uniform_range()
+            crate::runner::tolerance_range()
         ))
     })
 }

@@ -35,7 +35,7 @@ pub struct SweepArgs {
     #[arg(long, value_delimiter = ',')]
     pub formulations: Option<Vec<String>>,
     /// Tolerances RTOL = ATOL, comma-separated (default: the scene's), each
-    /// in [2.2e-14, 1).
+    /// in [100 ε, 1) = [2.220446049250313e-14, 1).
     #[arg(long, value_delimiter = ',')]
     pub tols: Option<Vec<f64>>,
     /// Timed integrations per run, at least: more (up to 50) while they
@@ -120,6 +120,21 @@ pub fn default_out_dir(scene_name: &str) -> PathBuf {
     })
 }
 
+/// Before any work: refuse an `--out` the sweep may not replace (exit 2:
+/// files that are not a sweep's, a mount point) or that another process is
+/// writing (exit 4), and take its lock.
+fn lock_out(dir: &std::path::Path) -> Result<sweep::write::OutputLock, Failure> {
+    let lock = sweep::write::OutputLock::acquire(dir).map_err(|e| {
+        let f = Failure::sweep(&e.into());
+        Failure {
+            message: format!("--out: {}", f.message),
+            ..f
+        }
+    })?;
+    sweep::check_replaceable(dir).map_err(|e| Failure::input(format!("--out: {e}")))?;
+    Ok(lock)
+}
+
 /// Run the sweep; `Ok((stdout, exit code))`.
 pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
     if let Some(tols) = &args.tols {
@@ -164,16 +179,18 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&scene.name));
-    // Refuse an output directory the sweep may not replace before the work.
-    sweep::check_replaceable(&dir).map_err(|e| Failure::input(format!("--out: {e}")))?;
+    // Refuse an output directory the sweep may not replace, or that
+    // another sweep is writing, before the work; hold it until written.
+    let lock = lock_out(&dir)?;
     let report = sweep::run(&scene, &opts).map_err(|e| match &e {
         sweep::SweepError::Run(r) => Failure::input(format!("{}: {r}", scene.origin)),
         _ => Failure::input(e.to_string()),
     })?;
     let summary = sweep::Summary::of(&report);
-    // An output directory that cannot be written is a bad `--out` (exit 2).
-    let written =
-        sweep::write_outputs(&report, &summary, &dir).map_err(|e| Failure::input(e.to_string()))?;
+    // Outputs that cannot be written (a full disk): exit 4, the previous
+    // set kept.
+    let written = sweep::write_outputs(&report, &summary, &dir, Some(&lock))
+        .map_err(|e| Failure::sweep(&e))?;
     for n in &written.notes {
         eprintln!("note: {n}");
     }
@@ -228,9 +245,9 @@ fn extremes(args: &SweepArgs, cases: &std::path::Path) -> Result<(String, i32), 
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join("extremes"));
-    sweep::check_replaceable(&dir).map_err(|e| Failure::input(format!("--out: {e}")))?;
+    let lock = lock_out(&dir)?;
     let map = stability::build(&files, &opts).map_err(|e| Failure::input(e.to_string()))?;
-    let files = stability::write(&map, &dir).map_err(|e| Failure::input(e.to_string()))?;
+    let files = stability::write(&map, &dir, Some(&lock)).map_err(|e| Failure::sweep(&e))?;
     let out = match args.format {
         Format::Json => {
             eprintln!("wrote {} files to {}", files.len(), dir.display());

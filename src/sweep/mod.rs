@@ -194,7 +194,7 @@ pub enum SweepError {
     /// A tolerance outside [`dae_solvers::options::check_uniform`].
     #[error(
         "tolerance {tol:e} {issue}; tolerances (RTOL = ATOL) must be in {}",
-        dae_solvers::options::uniform_range()
+        crate::runner::tolerance_range()
     )]
     BadTolerance {
         /// The value given.
@@ -247,6 +247,19 @@ pub enum SweepError {
         path: PathBuf,
         /// The I/O error.
         source: std::io::Error,
+    },
+    /// The output set could not be published: another process holds the
+    /// destination, it is a mount point, or the file system refused.
+    #[error(transparent)]
+    Publish(#[from] write::PublishError),
+    /// A figure could not be drawn or written (a full disk shows here as
+    /// the PNG encoder's error): the set is incomplete, so not published.
+    #[error("cannot draw figure {file}: {source}")]
+    Figure {
+        /// The figure's file name, without extension.
+        file: String,
+        /// Why.
+        source: plot::PlotError,
     },
     /// A file could not be written.
     #[error("cannot write {path}: {source}")]
@@ -973,7 +986,7 @@ pub fn results_json_string(report: &SweepReport, summary: &Summary) -> String {
 pub struct Outputs {
     /// Files written, in order.
     pub files: Vec<PathBuf>,
-    /// Figures that could not be drawn, and why.
+    /// Figures left out (nothing to draw), and why.
     pub notes: Vec<String>,
 }
 
@@ -1034,41 +1047,25 @@ pub fn check_replaceable(dir: &Path) -> Result<(), SweepError> {
     Ok(())
 }
 
-/// Why [`write::publish_dir`] failed: the filling or the publishing.
-enum Staged {
-    Fill(SweepError),
-    Io(std::io::Error),
-}
-
-impl From<std::io::Error> for Staged {
-    fn from(e: std::io::Error) -> Self {
-        Staged::Io(e)
-    }
-}
-
 /// Produce the output directory `dir` as one set: refuse a `dir` that holds
 /// anything but sweep outputs ([`check_replaceable`]), then let `fill`
 /// write every file into a staging directory that replaces `dir` only when
-/// complete ([`write::publish_dir`]). Shared by [`write_outputs`] and the
-/// stability map.
+/// complete ([`write::publish_dir`], under `lock` or, if `None`, a lock
+/// taken here). Shared by [`write_outputs`] and the stability map.
 pub fn publish<T>(
     dir: &Path,
+    lock: Option<&write::OutputLock>,
     fill: impl FnOnce(&Path) -> Result<T, SweepError>,
 ) -> Result<T, SweepError> {
     check_replaceable(dir)?;
-    match write::publish_dir(dir, |staging: &Path| fill(staging).map_err(Staged::Fill)) {
-        Ok(v) => Ok(v),
-        Err(Staged::Fill(e)) => Err(e),
-        Err(Staged::Io(source)) => Err(SweepError::Write {
-            path: dir.to_path_buf(),
-            source,
-        }),
-    }
+    write::publish_dir(dir, lock, fill)
 }
 
 /// Write `results.csv`, `results.json`, the figures (SVG and PNG) and
-/// `index.html` as one set into `dir`. A figure that cannot be drawn is a
-/// note in `index.html`, not an error.
+/// `index.html` as one set into `dir`. A figure that cannot be drawn or
+/// written is an error ([`SweepError::Figure`]): the set would be
+/// incomplete, so the previous one stays. `lock`: the destination's lock if
+/// the caller took it before the work (the command line does), else `None`.
 ///
 /// The set is atomic ([`write::publish_dir`]): everything is written into a
 /// staging directory `.<dir name>.dae-sweep-new-…` beside `dir` and renamed
@@ -1083,8 +1080,9 @@ pub fn write_outputs(
     report: &SweepReport,
     summary: &Summary,
     dir: &Path,
+    lock: Option<&write::OutputLock>,
 ) -> Result<Outputs, SweepError> {
-    let mut out = publish(dir, |staging| fill_outputs(report, summary, staging))?;
+    let mut out = publish(dir, lock, |staging| fill_outputs(report, summary, staging))?;
     // The files were written in the staging directory: report them where
     // they are now.
     for f in &mut out.files {
@@ -1111,10 +1109,11 @@ fn fill_outputs(
     write_file(dir, "results.json", json.as_bytes(), &mut out)?;
     let figures = plot::figures(report);
     for fig in &figures.figures {
-        match plot::render(fig, dir) {
-            Ok(files) => out.files.extend(files),
-            Err(e) => out.notes.push(format!("figure {}: {e}", fig.file)),
-        }
+        let files = plot::render(fig, dir).map_err(|source| SweepError::Figure {
+            file: fig.file.clone(),
+            source,
+        })?;
+        out.files.extend(files);
     }
     out.notes.extend(figures.notes.iter().cloned());
     let drawn: Vec<&plot::Figure> = figures
