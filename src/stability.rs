@@ -34,6 +34,48 @@ use std::path::{Path, PathBuf};
 /// 2·10⁴ s horizon case at 1e-6 (≈ 2.7·10⁶).
 pub const MAP_MAX_STEPS: usize = 5_000_000;
 
+/// What makes a finished run with a reference accurate.
+///
+/// ```
+/// use dae::stability::Verdict;
+///
+/// // At tol 1e-8 the literature map wants 6 significant correct digits.
+/// assert!(Verdict::Digits.accepts(6.0, 1e-8));
+/// assert!(!Verdict::Digits.accepts(5.9, 1e-8));
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// The run's own verdict ([`crate::runner::Accuracy`]): the error within
+    /// [`ACCURATE_FACTOR`]·tol·max(1, |y*|) at every check time (the
+    /// stability map of the extremes).
+    #[default]
+    Accuracy,
+    /// Significant correct digits against the published reference, as the
+    /// IVP Test Set defines them (`scd` = −log₁₀ of the largest error,
+    /// relative where the scene says so): accurate when
+    /// `scd ≥ −log₁₀(tol) − 2` (the literature map, issue 26).
+    Digits,
+}
+
+impl Verdict {
+    /// Digits a run at `tol` needs under [`Verdict::Digits`].
+    pub fn digits_needed(tol: f64) -> f64 {
+        -tol.log10() - 2.0
+    }
+
+    /// Whether `scd` digits are enough at `tol` (always under
+    /// [`Verdict::Accuracy`], which does not look at digits).
+    pub fn accepts(self, scd: f64, tol: f64) -> bool {
+        match self {
+            Verdict::Accuracy => true,
+            // A small slack for the printing of tol (1e-8 is not exactly
+            // 10⁻⁸): 6 digits at 1e-8 are 6 digits.
+            Verdict::Digits => scd >= Self::digits_needed(tol) - 1e-9,
+        }
+    }
+}
+
 /// How to build a map.
 #[derive(Clone, Debug)]
 pub struct MapOptions {
@@ -47,6 +89,8 @@ pub struct MapOptions {
     pub tolerances: Option<Vec<f64>>,
     /// Progress bars on stderr.
     pub progress: bool,
+    /// What makes a finished run accurate.
+    pub verdict: Verdict,
 }
 
 impl Default for MapOptions {
@@ -57,6 +101,7 @@ impl Default for MapOptions {
             solvers: None,
             tolerances: None,
             progress: false,
+            verdict: Verdict::Accuracy,
         }
     }
 }
@@ -148,6 +193,9 @@ pub struct Cell {
     pub class: Class,
     /// Error against the reference (if any).
     pub err: Option<f64>,
+    /// Significant correct digits against the reference (if any; see
+    /// [`crate::runner::RunRecord::scd`]).
+    pub scd: Option<f64>,
     /// Largest invariant drift over the check times.
     pub drift: Option<f64>,
     /// Largest position-level constraint residual.
@@ -188,6 +236,8 @@ pub struct Case {
 /// The whole map.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StabilityMap {
+    /// What makes a finished run with a reference accurate.
+    pub verdict: Verdict,
     /// The accuracy threshold: a run with a reference is accurate when
     /// `err ≤ threshold · tol`.
     pub threshold: f64,
@@ -266,6 +316,7 @@ pub fn build(files: &[PathBuf], opts: &MapOptions) -> Result<StabilityMap, Sweep
         cases.push(case(file, opts)?);
     }
     Ok(StabilityMap {
+        verdict: opts.verdict,
         threshold: ACCURATE_FACTOR,
         max_steps: opts.max_steps,
         cases,
@@ -316,12 +367,12 @@ fn case(file: &Path, opts: &MapOptions) -> Result<Case, SweepError> {
         scene: Some(scene.name.clone()),
         refused: None,
         tolerances: sweep_opts.tolerances.clone(),
-        cells: cells(&report),
+        cells: cells(&report, opts.verdict),
         wall_s: start.elapsed().as_secs_f64(),
     })
 }
 
-fn cells(report: &SweepReport) -> Vec<Cell> {
+fn cells(report: &SweepReport, verdict: Verdict) -> Vec<Cell> {
     let mut out = Vec::new();
     for p in &report.pairs {
         if let Some(why) = &p.not_applicable {
@@ -331,6 +382,7 @@ fn cells(report: &SweepReport) -> Vec<Cell> {
                 tol: None,
                 class: Class::NotApplicable { why: why.clone() },
                 err: None,
+                scd: None,
                 drift: None,
                 g0: None,
                 steps: 0,
@@ -344,12 +396,27 @@ fn cells(report: &SweepReport) -> Vec<Cell> {
             .filter(|r| r.record.solver == p.solver && r.record.formulation == p.formulation)
         {
             let rec = &run.record;
+            let mut note = rec.accuracy_note.clone();
+            let class = match (Class::of(rec), rec.scd) {
+                (Class::Accurate | Class::Inaccurate, Some(scd)) if verdict == Verdict::Digits => {
+                    let needed = Verdict::digits_needed(rec.tol);
+                    if verdict.accepts(scd, rec.tol) {
+                        note = Some(format!("scd {scd:.2} >= {needed:.0} needed at this tol"));
+                        Class::Accurate
+                    } else {
+                        note = Some(format!("scd {scd:.2} < {needed:.0} needed at this tol"));
+                        Class::Inaccurate
+                    }
+                }
+                (class, _) => class,
+            };
             out.push(Cell {
                 solver: rec.solver.clone(),
                 formulation: rec.formulation.clone(),
                 tol: Some(rec.tol),
-                class: Class::of(rec),
+                class,
                 err: rec.err,
+                scd: rec.scd,
                 drift: rec
                     .invariant_drift
                     .0
@@ -358,7 +425,7 @@ fn cells(report: &SweepReport) -> Vec<Cell> {
                     .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.max(d)))),
                 g0: rec.residuals.level(0),
                 steps: rec.stats.steps,
-                note: rec.accuracy_note.clone(),
+                note,
             });
         }
     }
@@ -375,12 +442,16 @@ fn short(v: Option<f64>) -> String {
 /// applicable); then every failure with its typed error and time.
 pub fn text(map: &StabilityMap) -> String {
     let mut s = String::new();
+    let accurate = match map.verdict {
+        Verdict::Accuracy => format!("err <= {}·tol·max(1,|y*|)", map.threshold),
+        Verdict::Digits => "scd >= -log10(tol) - 2 against the published reference".into(),
+    };
     let _ = writeln!(
         s,
-        "Stability map: A accurate (err <= {}·tol·max(1,|y*|)), i inaccurate, u unverified (no reference), \
+        "Stability map: A accurate ({accurate}), i inaccurate, u unverified (no reference), \
          s suspect (residual or drift >= {:e}·tol), L step limit ({} steps), F failed, - not applicable; \
          one symbol per tolerance",
-        map.threshold, SUSPECT_FACTOR, map.max_steps
+        SUSPECT_FACTOR, map.max_steps
     );
     for case in &map.cases {
         let name = case.scene.as_deref().unwrap_or("?");
@@ -411,6 +482,9 @@ pub fn text(map: &StabilityMap) -> String {
             }
             s.push('\n');
         }
+        if map.verdict == Verdict::Digits {
+            digits_table(&mut s, case, &solvers, &formulations);
+        }
         for c in case.cells.iter().filter(|c| c.class.is_failure()) {
             let what = match &c.class {
                 Class::StepLimit { t } => format!("step limit at t = {t:.6e}"),
@@ -435,7 +509,7 @@ pub fn text(map: &StabilityMap) -> String {
         {
             let _ = writeln!(
                 s,
-                "  {}({}) tol {:e}: {} (err {}, |g0| {}, drift {}){}",
+                "  {}({}) tol {:e}: {} (err {}{}, |g0| {}, drift {}){}",
                 c.solver,
                 c.formulation,
                 c.tol.unwrap_or(f64::NAN),
@@ -445,6 +519,7 @@ pub fn text(map: &StabilityMap) -> String {
                     "suspect"
                 },
                 short(c.err),
+                c.scd.map_or(String::new(), |d| format!(", scd {d:.2}")),
                 short(c.g0),
                 short(c.drift),
                 c.note
@@ -461,6 +536,47 @@ pub fn text(map: &StabilityMap) -> String {
         c.runs, c.accurate, c.inaccurate, c.unverified, c.suspect, c.step_limit, c.failed, c.refused_cases
     );
     s
+}
+
+/// Per solver(formulation), one column per tolerance: the significant
+/// correct digits and the accepted steps of the run (`A9.6/2768`: the
+/// class symbol, scd, steps), or only the class symbol where the run did
+/// not finish (`F`, `L`) or has no digits.
+fn digits_table(s: &mut String, case: &Case, solvers: &[String], formulations: &[String]) {
+    let _ = write!(s, "  scd/steps {:<12}", "");
+    for t in &case.tolerances {
+        let _ = write!(s, " {:>12}", format!("{t:.0e}"));
+    }
+    s.push('\n');
+    for sv in solvers {
+        for f in formulations {
+            let row: Vec<&Cell> = case
+                .cells
+                .iter()
+                .filter(|c| &c.solver == sv && &c.formulation == f && c.tol.is_some())
+                .collect();
+            if row.is_empty() {
+                continue;
+            }
+            let _ = write!(s, "  {:<22}", format!("{sv}({f})"));
+            for t in &case.tolerances {
+                let entry = row
+                    .iter()
+                    .find(|c| c.tol == Some(*t))
+                    .map_or_else(String::new, |c| match (&c.class, c.scd) {
+                        (Class::Accurate | Class::Inaccurate, Some(d)) => {
+                            format!("{}{d:.1}/{}", c.class.symbol(), c.steps)
+                        }
+                        // A run that did not finish has no digits (and a
+                        // failed one no step count): its symbol; the failure
+                        // lines below say what and where.
+                        (class, _) => class.symbol().to_string(),
+                    });
+                let _ = write!(s, " {entry:>12}");
+            }
+            s.push('\n');
+        }
+    }
 }
 
 /// Solvers and formulations of a case's cells, in first-seen order.
@@ -692,6 +808,7 @@ fn legend_cell(ratio: f64) -> Cell {
         tol: Some(1.0),
         class: Class::Accurate,
         err: Some(ratio),
+        scd: None,
         drift: None,
         g0: None,
         steps: 0,

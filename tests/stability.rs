@@ -19,6 +19,7 @@ fn reduced(files: &[&str], max_steps: usize) -> StabilityMap {
         solvers: Some(vec!["radau5".into(), "bdf".into()]),
         tolerances: Some(vec![1e-5]),
         progress: false,
+        verdict: stability::Verdict::Accuracy,
     };
     stability::build(&files, &opts).expect("the options are valid")
 }

@@ -71,6 +71,15 @@ pub struct SweepArgs {
     #[arg(long, value_name = "DIR", num_args = 0..=1,
           default_missing_value = "scenes/extremes")]
     pub extremes: Option<PathBuf>,
+    /// Build the literature map instead: every scene of DIR (default
+    /// scenes/literature: published problems with published reference
+    /// values) × its solvers × formulations × tolerances, like --extremes,
+    /// with the accuracy verdict on significant correct digits (accurate
+    /// when scd ≥ −log10(tol) − 2) and a scd/steps table per case; writes
+    /// to --out (default out/literature).
+    #[arg(long, value_name = "DIR", num_args = 0..=1,
+          default_missing_value = "scenes/literature", conflicts_with = "extremes")]
+    pub literature: Option<PathBuf>,
     /// Steps (accepted + rejected) each run may take before it stops with
     /// a step-limit failure. Sweep: overrides the scene's `[sweep]
     /// max_steps` (default: the library's, 20 000 000). Stability map:
@@ -94,6 +103,7 @@ impl Default for SweepArgs {
             strict_init: false,
             quiet: false,
             extremes: None,
+            literature: None,
             max_steps: None,
         }
     }
@@ -146,7 +156,10 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
         return Err(Failure::input("--max-steps 0: at least one step is needed"));
     }
     if let Some(dir) = &args.extremes {
-        return extremes(args, dir);
+        return map(args, dir, MapKind::Extremes);
+    }
+    if let Some(dir) = &args.literature {
+        return map(args, dir, MapKind::Literature);
     }
     if args.repeats == 0 {
         return Err(Failure::input(
@@ -219,18 +232,36 @@ pub fn run(args: &SweepArgs) -> Result<(String, i32), Failure> {
     Ok((out, 0))
 }
 
-/// `dae sweep --extremes [DIR]`: the stability map.
-fn extremes(args: &SweepArgs, cases: &std::path::Path) -> Result<(String, i32), Failure> {
+/// Which map `dae sweep` builds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MapKind {
+    /// `--extremes`: the pendulum's extremes, the run's own verdict.
+    Extremes,
+    /// `--literature`: published problems, the verdict on digits.
+    Literature,
+}
+
+impl MapKind {
+    fn flag(self) -> &'static str {
+        match self {
+            MapKind::Extremes => "--extremes",
+            MapKind::Literature => "--literature",
+        }
+    }
+}
+
+/// `dae sweep --extremes [DIR]` or `--literature [DIR]`: the stability map.
+fn map(args: &SweepArgs, cases: &std::path::Path, kind: MapKind) -> Result<(String, i32), Failure> {
+    let flag = kind.flag();
     if args.formulations.is_some() {
         return Err(Failure::input(
             "--formulations: the stability map runs every formulation of each case",
         ));
     }
-    let files =
-        stability::case_files(cases).map_err(|e| Failure::input(format!("--extremes: {e}")))?;
+    let files = stability::case_files(cases).map_err(|e| Failure::input(format!("{flag}: {e}")))?;
     if files.is_empty() {
         return Err(Failure::input(format!(
-            "--extremes {}: no scene files (*.toml) there",
+            "{flag} {}: no scene files (*.toml) there",
             cases.display()
         )));
     }
@@ -240,11 +271,17 @@ fn extremes(args: &SweepArgs, cases: &std::path::Path) -> Result<(String, i32), 
         solvers: args.solvers.clone(),
         tolerances: args.tols.clone(),
         progress: !args.quiet,
+        verdict: match kind {
+            MapKind::Extremes => stability::Verdict::Accuracy,
+            MapKind::Literature => stability::Verdict::Digits,
+        },
     };
-    let dir = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join("extremes"));
+    let dir = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out").join(match kind {
+            MapKind::Extremes => "extremes",
+            MapKind::Literature => "literature",
+        })
+    });
     let lock = lock_out(&dir)?;
     let map = stability::build(&files, &opts).map_err(|e| Failure::input(e.to_string()))?;
     let files = stability::write(&map, &dir, Some(&lock)).map_err(|e| Failure::sweep(&e))?;

@@ -1,0 +1,89 @@
+//! The reduced literature map: two quick published problems of
+//! `scenes/literature/` (the IVP Test Set's chemical Akzo Nobel problem,
+//! index 1, and the car axis, index 3), `radau5` and `bdf`, one tolerance.
+//! The full map is `dae sweep --literature` (EXTREMES.md §5).
+
+use dae::stability::{self, Cell, Class, MapOptions, StabilityMap, Verdict};
+use std::path::{Path, PathBuf};
+
+const TOL: f64 = 1e-6;
+
+fn reduced(files: &[&str]) -> StabilityMap {
+    let files: Vec<PathBuf> = files
+        .iter()
+        .map(|f| {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("scenes/literature")
+                .join(f)
+        })
+        .collect();
+    let opts = MapOptions {
+        jobs: 2,
+        max_steps: 200_000,
+        solvers: Some(vec!["radau5".into(), "bdf".into()]),
+        tolerances: Some(vec![TOL]),
+        progress: false,
+        verdict: Verdict::Digits,
+    };
+    stability::build(&files, &opts).expect("the options are valid")
+}
+
+fn cells<'a>(map: &'a StabilityMap, scene: &str) -> &'a [Cell] {
+    let case = map
+        .cases
+        .iter()
+        .find(|c| c.scene.as_deref() == Some(scene))
+        .unwrap_or_else(|| panic!("no case {scene}"));
+    assert!(case.refused.is_none(), "{scene}: {:?}", case.refused);
+    &case.cells
+}
+
+fn cell<'a>(map: &'a StabilityMap, scene: &str, solver: &str, f: &str) -> &'a Cell {
+    cells(map, scene)
+        .iter()
+        .find(|c| c.solver == solver && c.formulation == f)
+        .unwrap_or_else(|| panic!("no cell {solver}({f}) in {scene}"))
+}
+
+#[test]
+fn published_values_are_reached_and_every_cell_is_typed() {
+    let map = reduced(&["chemakzo.toml", "caraxis.toml"]);
+    // Index 1, radau5 and bdf on the model as written: the Test Set's
+    // digits at this tolerance (scd ≥ −log10(tol) − 2 = 4).
+    for solver in ["radau5", "bdf"] {
+        let c = cell(&map, "chemakzo", solver, "ori2");
+        assert_eq!(c.class, Class::Accurate, "chemakzo {solver}: {c:?}");
+        assert!(c.scd.is_some_and(|d| d >= 4.0), "{c:?}");
+    }
+    // chemakzo is index 1: the formulations of index-2/3 problems are not
+    // offered, and the map says so instead of running them.
+    for f in ["rcd1", "ggl1", "psi1"] {
+        let c = cell(&map, "chemakzo", "radau5", f);
+        assert!(
+            matches!(c.class, Class::NotApplicable { .. }),
+            "chemakzo radau5({f}): {c:?}"
+        );
+    }
+    // Car axis, index 3: radau5 on the index-1 and the stabilised index-2
+    // forms reaches the published values.
+    for f in ["rcd0", "ggl1"] {
+        let c = cell(&map, "caraxis", "radau5", f);
+        assert_eq!(c.class, Class::Accurate, "caraxis radau5({f}): {c:?}");
+    }
+    // Every run is one typed outcome; the digits verdict agrees with scd.
+    for scene in ["chemakzo", "caraxis"] {
+        for c in cells(&map, scene) {
+            match (&c.class, c.scd) {
+                (Class::Accurate, Some(d)) => assert!(d >= 4.0, "{c:?}"),
+                (Class::Inaccurate, Some(d)) => assert!(d < 4.0, "{c:?}"),
+                (Class::Failed { kind, .. }, _) => assert!(!kind.is_empty(), "{c:?}"),
+                (Class::StepLimit { .. } | Class::NotApplicable { .. }, _) => {}
+                other => panic!("{scene} {}({}): {other:?}", c.solver, c.formulation),
+            }
+        }
+    }
+    // The text map carries the digits and steps of every run.
+    let text = stability::text(&map);
+    assert!(text.contains("scd >= -log10(tol) - 2"), "{text}");
+    assert!(text.contains("radau5(ori2)"), "{text}");
+}
