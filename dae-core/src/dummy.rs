@@ -135,6 +135,15 @@ impl Block {
     pub fn dummies(&self) -> usize {
         self.members.len() - self.algebraic.len()
     }
+
+    /// The algebraic unknowns, then the candidates.
+    pub fn columns(&self) -> Vec<usize> {
+        self.algebraic
+            .iter()
+            .chain(&self.candidates)
+            .copied()
+            .collect()
+    }
 }
 
 /// The blocks of a formulation's constraint chain, from which unknowns each
@@ -338,12 +347,7 @@ impl<S: DaeSystem> DummyDerivatives<S> {
         let live: Vec<Live> = found
             .into_iter()
             .map(|block| {
-                let cols: Vec<usize> = block
-                    .algebraic
-                    .iter()
-                    .chain(&block.candidates)
-                    .copied()
-                    .collect();
+                let cols: Vec<usize> = block.columns();
                 let constant = block.members.iter().all(|&r| {
                     cols.iter().all(|&c| {
                         jacs.iter()
@@ -515,12 +519,7 @@ impl<S: DaeSystem> DummyDerivatives<S> {
 /// The block's Jacobian (members × `cols`), each row scaled to unit largest
 /// entry over the block's columns.
 fn scaled(block: &Block, cols: &[usize], jac: &DMatrix<f64>) -> DMatrix<f64> {
-    let all: Vec<usize> = block
-        .algebraic
-        .iter()
-        .chain(&block.candidates)
-        .copied()
-        .collect();
+    let all: Vec<usize> = block.columns();
     let mut a = DMatrix::zeros(block.members.len(), cols.len());
     for (i, &r) in block.members.iter().enumerate() {
         let norm = all.iter().map(|&c| jac[(r, c)].abs()).fold(0.0, f64::max);
@@ -536,12 +535,7 @@ fn scaled(block: &Block, cols: &[usize], jac: &DMatrix<f64>) -> DMatrix<f64> {
 /// pivoted first with row pivoting, then complete pivoting among the
 /// candidates) and its |determinant|.
 fn best(block: &Block, jac: &DMatrix<f64>) -> (Vec<usize>, f64) {
-    let cols: Vec<usize> = block
-        .algebraic
-        .iter()
-        .chain(&block.candidates)
-        .copied()
-        .collect();
+    let cols: Vec<usize> = block.columns();
     let mut a = scaled(block, &cols, jac);
     let rows = a.nrows();
     let mut free_rows: Vec<usize> = (0..rows).collect();

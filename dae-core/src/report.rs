@@ -147,7 +147,7 @@ fn dummies(d: &Derived) -> Vec<DummyReport> {
         .iter()
         .map(|b| {
             let constant = b.members.iter().all(|&r| {
-                b.algebraic.iter().chain(&b.candidates).all(|&j| {
+                b.columns().into_iter().all(|j| {
                     let entry = crate::expr::diff(flat[r].2, crate::expr::Sym::Var(j as u32));
                     !entry.any_sym(&|s| {
                         matches!(s, crate::expr::Sym::Var(_) | crate::expr::Sym::Time)
