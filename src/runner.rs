@@ -1089,7 +1089,9 @@ fn measure(
         if let Some((r, comps)) = &reference {
             if r.at(*t, &mut exact) {
                 let e = comps.errors(y, &exact);
-                traj.err.push((*t, e.main));
+                if is_shown {
+                    traj.err.push((*t, e.main));
+                }
                 if is_ref_time {
                     compared = true;
                     compared_later |= *t > spec.t0;

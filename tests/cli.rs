@@ -53,7 +53,7 @@ fn derive_json_is_deterministic_and_has_the_contract_shape() {
     assert_eq!(v["constraints"][1]["expr"], "2*x*v + 2*y*w");
     assert_eq!(v["constraints"][2]["level"], 2);
     let f = &v["formulations"];
-    assert_eq!(f.as_array().unwrap().len(), 8);
+    assert_eq!(f.as_array().unwrap().len(), 9);
     let ovd0 = f
         .as_array()
         .unwrap()
@@ -501,7 +501,7 @@ fn the_default_formulation_respects_the_scenes_list() {
     let (dir, scene) = user_pendulum_scene();
     let text = std::fs::read_to_string(&scene).unwrap();
     let restricted = text.replace(
-        "formulations = [\"ori2\", \"rcd1\", \"rcd0\", \"ovd1\", \"ovd0\", \"ggl1\", \"psi1\", \"psi0\"]",
+        "formulations = [\"ori2\", \"rcd1\", \"rcd0\", \"ovd1\", \"ovd0\", \"ggl1\", \"psi1\", \"psi0\", \"mex0\"]",
         "formulations = [\"ori2\", \"rcd0\"]",
     );
     assert_ne!(restricted, text);

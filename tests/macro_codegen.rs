@@ -37,7 +37,7 @@ mod inline {
                 0 = x^2 + y^2 - l^2;
             }
             invariants { energy = m * (v^2 + w^2) / 2 + m * g * y; }
-            formulations { ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0 }
+            formulations { ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0, mex0 }
         }
     }
 }
@@ -189,7 +189,7 @@ fn agree_model(compiled: &mut dyn Model, seed: u64) {
             }
         }
         let names = interpreted.model_info().formulations.clone();
-        assert_eq!(names.len(), 8);
+        assert_eq!(names.len(), 9);
         for name in &names {
             let c = compiled.formulation(name).unwrap();
             let i = interpreted.formulation(name).unwrap();
@@ -231,7 +231,7 @@ fn model_struct_fields_and_defaults() {
     assert_eq!(p, inline::Pendulum::default().rcd1().params.into_included());
     assert_eq!(
         included::Pendulum::FORMULATIONS,
-        ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0"]
+        ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0", "mex0"]
     );
     let info = included::Pendulum::model_info_static();
     assert!(info.doc.starts_with("The simple pendulum"), "{}", info.doc);

@@ -120,7 +120,7 @@ fn defaults() {
     assert_eq!(s.sweep.solvers, KNOWN_SOLVERS);
     assert_eq!(
         s.sweep.formulations,
-        ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0"]
+        ["ori2", "rcd1", "rcd0", "ovd1", "ovd0", "ggl1", "psi1", "psi0", "mex0"]
     );
     assert_eq!(s.sweep.tolerances, DEFAULT_TOLERANCES);
     assert_eq!(

@@ -88,6 +88,8 @@ pub enum Marker {
     Plus,
     /// A hexagon.
     Hexagon,
+    /// A five-pointed star.
+    Star,
 }
 
 /// How a line is stroked.
@@ -138,7 +140,7 @@ const OTHER_COLOR: RGBColor = RGBColor(90, 90, 90);
 
 /// Markers of the formulations (in
 /// [`dae_core::system::FORMULATION_NAMES`] order).
-pub const FORMULATION_MARKERS: [Marker; 8] = [
+pub const FORMULATION_MARKERS: [Marker; 9] = [
     Marker::Circle,       // ori2
     Marker::Triangle,     // rcd1
     Marker::Square,       // rcd0
@@ -147,6 +149,7 @@ pub const FORMULATION_MARKERS: [Marker; 8] = [
     Marker::Cross,        // ggl1
     Marker::Plus,         // psi1
     Marker::Hexagon,      // psi0
+    Marker::Star,         // mex0
 ];
 
 /// At most this many pairs, the solution and error figures draw every
@@ -1171,6 +1174,20 @@ fn marker_corners(marker: Marker, at: (i32, i32), r: i32) -> Vec<(i32, i32)> {
                 })
                 .collect()
         }
+        Marker::Star => (0..10)
+            .map(|k| {
+                let a = (-90.0 + 36.0 * f64::from(k)).to_radians();
+                let rho = if k % 2 == 0 {
+                    f64::from(r)
+                } else {
+                    0.45 * f64::from(r)
+                };
+                (
+                    (f64::from(x) + rho * a.cos()).round() as i32,
+                    (f64::from(y) + rho * a.sin()).round() as i32,
+                )
+            })
+            .collect(),
         Marker::None | Marker::Circle | Marker::Cross | Marker::Plus => Vec::new(),
     }
 }
@@ -1527,9 +1544,9 @@ mod tests {
         let formulations: Vec<String> = dae_core::system::FORMULATION_NAMES
             .map(String::from)
             .to_vec();
-        // 56 pairs: 2 headings + 7 + 8 entries.
+        // 63 pairs: 2 headings + 7 + 9 entries.
         let legend = compact_legend(&solvers, &formulations, true);
-        assert_eq!(legend.len(), 17);
+        assert_eq!(legend.len(), 18);
         assert!(legend
             .iter()
             .any(|(l, lk, _)| l == "mebdf" && lk.color == solver_color("mebdf")));
