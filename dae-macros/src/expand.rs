@@ -414,7 +414,7 @@ mod tests {
     #[test]
     fn only_listed_formulations_are_emitted() {
         let src = PENDULUM.replace(
-            "formulations { ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0 }",
+            "formulations { ori2, rcd1, rcd0, ovd1, ovd0, ggl1, psi1, psi0, mex0 }",
             "formulations { rcd0 }",
         );
         let out = expand(TokenStream::from_str(&src).unwrap()).to_string();

@@ -376,11 +376,16 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         }
         // Column-major: the rows of `E`, then the algebraic rows of `J`.
         let n = self.n;
-        let e = if self.constant_leading {
-            &w.e_n
-        } else {
-            &w.e_step
-        };
+        // Where the formulation chose other rows over the step (`mex0`'s
+        // dummies: the zero pattern of `E` changed), the step's own `E`;
+        // otherwise `E(y_{n+1})`, whose null space is the constraints'
+        // normal at the new point (`psi0`).
+        let chose_other_rows = !self.constant_leading
+            && w.e_step
+                .iter()
+                .zip(w.e_n.iter())
+                .any(|(a, b)| (*a == 0.0) != (*b == 0.0));
+        let e = if chose_other_rows { &w.e_step } else { &w.e_n };
         w.projection
             .matrix_mut()
             .as_mut_slice()
