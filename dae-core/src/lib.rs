@@ -24,6 +24,7 @@ pub mod names;
 pub mod print;
 pub mod report;
 pub mod selector;
+pub mod sensitivity;
 pub mod structure;
 pub mod system;
 pub mod tape;

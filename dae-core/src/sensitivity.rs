@@ -1,0 +1,642 @@
+//! Forward sensitivities with respect to named parameters
+//! (`docs/design_sensitivities.md`).
+//!
+//! For a formulation `E y' = f(t, y, p)` with a constant leading matrix the
+//! sensitivity `sᵢ = ∂y/∂pᵢ` satisfies the linear DAE
+//!
+//! ```text
+//!     E sᵢ' = J(t, y) sᵢ + ∂f/∂pᵢ(t, y),     J = ∂f/∂y,
+//! ```
+//!
+//! with the state's matrix `E`, and the linearised constraint chain
+//! `G(t, y) sᵢ + ∂g/∂pᵢ = 0` (`G = ∂g/∂y`). [`SensitivitySystem`] is that
+//! system and the state's side by side, as one formulation of
+//! `N (1 + P)` unknowns `[y; s₁; …; s_P]` that every solver integrates and
+//! every consistent initialisation starts: the state's rows first, then
+//! for each parameter its copy of the rows.
+//!
+//! # Where `∂f/∂p` comes from
+//!
+//! From the derivation itself. The model is derived a second time with the
+//! named parameters made differential unknowns of the equations
+//! `der(p) = 0` ([`parameters_as_unknowns`]): its formulations are the
+//! original ones with `p` a symbol like any other, so the columns of their
+//! analytic Jacobians for `p` are `∂f/∂p` and `∂g/∂p` — every formulation,
+//! every hidden constraint, differentiated symbolically by the code that
+//! differentiates everything else. Rows and constraint members of the two
+//! derivations are matched by their printed text (the state's rows are
+//! printed alike whether `p` is a parameter or an unknown); a formulation
+//! whose rows do not match is refused ([`SensitivityError::Rows`]):
+//! `ggl1` adds `Gᵀη` also to `der(p)`, a row the sensitivity system drops,
+//! and its other rows match.
+//!
+//! # What the solvers see
+//!
+//! The Jacobian the system reports is block lower triangular: `∂f/∂y` of
+//! the state on every diagonal block, and below it `∂(J sᵢ + ∂f/∂pᵢ)/∂y`
+//! (second derivatives of `f`) by forward differences of the symbolic
+//! `J` — `N` evaluations of the augmented Jacobian per Jacobian. Leaving
+//! them out (a block-diagonal matrix, as IDA's simultaneous corrector
+//! does for its ODE-like index-1 systems) was measured: on the pendulum's
+//! `rcd0` the sensitivities' algebraic rows depend on `y` at order one,
+//! not `h`, the simplified Newton iteration then contracts poorly, and
+//! radau5 at tol 1e-10 rejected every second step (60 674 steps, 32 789
+//! rejected, against about 2 000 with the full matrix). The constraint
+//! chain's Jacobian is built the same way.
+//! Refused: formulations whose leading matrix depends on the unknowns or
+//! on a sensitivity parameter (`psi1`, `psi0`, a mass `m` in `m·der(v)` as
+//! sensitivity parameter: the term `∂(E y')/∂(y, p)` is not built yet), and
+//! `mex0` (its run-time choice of dummies could choose a parameter).
+//!
+//! ```
+//! use dae_core::sensitivity::Sensitivities;
+//! use dae_core::system::DaeSystem;
+//!
+//! let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/pendulum.dae")).unwrap();
+//! let model = Sensitivities::from_str(&src, &["g", "l"]).unwrap();
+//! let sys = model.formulation("rcd0").unwrap();
+//! assert_eq!(sys.info().unknowns(), 5 * 3);
+//! assert_eq!(sys.info().variables[5].name, "dx/dg");
+//! // the linearised constraint at the horizontal release: 2x·sx + 2y·sy − 2l = 0
+//! let mut y = vec![0.0; 15];
+//! y[0] = 1.0; // x = l = 1, y = 0, at rest
+//! y[10] = 1.0; // dx/dl = 1
+//! let mut g = vec![0.0; sys.info().constraints.len()];
+//! sys.constraints(0.0, &y, &mut g);
+//! assert!(g.iter().all(|v| v.abs() < 1e-15));
+//! assert!(matches!(
+//!     Sensitivities::from_str(&src, &["q"]),
+//!     Err(dae_core::sensitivity::SensitivityError::UnknownParameter { .. })
+//! ));
+//! ```
+
+use crate::derive::Derived;
+use crate::dsl::{Ast, Equation, ModelAst, Name};
+use crate::expr::Q;
+use crate::interp::InterpretedModel;
+use crate::system::{
+    BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo, Model,
+    ParameterError, RowInfo, VarInfo,
+};
+use nalgebra::DMatrix;
+use std::cell::RefCell;
+
+/// Why sensitivities cannot be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SensitivityError {
+    /// No base parameter has this name.
+    #[error(
+        "no parameter `{name}` to differentiate with respect to (the model's parameters: {known})"
+    )]
+    UnknownParameter {
+        /// The name asked for.
+        name: String,
+        /// The model's base parameters.
+        known: String,
+    },
+    /// A name asked for twice.
+    #[error("parameter `{name}` is named twice")]
+    Duplicate {
+        /// The name.
+        name: String,
+    },
+    /// The model with the parameters as unknowns does not derive (e.g. a
+    /// derived parameter depends on one of them).
+    #[error("sensitivities with respect to {params}: {message}")]
+    Model {
+        /// The parameters asked for.
+        params: String,
+        /// The derivation's error.
+        message: String,
+    },
+    /// The formulation cannot carry sensitivities.
+    #[error("no sensitivities on formulation `{name}`: {reason}")]
+    Formulation {
+        /// Formulation name.
+        name: String,
+        /// Why.
+        reason: String,
+    },
+    /// The two derivations' rows of a formulation do not correspond.
+    #[error("formulation `{name}`: its rows with the parameters as unknowns do not match its own ({detail})")]
+    Rows {
+        /// Formulation name.
+        name: String,
+        /// The first row without a partner.
+        detail: String,
+    },
+    /// The formulation does not exist or is not provided.
+    #[error(transparent)]
+    NotProvided(#[from] FormulationError),
+    /// A parameter value could not be set.
+    #[error(transparent)]
+    Parameter(#[from] ParameterError),
+}
+
+/// The model `ast` with the base parameters `params` made differential
+/// unknowns, appended after the others, each with the equation
+/// `der(p) = 0` appended after the others.
+pub fn parameters_as_unknowns(
+    ast: &ModelAst,
+    params: &[&str],
+) -> Result<ModelAst, SensitivityError> {
+    let mut out = ast.clone();
+    for (i, &name) in params.iter().enumerate() {
+        if params[..i].contains(&name) {
+            return Err(SensitivityError::Duplicate {
+                name: name.to_string(),
+            });
+        }
+        let Some(k) = out.parameters.iter().position(|p| p.name.name == name) else {
+            return Err(SensitivityError::UnknownParameter {
+                name: name.to_string(),
+                known: ast
+                    .parameters
+                    .iter()
+                    .map(|p| p.name.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+        };
+        let decl = out.parameters.remove(k);
+        let span = decl.name.span;
+        out.differential.push(Name {
+            name: name.to_string(),
+            span,
+        });
+        out.equations.push(Equation {
+            lhs: Ast::Call("der".into(), span, vec![Ast::Ident(name.to_string(), span)]),
+            rhs: Ast::Num(Q::from_integer(0.into()), span),
+            span,
+        });
+    }
+    Ok(out)
+}
+
+/// A model read at run time, derived twice: as written, and with the
+/// sensitivity parameters as unknowns.
+#[derive(Clone, Debug)]
+pub struct Sensitivities {
+    state: InterpretedModel,
+    augmented: InterpretedModel,
+    params: Vec<String>,
+}
+
+impl Sensitivities {
+    /// Parse and derive model text, with sensitivities with respect to
+    /// the base parameters `params`.
+    #[allow(clippy::should_implement_trait)] // two arguments, a typed error
+    pub fn from_str(src: &str, params: &[&str]) -> Result<Self, SensitivityError> {
+        let model_error = |e: syn::Error| SensitivityError::Model {
+            params: params.join(", "),
+            message: e.to_string(),
+        };
+        let ast = crate::dsl::parse_str(src).map_err(model_error)?;
+        let augmented = parameters_as_unknowns(&ast, params)?;
+        Ok(Sensitivities {
+            state: InterpretedModel::new(&Derived::from_ast(&ast).map_err(model_error)?),
+            augmented: InterpretedModel::new(&Derived::from_ast(&augmented).map_err(model_error)?),
+            params: params.iter().map(|p| p.to_string()).collect(),
+        })
+    }
+
+    /// The model as written (its parameters, its formulations).
+    pub fn model(&self) -> &InterpretedModel {
+        &self.state
+    }
+
+    /// The sensitivity parameters, in order.
+    pub fn parameters(&self) -> &[String] {
+        &self.params
+    }
+
+    /// Set a parameter of the model (a sensitivity parameter or another).
+    pub fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), SensitivityError> {
+        self.state.set_parameter(name, value)?;
+        if !self.params.iter().any(|p| p == name) {
+            self.augmented.set_parameter(name, value)?;
+        }
+        Ok(())
+    }
+
+    /// The sensitivity system of formulation `name`.
+    pub fn formulation(&self, name: &str) -> Result<SensitivitySystem, SensitivityError> {
+        if name == crate::dummy::NAME {
+            return Err(SensitivityError::Formulation {
+                name: name.into(),
+                reason: "its dummy derivatives are chosen at run time among the unknowns, \
+                         which would include the parameters"
+                    .into(),
+            });
+        }
+        let state = self.state.formulation(name)?;
+        let augmented = self.augmented.formulation(name)?;
+        SensitivitySystem::new(state, augmented, &self.params)
+    }
+}
+
+/// A formulation and its sensitivities, as one formulation (see the
+/// module's documentation).
+pub struct SensitivitySystem {
+    state: BoxedSystem,
+    augmented: BoxedSystem,
+    info: FormulationInfo,
+    /// The state's unknowns' columns in the augmented formulation.
+    var_cols: Vec<usize>,
+    /// The sensitivity parameters' columns in the augmented formulation.
+    param_cols: Vec<usize>,
+    /// The state's rows' rows in the augmented formulation.
+    row_of: Vec<usize>,
+    /// The sensitivity parameters' positions in the state's
+    /// `parameter_values`.
+    param_values: Vec<usize>,
+    /// `E` of the state (constant).
+    e: DMatrix<f64>,
+    scratch: RefCell<Scratch>,
+}
+
+struct Scratch {
+    /// The augmented point `[y, p]`.
+    point: Vec<f64>,
+    /// The augmented formulation's Jacobian (rows × unknowns).
+    jac: DMatrix<f64>,
+    /// The augmented constraint chain's Jacobian.
+    cjac: DMatrix<f64>,
+    /// The state's Jacobian.
+    block: DMatrix<f64>,
+    /// The state's constraint Jacobian.
+    cblock: DMatrix<f64>,
+    /// `f` of the sensitivity rows for the residual.
+    f: Vec<f64>,
+}
+
+impl std::fmt::Debug for SensitivitySystem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SensitivitySystem")
+            .field("formulation", &self.info.name)
+            .field("unknowns", &self.info.unknowns())
+            .finish()
+    }
+}
+
+/// The positions of `wanted` in `have`, in order, each after the last:
+/// `None` at the first one missing.
+fn match_in_order<'a>(
+    wanted: impl Iterator<Item = &'a str>,
+    have: &[&str],
+) -> Result<Vec<usize>, String> {
+    let mut at = 0;
+    let mut out = Vec::new();
+    for w in wanted {
+        match have[at..].iter().position(|h| *h == w) {
+            Some(k) => {
+                out.push(at + k);
+                at += k + 1;
+            }
+            None => return Err(format!("`{w}`")),
+        }
+    }
+    Ok(out)
+}
+
+/// Which row of `augmented` each row of `state` is, in order, found by
+/// evaluating both at two pseudo-random points (the state's rows are the
+/// augmented formulation's with the parameters' values in their columns,
+/// though the terms may print in another order), and whether the two
+/// constraint chains agree there member by member.
+fn match_numerically(
+    state: &dyn DaeSystem,
+    augmented: &dyn DaeSystem,
+    var_cols: &[usize],
+    param_cols: &[usize],
+    params: &[String],
+) -> Result<(Vec<usize>, bool), String> {
+    let (si, ai) = (state.info(), augmented.info());
+    let values = state.parameter_values();
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut random = move || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        0.5 + (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-10 * (1.0 + a.abs().max(b.abs()));
+    let mut candidates: Vec<Vec<bool>> = vec![vec![true; ai.equations()]; si.equations()];
+    let mut same_chain = si.constraints.len() == ai.constraints.len();
+    for _ in 0..2 {
+        let t = random();
+        let y: Vec<f64> = (0..si.unknowns()).map(|_| random()).collect();
+        let yp: Vec<f64> = (0..si.unknowns()).map(|_| random()).collect();
+        let (mut ya, mut ypa) = (vec![0.0; ai.unknowns()], vec![0.0; ai.unknowns()]);
+        for (j, &c) in var_cols.iter().enumerate() {
+            ya[c] = y[j];
+            ypa[c] = yp[j];
+        }
+        for (p, &c) in params.iter().zip(param_cols) {
+            let k = si
+                .parameters
+                .iter()
+                .position(|q| q == p)
+                .ok_or(format!("parameter `{p}`"))?;
+            ya[c] = values[k];
+        }
+        let (mut rs, mut ra) = (vec![0.0; si.equations()], vec![0.0; ai.equations()]);
+        state.residual(t, &y, &yp, &mut rs);
+        augmented.residual(t, &ya, &ypa, &mut ra);
+        for (r, c) in candidates.iter_mut().enumerate() {
+            for (a, ok) in c.iter_mut().enumerate() {
+                *ok &= close(rs[r], ra[a]);
+            }
+        }
+        if same_chain {
+            let (mut gs, mut ga) = (
+                vec![0.0; si.constraints.len()],
+                vec![0.0; ai.constraints.len()],
+            );
+            state.constraints(t, &y, &mut gs);
+            augmented.constraints(t, &ya, &mut ga);
+            same_chain = gs.iter().zip(&ga).all(|(a, b)| close(*a, *b));
+        }
+    }
+    let mut at = 0;
+    let mut row_of = Vec::with_capacity(si.equations());
+    for (r, c) in candidates.iter().enumerate() {
+        match (at..ai.equations()).find(|&a| c[a]) {
+            Some(a) => {
+                row_of.push(a);
+                at = a + 1;
+            }
+            None => return Err(format!("row `{}`", si.rows[r].text)),
+        }
+    }
+    Ok((row_of, same_chain))
+}
+
+impl SensitivitySystem {
+    /// Pair a formulation with the same formulation derived with the
+    /// parameters `params` as unknowns.
+    pub fn new(
+        state: BoxedSystem,
+        augmented: BoxedSystem,
+        params: &[String],
+    ) -> Result<Self, SensitivityError> {
+        let si = state.info();
+        let ai = augmented.info();
+        let refuse = |reason: &str| SensitivityError::Formulation {
+            name: si.name.clone(),
+            reason: reason.to_string(),
+        };
+        if !ai.constant_leading || !si.constant_leading {
+            return Err(refuse(
+                "its leading matrix depends on the unknowns, the time or a sensitivity \
+                 parameter (the term d(E y')/d(y, p) of the sensitivity equations is not built)",
+            ));
+        }
+        let rows_error = |detail: String| SensitivityError::Rows {
+            name: si.name.clone(),
+            detail,
+        };
+        let names: Vec<&str> = ai.variables.iter().map(|v| v.name.as_str()).collect();
+        let var_cols = match_in_order(si.variables.iter().map(|v| v.name.as_str()), &names)
+            .map_err(|w| rows_error(format!("unknown {w}")))?;
+        let param_cols = params
+            .iter()
+            .map(|p| {
+                names
+                    .iter()
+                    .position(|n| n == p)
+                    .ok_or_else(|| rows_error(format!("parameter `{p}`")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let (row_of, same_chain) =
+            match_numerically(&*state, &*augmented, &var_cols, &param_cols, params)
+                .map_err(rows_error)?;
+        if !same_chain {
+            return Err(rows_error("the constraint chains differ".into()));
+        }
+        let (n, m, k, np) = (
+            si.unknowns(),
+            si.equations(),
+            si.constraints.len(),
+            params.len(),
+        );
+        let sources = si
+            .constraints
+            .iter()
+            .map(|c| c.source + 1)
+            .max()
+            .unwrap_or(0);
+        let mut info = si.clone();
+        for (i, p) in params.iter().enumerate() {
+            info.variables.extend(si.variables.iter().map(|v| VarInfo {
+                name: format!("d{}/d{p}", v.name),
+                kind: v.kind,
+                index: v.index,
+            }));
+            info.rows.extend(si.rows.iter().map(|r| RowInfo {
+                kind: r.kind,
+                text: format!("d/d{p}: {}", r.text),
+            }));
+            info.constraints
+                .extend(si.constraints.iter().map(|c| ConstraintInfo {
+                    level: c.level,
+                    source: c.source + (i as u16 + 1) * sources,
+                    expr: format!("d/d{p}: {}", c.expr),
+                }));
+        }
+        let mut e = DMatrix::zeros(m, n);
+        state.leading(0.0, &vec![0.0; n], &mut e);
+        let scratch = RefCell::new(Scratch {
+            point: vec![0.0; ai.unknowns()],
+            jac: DMatrix::zeros(ai.equations(), ai.unknowns()),
+            cjac: DMatrix::zeros(k, ai.unknowns()),
+            block: DMatrix::zeros(m, n),
+            cblock: DMatrix::zeros(k, n),
+            f: vec![0.0; m * (1 + np)],
+        });
+        let param_values = params
+            .iter()
+            .map(|p| {
+                si.parameters
+                    .iter()
+                    .position(|q| q == p)
+                    .ok_or_else(|| rows_error(format!("parameter `{p}` of the state")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(SensitivitySystem {
+            state,
+            augmented,
+            info,
+            var_cols,
+            param_cols,
+            row_of,
+            param_values,
+            e,
+            scratch,
+        })
+    }
+
+    /// Unknowns of the state.
+    pub fn state_unknowns(&self) -> usize {
+        self.state.info().unknowns()
+    }
+
+    /// The sensitivity parameters' count.
+    pub fn parameters(&self) -> usize {
+        self.param_cols.len()
+    }
+
+    /// The augmented point `[y, p]` of the state's `y` into the scratch.
+    fn lift(&self, s: &mut Scratch, y: &[f64]) {
+        for (j, &c) in self.var_cols.iter().enumerate() {
+            s.point[c] = y[j];
+        }
+        let values = self.state.parameter_values();
+        for (&c, &k) in self.param_cols.iter().zip(&self.param_values) {
+            s.point[c] = values[k];
+        }
+    }
+
+    /// The sensitivity rows' `f` (`J sᵢ + ∂f/∂pᵢ`) for `y = [y; s…]` into
+    /// `out` (length `m P`).
+    fn sensitivity_rhs(&self, s: &mut Scratch, t: f64, y: &[f64], out: &mut [f64]) {
+        let (n, m) = (self.state_unknowns(), self.state.info().equations());
+        self.lift(s, &y[..n]);
+        self.augmented.rhs_jacobian(t, &s.point, &mut s.jac);
+        for (i, &pc) in self.param_cols.iter().enumerate() {
+            let si = &y[n * (i + 1)..n * (i + 2)];
+            for (r, &ar) in self.row_of.iter().enumerate() {
+                let mut v = s.jac[(ar, pc)];
+                for (j, &c) in self.var_cols.iter().enumerate() {
+                    v += s.jac[(ar, c)] * si[j];
+                }
+                out[m * i + r] = v;
+            }
+        }
+    }
+}
+
+impl DaeSystem for SensitivitySystem {
+    fn info(&self) -> &FormulationInfo {
+        &self.info
+    }
+
+    fn parameter_values(&self) -> Vec<f64> {
+        self.state.parameter_values()
+    }
+
+    fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
+        let (n, m) = (self.state_unknowns(), self.state.info().equations());
+        self.state.rhs(t, &y[..n], &mut f[..m]);
+        let s = &mut *self.scratch.borrow_mut();
+        self.sensitivity_rhs(s, t, y, &mut f[m..]);
+    }
+
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
+        let (n, m) = (self.state_unknowns(), self.state.info().equations());
+        self.state.residual(t, &y[..n], &yp[..n], &mut r[..m]);
+        let s = &mut *self.scratch.borrow_mut();
+        let mut f = std::mem::take(&mut s.f);
+        self.sensitivity_rhs(s, t, y, &mut f[m..]);
+        for i in 0..self.parameters() {
+            let sp = &yp[n * (i + 1)..n * (i + 2)];
+            for row in 0..m {
+                let mut v = -f[m * (i + 1) + row];
+                for (j, &d) in sp.iter().enumerate() {
+                    v += self.e[(row, j)] * d;
+                }
+                r[m * (i + 1) + row] = v;
+            }
+        }
+        s.f = f;
+    }
+
+    fn leading(&self, _t: f64, _y: &[f64], e: &mut DMatrix<f64>) {
+        let (n, m) = (self.state_unknowns(), self.state.info().equations());
+        e.fill(0.0);
+        for b in 0..=self.parameters() {
+            e.view_mut((m * b, n * b), (m, n)).copy_from(&self.e);
+        }
+    }
+
+    fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+        let (n, m) = (self.state_unknowns(), self.state.info().equations());
+        let s = &mut *self.scratch.borrow_mut();
+        self.state.rhs_jacobian(t, &y[..n], &mut s.block);
+        j.fill(0.0);
+        for b in 0..=self.parameters() {
+            j.view_mut((m * b, n * b), (m, n)).copy_from(&s.block);
+        }
+        // Below the diagonal: d(J sᵢ + ∂f/∂pᵢ)/dy by forward differences.
+        let mut base = vec![0.0; m * self.parameters()];
+        let mut moved = base.clone();
+        self.sensitivity_rhs(s, t, y, &mut base);
+        let mut yd = y.to_vec();
+        for c in 0..n {
+            let h = f64::EPSILON.sqrt() * y[c].abs().max(1.0);
+            yd[c] = y[c] + h;
+            self.sensitivity_rhs(s, t, &yd, &mut moved);
+            yd[c] = y[c];
+            for i in 0..self.parameters() {
+                for r in 0..m {
+                    j[(m * (i + 1) + r, c)] = (moved[m * i + r] - base[m * i + r]) / h;
+                }
+            }
+        }
+    }
+
+    fn leading_jacobian(&self, _t: f64, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
+        j.fill(0.0);
+    }
+
+    fn constraints(&self, t: f64, y: &[f64], g: &mut [f64]) {
+        let n = self.state_unknowns();
+        let k = self.state.info().constraints.len();
+        self.state.constraints(t, &y[..n], &mut g[..k]);
+        let s = &mut *self.scratch.borrow_mut();
+        self.lift(s, &y[..n]);
+        self.augmented
+            .constraints_jacobian(t, &s.point, &mut s.cjac);
+        for (i, &pc) in self.param_cols.iter().enumerate() {
+            let si = &y[n * (i + 1)..n * (i + 2)];
+            for row in 0..k {
+                let mut v = s.cjac[(row, pc)];
+                for (j, &c) in self.var_cols.iter().enumerate() {
+                    v += s.cjac[(row, c)] * si[j];
+                }
+                g[k * (i + 1) + row] = v;
+            }
+        }
+    }
+
+    fn constraints_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+        let n = self.state_unknowns();
+        let k = self.state.info().constraints.len();
+        {
+            let s = &mut *self.scratch.borrow_mut();
+            self.state.constraints_jacobian(t, &y[..n], &mut s.cblock);
+            j.fill(0.0);
+            for b in 0..=self.parameters() {
+                j.view_mut((k * b, n * b), (k, n)).copy_from(&s.cblock);
+            }
+        }
+        // Below the diagonal: d(G sᵢ + ∂g/∂pᵢ)/dy by forward differences.
+        let mut base = vec![0.0; k * (1 + self.parameters())];
+        let mut moved = base.clone();
+        self.constraints(t, y, &mut base);
+        let mut yd = y.to_vec();
+        for c in 0..n {
+            let h = f64::EPSILON.sqrt() * y[c].abs().max(1.0);
+            yd[c] = y[c] + h;
+            self.constraints(t, &yd, &mut moved);
+            yd[c] = y[c];
+            for r in k..base.len() {
+                j[(r, c)] = (moved[r] - base[r]) / h;
+            }
+        }
+    }
+
+    fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        self.state.invariants(t, &y[..self.state_unknowns()], out);
+    }
+}
