@@ -476,6 +476,38 @@ impl SensitivitySystem {
         })
     }
 
+    /// The state's formulation.
+    pub fn state(&self) -> &dyn DaeSystem {
+        &*self.state
+    }
+
+    /// The sensitivities alone with the state frozen at `y` (its
+    /// consistent start): a linear DAE in `[s₁; …; s_P]` whose constraint
+    /// chain is `G(y) sᵢ + ∂g/∂pᵢ(y) = 0`, so that the consistent
+    /// initialisation of it is the least-change projection of the given
+    /// sensitivities onto the linearised constraints, with the algebraic
+    /// sensitivities from the highest members. Starting the whole system
+    /// at once would also move the state to satisfy the sensitivities'
+    /// constraints (their rows depend on `y`): start the state first, then
+    /// this.
+    pub fn frozen(&self, y: &[f64]) -> Frozen<'_> {
+        let (n, m, k) = (
+            self.state_unknowns(),
+            self.state.info().equations(),
+            self.state.info().constraints.len(),
+        );
+        let mut info = self.info.clone();
+        info.variables.drain(..n);
+        info.rows.drain(..m);
+        info.constraints.drain(..k);
+        info.invariants.clear();
+        Frozen {
+            sys: self,
+            y: y[..n].to_vec(),
+            info,
+        }
+    }
+
     /// Unknowns of the state.
     pub fn state_unknowns(&self) -> usize {
         self.state.info().unknowns()
@@ -639,4 +671,78 @@ impl DaeSystem for SensitivitySystem {
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.state.invariants(t, &y[..self.state_unknowns()], out);
     }
+}
+
+/// [`SensitivitySystem::frozen`]: the sensitivities with the state fixed.
+pub struct Frozen<'a> {
+    sys: &'a SensitivitySystem,
+    y: Vec<f64>,
+    info: FormulationInfo,
+}
+
+impl Frozen<'_> {
+    /// `[y; s]` from the sensitivities `s`.
+    fn whole(&self, s: &[f64]) -> Vec<f64> {
+        let mut v = self.y.clone();
+        v.extend_from_slice(s);
+        v
+    }
+}
+
+impl DaeSystem for Frozen<'_> {
+    fn info(&self) -> &FormulationInfo {
+        &self.info
+    }
+    fn parameter_values(&self) -> Vec<f64> {
+        self.sys.parameter_values()
+    }
+    fn rhs(&self, t: f64, s: &[f64], f: &mut [f64]) {
+        let m = self.sys.state.info().equations();
+        let mut all = vec![0.0; self.sys.info.equations()];
+        self.sys.rhs(t, &self.whole(s), &mut all);
+        f.copy_from_slice(&all[m..]);
+    }
+    fn residual(&self, t: f64, s: &[f64], sp: &[f64], r: &mut [f64]) {
+        let m = self.sys.state.info().equations();
+        let mut yp = vec![0.0; self.y.len()];
+        yp.extend_from_slice(sp);
+        let mut all = vec![0.0; self.sys.info.equations()];
+        self.sys.residual(t, &self.whole(s), &yp, &mut all);
+        r.copy_from_slice(&all[m..]);
+    }
+    fn leading(&self, t: f64, s: &[f64], e: &mut DMatrix<f64>) {
+        let (n, m) = (self.y.len(), self.sys.state.info().equations());
+        let mut all = DMatrix::zeros(self.sys.info.equations(), self.sys.info.unknowns());
+        self.sys.leading(t, &self.whole(s), &mut all);
+        e.copy_from(&all.view((m, n), (e.nrows(), e.ncols())));
+    }
+    fn rhs_jacobian(&self, t: f64, _s: &[f64], j: &mut DMatrix<f64>) {
+        // Linear in s: the state's Jacobian on every block, exactly.
+        let (n, m) = (self.y.len(), self.sys.state.info().equations());
+        let mut block = DMatrix::zeros(m, n);
+        self.sys.state.rhs_jacobian(t, &self.y, &mut block);
+        j.fill(0.0);
+        for b in 0..self.sys.parameters() {
+            j.view_mut((m * b, n * b), (m, n)).copy_from(&block);
+        }
+    }
+    fn leading_jacobian(&self, _t: f64, _s: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
+        j.fill(0.0);
+    }
+    fn constraints(&self, t: f64, s: &[f64], g: &mut [f64]) {
+        let k = self.sys.state.info().constraints.len();
+        let mut all = vec![0.0; self.sys.info.constraints.len()];
+        self.sys.constraints(t, &self.whole(s), &mut all);
+        g.copy_from_slice(&all[k..]);
+    }
+    fn constraints_jacobian(&self, t: f64, _s: &[f64], j: &mut DMatrix<f64>) {
+        let (n, k) = (self.y.len(), self.sys.state.info().constraints.len());
+        let mut block = DMatrix::zeros(k, n);
+        self.sys.state.constraints_jacobian(t, &self.y, &mut block);
+        j.fill(0.0);
+        for b in 0..self.sys.parameters() {
+            j.view_mut((k * b, n * b), (k, n)).copy_from(&block);
+        }
+    }
+    fn invariants(&self, _t: f64, _s: &[f64], _out: &mut [f64]) {}
 }

@@ -50,6 +50,7 @@ pub mod odbdf;
 pub mod odradau;
 pub mod options;
 pub mod radau5;
+pub mod sensitivity;
 pub mod solution;
 pub mod stats;
 

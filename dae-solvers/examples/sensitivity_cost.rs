@@ -1,0 +1,93 @@
+//! What forward sensitivities cost on the pendulum (issue 25, done-when 3):
+//! the plain run against the same run with the sensitivities of 1 and 2
+//! parameters (`dae_core::sensitivity`), S01 (t ∈ [0, 20]), each solver and
+//! formulation, counts and the least time of 5 runs.
+//!
+//! ```sh
+//! cargo run --release -p dae-solvers --example sensitivity_cost [tol]
+//! ```
+
+use dae_core::interp::InterpretedModel;
+use dae_core::sensitivity::Sensitivities;
+use dae_core::system::DaeSystem;
+use dae_solvers::init::{consistent, InitOptions};
+use dae_solvers::sensitivity::consistent_start;
+use dae_solvers::{solver_by_name, Options, Problem, Stats};
+use std::time::Instant;
+
+fn run(solver: &str, sys: &dyn DaeSystem, y0: &[f64], tol: f64) -> (Stats, f64) {
+    let options = Options::with_tol(tol);
+    let problem = Problem {
+        system: sys,
+        t0: 0.0,
+        y0,
+        t_end: 20.0,
+    };
+    let solver = solver_by_name(solver).unwrap();
+    let mut best = f64::INFINITY;
+    let mut stats = Stats::default();
+    for _ in 0..5 {
+        let start = Instant::now();
+        let sol = solver.solve(&problem, &options).unwrap();
+        best = best.min(start.elapsed().as_secs_f64());
+        stats = sol.stats;
+    }
+    (stats, best)
+}
+
+/// The consistent start of the release x = 1, at rest.
+fn released(
+    sys: &dyn DaeSystem,
+    start: impl Fn(&[f64]) -> Result<dae_solvers::init::Consistent, dae_solvers::SolveError>,
+) -> Vec<f64> {
+    let mut y0 = vec![0.0; sys.info().unknowns()];
+    y0[0] = 1.0;
+    start(&y0).unwrap().y
+}
+
+fn main() {
+    let tol: f64 = std::env::args()
+        .nth(1)
+        .map_or(1e-8, |s| s.parse().expect("a tolerance"));
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/pendulum.dae");
+    let src = std::fs::read_to_string(path).unwrap();
+    let plain = InterpretedModel::from_str(&src).unwrap();
+    let one = Sensitivities::from_str(&src, &["g"]).unwrap();
+    let two = Sensitivities::from_str(&src, &["g", "l"]).unwrap();
+    println!("tol {tol:e}; time: least of 5 runs (wall, s); ratio: against the plain run");
+    println!("| solver(formulation) | P | steps | residual evals | Jacobians | LUs | time | time ratio | (1 + 0.6 P) |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for solver in ["radau5", "bdf"] {
+        for f in ["rcd0", "ggl1"] {
+            let base = plain.system(f).unwrap();
+            let (s0, t0) = run(
+                solver,
+                &base,
+                &released(&base, |y| {
+                    consistent(&base, 0.0, y, &InitOptions::default())
+                }),
+                tol,
+            );
+            let row = |p: usize, s: &Stats, t: f64| {
+                println!(
+                    "| {solver}({f}) | {p} | {} | {} | {} | {} | {t:.4} | {:.2} | {:.1} |",
+                    s.steps,
+                    s.residual_evals,
+                    s.jacobian_evals,
+                    s.factorizations,
+                    t / t0,
+                    1.0 + 0.6 * p as f64
+                )
+            };
+            row(0, &s0, t0);
+            for (p, model) in [(1, &one), (2, &two)] {
+                let sys = model.formulation(f).unwrap();
+                let y0 = released(&sys, |y| {
+                    consistent_start(&sys, 0.0, y, &InitOptions::default())
+                });
+                let (s, t) = run(solver, &sys, &y0, tol);
+                row(p, &s, t);
+            }
+        }
+    }
+}
