@@ -1,17 +1,18 @@
 //! The runs of an integration: one error-controlled run, or — with a
 //! constant step — the adaptive start-up run that computes the `k − 1`
 //! starting values and the constant-step run of order `k` it feeds, as one
-//! [`Method`] for the driver ([`Startup`]).
+//! [`Method`] for the driver ([`startup::constant_step`]).
 
 use super::step::{Config, Integrator};
 use super::MAX_ORDER;
-use crate::core::control;
-use crate::core::driver::{Method, Startup};
+use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::Corrector;
+use crate::core::startup;
 use crate::{Options, SolveError, Stats};
 
 /// Everything a run needs.
+#[derive(Clone)]
 pub(super) struct Run<'a> {
     /// The formulation.
     pub(super) sys: Formulation<'a>,
@@ -71,7 +72,7 @@ impl<'a> Run<'a> {
 
     /// Constant step size, order `k`, no error control, started; the
     /// `k−1` starting values come from an adaptive run at the caller's
-    /// tolerances, which runs first ([`Startup`]).
+    /// tolerances, which runs first ([`startup::constant_step`]).
     pub(super) fn fixed<L: Corrector + 'a>(
         self,
         h_request: f64,
@@ -80,17 +81,9 @@ impl<'a> Run<'a> {
         let (t0, t_end) = (self.t0, self.t_end);
         let span = t_end - t0;
         let k = opts.fixed_order.unwrap_or(opts.max_order);
-        let (nsteps, h) = control::constant_grid(span, h_request, opts.max_steps, t0)?;
-        let grid = move |j: usize| {
-            if j == nsteps {
-                t_end
-            } else {
-                t0 + j as f64 * h
-            }
-        };
         // The constant-step run, within what is left of the step budget
         // after the work `spent` before it.
-        let constant = move |spent: Stats| Config {
+        let constant = move |spent: Stats, h: f64| Config {
             max_order: k,
             fixed_order: true,
             fixed_step: true,
@@ -99,45 +92,46 @@ impl<'a> Run<'a> {
             t_end,
             span,
         };
-
-        // Starting values y(t0 + j h), j = 1 … m.
-        let m = (k - 1).min(nsteps);
-        if m == 0 {
-            // Order one starts from y₀ and y'₀ alone.
-            let mut integ = self.integrator::<L>(constant(self.spent), self.spent);
-            integ.start(self.t0, self.y0, &self.yp0, h);
-            return Ok(Box::new(integ));
-        }
-        let cfg = Config {
-            max_order: MAX_ORDER,
-            fixed_order: false,
-            fixed_step: false,
-            hmax: span,
-            max_steps: opts.max_steps,
-            t_end: grid(m),
-            span,
+        let startup = |t_end: f64, h: f64| {
+            let cfg = Config {
+                max_order: MAX_ORDER,
+                fixed_order: false,
+                fixed_step: false,
+                hmax: span,
+                max_steps: opts.max_steps,
+                t_end,
+                span,
+            };
+            let mut startup = self.integrator::<L>(cfg, self.spent);
+            let h0 = startup.initial_step(self.y0, &self.yp0).min(h);
+            startup.start(t0, self.y0, &self.yp0, h0);
+            startup
         };
-        let mut startup = self.integrator::<L>(cfg, self.spent);
-        let h0 = startup.initial_step(self.y0, &self.yp0).min(h);
-        startup.start(self.t0, self.y0, &self.yp0, h0);
-        let build = move |startup: &Integrator<'a, L>, values: &[Vec<f64>]| {
-            if m == nsteps {
-                return None;
-            }
-            let mut integ = self.integrator::<L>(constant(startup.stats), Stats::default());
-            // Values at t0, …, t0 + (k−1) h, oldest first.
-            let mut history: Vec<&[f64]> = Vec::with_capacity(k);
-            history.push(self.y0);
-            history.extend(values.iter().map(|v| v.as_slice()));
-            integ.start_from_history(grid(k - 1), &history, h);
-            Some(integ)
+        // Order one starts from y₀ and y'₀ alone.
+        let from_start = |h: f64| {
+            let mut integ = self.integrator::<L>(constant(self.spent, h), self.spent);
+            integ.start(t0, self.y0, &self.yp0, h);
+            integ
         };
+        let run = self.clone();
+        let from_history =
+            move |startup: &Integrator<'a, L>, t: f64, history: &[&[f64]], h: f64| {
+                let mut integ = run.integrator::<L>(constant(startup.stats, h), Stats::default());
+                integ.start_from_history(t, history, h);
+                integ
+            };
         // Both runs' dense output is of degree at most MAX_ORDER.
-        Ok(Box::new(Startup::new(
+        startup::constant_step(
+            t0,
+            t_end,
+            h_request,
+            opts.max_steps,
+            k - 1,
+            self.y0,
+            from_start,
             startup,
-            (1..=m).map(grid),
-            build,
+            from_history,
             MAX_ORDER,
-        )))
+        )
     }
 }

@@ -4,7 +4,7 @@
 
 use super::corrector::JacState;
 use super::NCOL;
-use crate::core::control::{self, Budget, Failure as Fail, Rejection};
+use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, Rows};
@@ -93,8 +93,10 @@ pub(super) struct Integrator<'a, L> {
     /// Work counters (of this run, and of the work before it that it was
     /// started with).
     pub(super) stats: Stats,
-    /// Step attempts (accepted + rejected) and failures on this step.
-    pub(super) budget: Budget,
+    /// The attempt loop's state: budgets, limits, the end rule.
+    pub(super) steps: Steps,
+    /// Error-test failures on this step.
+    pub(super) error_failures: usize,
 }
 
 impl<L: Corrector> Method for Integrator<'_, L> {
@@ -115,10 +117,36 @@ impl<L: Corrector> Method for Integrator<'_, L> {
         self.t >= self.cfg.t_end
     }
     fn step(&mut self) -> Result<(), SolveError> {
-        Integrator::step(self)
+        self.weights.update(&self.phi[..self.n]);
+        self.error_failures = 0;
+        attempt::step(self)
     }
     fn stats(&self) -> Stats {
         self.stats
+    }
+}
+
+impl<L: Corrector> Attempts for Integrator<'_, L> {
+    fn steps(&mut self) -> &mut Steps {
+        &mut self.steps
+    }
+    fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+    fn point(&self) -> (f64, f64) {
+        (self.t, self.h)
+    }
+    fn set_step(&mut self, h: f64, last: bool) {
+        let h_before = self.h;
+        self.h = h;
+        self.last = last;
+        // Before the first step `φ_2 = h y'₀` follows the step.
+        if self.kold == 0 && h != h_before {
+            self.rescale_first_step(h_before);
+        }
+    }
+    fn attempt(&mut self) -> Result<Outcome, SolveError> {
+        Ok(Integrator::attempt(self))
     }
 }
 
@@ -168,7 +196,15 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             lead: DMatrix::zeros(m, n),
             lead_jac: DMatrix::zeros(m, n),
             stats: Stats::default(),
-            budget: Budget::new(cfg.max_steps),
+            steps: Steps::new(
+                Policy::DASSL,
+                cfg.max_steps,
+                cfg.t_end,
+                cfg.span,
+                cfg.hmax,
+                cfg.fixed_step,
+            ),
+            error_failures: 0,
         }
     }
 
@@ -189,120 +225,66 @@ impl<'a, L: Corrector> Integrator<'a, L> {
         self.weights.norm(v)
     }
 
-    /// Smallest step allowed at `t`.
-    fn hmin(&self) -> f64 {
-        control::h_min(self.t, self.cfg.span)
-    }
-
-    /// Take one step (retrying with smaller steps or lower order as needed).
-    fn step(&mut self) -> Result<(), SolveError> {
-        self.weights.update(&self.phi[..self.n]);
-
-        // Step size limits and the end of the horizon.
-        let remaining = self.cfg.t_end - self.t;
-        let h_before = self.h;
-        (self.h, self.last) = control::approach_end(
-            self.h,
-            remaining,
-            self.cfg.hmax,
-            self.cfg.t_end,
-            self.cfg.fixed_step,
-        );
-        if self.kold == 0 && self.h != h_before {
-            self.rescale_first_step(h_before);
-        }
-        if !self.last && self.h < self.hmin() {
-            return Err(SolveError::StepSizeTooSmall {
-                t: self.t,
-                h: self.h,
-            });
-        }
-
-        let mut nef = 0usize;
-        loop {
-            self.budget.attempt(self.t)?;
-            let t_old = self.t;
-            self.set_coefficients();
-            self.t = if self.last {
-                self.cfg.t_end
-            } else {
-                t_old + self.h
-            };
-
-            let failure = match self.corrector() {
-                Ok(()) if self.cfg.fixed_step => {
-                    self.accept(None);
-                    self.budget.accepted();
-                    if L::LEAST_SQUARES {
-                        // The point a least-squares corrector converges to
-                        // depends on its matrix: with constant steps a
-                        // matrix kept for many steps would bias every step
-                        // the same way. A fresh one each step.
-                        self.jac = JacState::Needed;
-                    }
-                    return Ok(());
+    /// One attempt from `t` with `h` and order `k` (DDASTP's blocks 1–5;
+    /// block 6 after a failure: the order and step of the retry).
+    fn attempt(&mut self) -> Outcome {
+        let t_old = self.t;
+        self.set_coefficients();
+        self.t = if self.last {
+            self.cfg.t_end
+        } else {
+            t_old + self.h
+        };
+        let failure = match self.corrector() {
+            Ok(()) if self.cfg.fixed_step => {
+                self.accept(None);
+                if L::LEAST_SQUARES {
+                    // The point a least-squares corrector converges to
+                    // depends on its matrix: with constant steps a matrix
+                    // kept for many steps would bias every step the same
+                    // way. A fresh one each step.
+                    self.jac = JacState::Needed;
                 }
-                Ok(()) => {
-                    let test = self.error_test();
-                    if test.err <= 1.0 {
-                        self.accept(Some(test));
-                        self.budget.accepted();
-                        return Ok(());
-                    }
-                    Rejection::ErrorTest(test)
-                }
-                Err(fail) => Rejection::Newton(fail),
-            };
-
-            // Block 6: the step failed.
-            self.stats.rejected += 1;
-            self.restore(t_old);
-            self.ramp = false;
-            self.last = false;
-            let h_failed = self.h;
-            let hmin = self.hmin();
-            match failure {
-                Rejection::Newton(fail) => {
-                    match self
-                        .budget
-                        .retry_after(fail, self.h, hmin, self.cfg.fixed_step)
-                    {
-                        Some(h) => self.h = h,
-                        None => return Err(self.newton_error(fail, h_failed)),
-                    }
-                }
-                Rejection::ErrorTest(test) => {
-                    nef += 1;
-                    if nef == 1 {
-                        self.k = test.knew;
-                        let r = 0.9 * (2.0 * test.est + 1e-4).powf(-1.0 / (self.k + 1) as f64);
-                        self.h *= r.clamp(0.25, 0.9);
-                    } else {
-                        // From the third failure on, order one, as DASSL:
-                        // at higher orders an algebraic component left off
-                        // its constraint by the Newton tolerance is an error
-                        // estimate that does not shrink with h. With a fixed
-                        // order it is raised again after the step.
-                        self.k = if nef == 2 { test.knew } else { 1 };
-                        self.h *= 0.25;
-                    }
-                    if self.h < hmin {
-                        return Err(SolveError::StepSizeTooSmall {
-                            t: self.t,
-                            h: self.h,
-                        });
-                    }
-                }
+                return Outcome::Accepted;
             }
-            if self.kold == 0 {
-                self.rescale_first_step(h_failed);
+            Ok(()) => {
+                let test = self.error_test();
+                if test.err <= 1.0 {
+                    self.accept(Some(test));
+                    return Outcome::Accepted;
+                }
+                Err(test)
+            }
+            Err(failure) => Ok(failure),
+        };
+
+        // Block 6: the step failed.
+        self.restore(t_old);
+        self.ramp = false;
+        match failure {
+            Ok(failure) => Outcome::Failed {
+                failure,
+                retry: Retry::Policy,
+                iterations: self.last_iterations,
+            },
+            Err(test) => {
+                self.error_failures += 1;
+                let nef = self.error_failures;
+                let h = if nef == 1 {
+                    self.k = test.knew;
+                    let r: f64 = 0.9 * (2.0 * test.est + 1e-4).powf(-1.0 / (self.k + 1) as f64);
+                    self.h * r.clamp(0.25, 0.9)
+                } else {
+                    // From the third failure on, order one, as DASSL: at
+                    // higher orders an algebraic component left off its
+                    // constraint by the Newton tolerance is an error
+                    // estimate that does not shrink with h. With a fixed
+                    // order it is raised again after the step.
+                    self.k = if nef == 2 { test.knew } else { 1 };
+                    0.25 * self.h
+                };
+                Outcome::ErrorTest { h }
             }
         }
-    }
-
-    /// The typed error for a Newton failure at the current time with step
-    /// size `h`.
-    fn newton_error(&self, fail: Fail, h: f64) -> SolveError {
-        Budget::error(fail, self.t, h, self.last_iterations)
     }
 }

@@ -36,18 +36,6 @@ pub(crate) enum Failure {
     NonFinite(&'static str),
 }
 
-/// Why a step attempt was rejected: a failure before the error test, or the
-/// error test with the method's estimate `E` (BDF's order selection, MEBDF's
-/// norm).
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Rejection<E> {
-    /// The corrector did not converge (or met a singular or non-finite
-    /// value).
-    Newton(Failure),
-    /// The local error estimate exceeded the tolerance.
-    ErrorTest(E),
-}
-
 /// Failure counters of the current step and the attempt budget.
 #[derive(Clone, Debug)]
 pub(crate) struct Budget {
@@ -101,25 +89,6 @@ impl Budget {
         *count >= limit
     }
 
-    /// After an attempt with step `h` rejected by `failure` before its
-    /// error test: the step to retry with, a quarter of it, or `None` when
-    /// the run stops with [`Budget::error`] — a constant step (nothing to
-    /// shrink), the failure's budget spent (it is counted), or the retry
-    /// below `h_min`.
-    pub(crate) fn retry_after(
-        &mut self,
-        failure: Failure,
-        h: f64,
-        h_min: f64,
-        fixed_step: bool,
-    ) -> Option<f64> {
-        if fixed_step || self.failed(failure) {
-            return None;
-        }
-        let h = 0.25 * h;
-        (h >= h_min).then_some(h)
-    }
-
     /// The typed error for `failure` at `t` with step `h` after
     /// `iterations` Newton iterations.
     pub(crate) fn error(failure: Failure, t: f64, h: f64, iterations: usize) -> SolveError {
@@ -128,36 +97,6 @@ impl Budget {
             Failure::Singular => SolveError::SingularMatrix { t, h },
             Failure::NonFinite(what) => SolveError::NonFinite { t, what },
         }
-    }
-}
-
-/// The step toward `t_end` from a point `remaining` before it, for a
-/// proposed step `h` (bounded by `h_max` unless `fixed_step`): reach
-/// `t_end` without a step that is tiny next to its predecessors — stretch
-/// the last step by up to 10 % (a constant step: up to 50 %), or split
-/// what remains of two steps into two equal ones. Returns the step and
-/// whether it is the last.
-pub(crate) fn approach_end(
-    h: f64,
-    remaining: f64,
-    h_max: f64,
-    t_end: f64,
-    fixed_step: bool,
-) -> (f64, bool) {
-    let h = if fixed_step { h } else { h.min(h_max) };
-    let last = if fixed_step {
-        remaining <= 1.5 * h
-    } else {
-        h >= remaining
-            || (remaining <= 1.1 * h && remaining <= h_max)
-            || remaining - h <= 4.0 * f64::EPSILON * t_end.abs()
-    };
-    if last {
-        (remaining, true)
-    } else if !fixed_step && remaining < 2.0 * h {
-        (0.5 * remaining, false)
-    } else {
-        (h, false)
     }
 }
 

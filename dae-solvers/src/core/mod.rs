@@ -10,8 +10,14 @@
 //!   behind one interface, so that a method is written once for both.
 //! - `control`: the smallest step and the failure budgets, the same for
 //!   every method, and the typed errors they end in.
+//! - `attempt`: the step-attempt loop — a family implements one attempt
+//!   (`attempt::Attempts`) and says how it ended; the retries, the shrink
+//!   factors of its policy, the budgets, the smallest step and the one
+//!   end-of-horizon rule are there.
 //! - `output`: the output grid (one rule for `t0`, `t_end` and the times
 //!   between) and dense output.
+//! - `startup`: the constant-step start-up of a multistep method (its
+//!   starting values from an adaptive run of the same method).
 //! - `driver`: the step loop — a method implements `driver::Method`
 //!   (start, one accepted step, dense output), the driver steps to the end,
 //!   fills the output grid, records steps and assembles the solution — also
@@ -26,6 +32,7 @@
 //! step/order proposal and dense output; `radau5` and `bdf` are directory
 //! modules, one file to each of these parts.
 
+pub(crate) mod attempt;
 pub(crate) mod control;
 pub(crate) mod driver;
 pub(crate) mod eliminate;
@@ -33,4 +40,5 @@ pub(crate) mod matrix;
 pub(crate) mod newton;
 pub(crate) mod output;
 pub mod policy;
+pub(crate) mod startup;
 pub(crate) mod weights;

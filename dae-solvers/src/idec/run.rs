@@ -5,7 +5,8 @@
 use super::interp::{weights, Ends};
 use super::sweep::Sweep;
 use super::{Idec, FAC, H0_DEFAULT, RATIO_MAX, RATIO_MIN};
-use crate::core::control::{self, Budget, Failure};
+use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
+use crate::core::control::{self, Failure};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::weights::Weights;
@@ -26,7 +27,9 @@ pub(super) struct Integrator<'a> {
     pub(super) sweep: Sweep,
     weights: Weights,
     stats: Stats,
-    budget: Budget,
+    /// The attempt loop's state (its steps are intervals of `m` Euler
+    /// steps).
+    steps: Steps,
     /// Constant Euler step, if any.
     fixed: Option<f64>,
     /// Intervals of the constant step accepted so far: their end is
@@ -34,8 +37,6 @@ pub(super) struct Integrator<'a> {
     /// over the 10⁵ intervals of a long run and then makes the last
     /// interval look shorter than `m h`, a restart).
     fixed_count: u64,
-    /// Largest Euler step.
-    h_max: f64,
     /// End of the last accepted interval and the best value there.
     t: f64,
     y: Vec<f64>,
@@ -91,13 +92,40 @@ impl Method for Integrator<'_> {
         self.done
     }
     fn step(&mut self) -> Result<(), SolveError> {
-        match self.fixed {
-            Some(_) => self.step_fixed(),
-            None => self.step_adaptive(),
-        }
+        attempt::step(self)
     }
     fn stats(&self) -> Stats {
         self.stats
+    }
+}
+
+impl Attempts for Integrator<'_> {
+    fn steps(&mut self) -> &mut Steps {
+        &mut self.steps
+    }
+    fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+    /// The interval `m h` is the loop's step.
+    fn point(&self) -> (f64, f64) {
+        (self.t, self.m as f64 * self.h)
+    }
+    fn set_step(&mut self, interval: f64, last: bool) {
+        // An interval that differs from the current one by round-off only
+        // (the last, brought to `t_end`) keeps its step: a constant step
+        // keeps its factorisation and carries its levels over.
+        let round_off = 100.0 * f64::EPSILON * self.t.abs().max(self.t_end.abs());
+        let lands = last && (interval - self.m as f64 * self.h).abs() <= round_off;
+        if !lands {
+            self.h = interval / self.m as f64;
+        }
+        self.last = last;
+    }
+    fn attempt(&mut self) -> Result<Outcome, SolveError> {
+        match self.fixed {
+            Some(_) => self.attempt_fixed(),
+            None => self.attempt_adaptive(),
+        }
     }
 }
 
@@ -137,6 +165,14 @@ impl<'a> Integrator<'a> {
             .collect();
         let weights = Weights::new(&options.tol, |_| 1.0, vec![true; n], index_power);
         let h_max = options.h_max.unwrap_or(span).min(span / m as f64);
+        let steps = Steps::new(
+            Policy::HALVE,
+            options.max_steps,
+            problem.t_end,
+            span,
+            m as f64 * h_max,
+            options.fixed_step.is_some(),
+        );
         let h = match options.fixed_step {
             Some(h) => h,
             None => options
@@ -145,7 +181,7 @@ impl<'a> Integrator<'a> {
                 .min(h_max)
                 .max(100.0 * control::h_min(problem.t0, span)),
         };
-        let mut it = Integrator {
+        Ok(Integrator {
             sys: sys.clone(),
             n,
             m,
@@ -155,10 +191,9 @@ impl<'a> Integrator<'a> {
             sweep,
             weights,
             stats: Stats::default(),
-            budget: Budget::new(options.max_steps),
+            steps,
             fixed: options.fixed_step,
             fixed_count: 0,
-            h_max,
             t: problem.t0,
             y: problem.y0.to_vec(),
             h,
@@ -178,36 +213,7 @@ impl<'a> Integrator<'a> {
             done: false,
             have_jacobian: false,
             reject: false,
-        };
-        it.clip_to_end();
-        Ok(it)
-    }
-
-    /// Shorten the next interval to end exactly at `t_end` when it would
-    /// pass it or leave a remainder below round-off (constant steps: below
-    /// `10⁻⁸ h` or the round-off of `t` itself, whichever is larger); with
-    /// error control, split a remainder of less than two intervals evenly.
-    fn clip_to_end(&mut self) {
-        let (t, m) = (self.t, self.m as f64);
-        let rest = self.t_end - self.t;
-        let round_off = 100.0 * f64::EPSILON * t.abs().max(self.t_end.abs());
-        let slack = match self.fixed {
-            // `t₀ + n m h` is rounded at `ulp(t)`: 3.6e-15 at t = 20, more
-            // than `10⁻⁸ h` for h = 2e-7 (the last interval then looked
-            // shorter than `m h` and restarted every level).
-            Some(_) => (1e-8 * self.h).max(round_off),
-            None => round_off,
-        };
-        if t + m * self.h >= self.t_end - slack {
-            // Keep a step that reaches `t_end` up to the slack (constant
-            // steps keep their factorisation).
-            if (rest - m * self.h).abs() > slack {
-                self.h = rest / m;
-            }
-            self.last = true;
-        } else if self.fixed.is_none() && t + 2.0 * m * self.h > self.t_end {
-            self.h = 0.5 * rest / m;
-        }
+        })
     }
 
     /// `J = ∂f/∂y` at `(t, y)`, counted.
@@ -227,7 +233,7 @@ impl<'a> Integrator<'a> {
 
     /// Factorise `E − hJ` (unless it is for this `h` and Jacobian) and run
     /// one interval from `t`.
-    fn attempt(&mut self, t: f64, h: f64) -> Result<(), Failure> {
+    fn interval(&mut self, t: f64, h: f64) -> Result<(), Failure> {
         if self.factored != Some(h) {
             self.factored = None;
             self.sweep.factor(h)?;
@@ -239,7 +245,6 @@ impl<'a> Integrator<'a> {
 
     /// Record the interval just computed as accepted.
     fn accept(&mut self, t: f64, h: f64) {
-        self.budget.accepted();
         self.stats.steps += self.m;
         self.t_prev = t;
         self.h_prev = h;
@@ -266,20 +271,23 @@ impl<'a> Integrator<'a> {
     /// Constant steps: the seed's scheme, the Jacobian evaluated once at
     /// `t₀`, every level and neighbouring problem carried from interval to
     /// interval.
-    fn step_fixed(&mut self) -> Result<(), SolveError> {
+    fn attempt_fixed(&mut self) -> Result<Outcome, SolveError> {
         let (t, h) = (self.t, self.h);
         if !self.have_jacobian {
             self.jacobian(t)?;
             self.have_jacobian = true;
         }
-        self.budget.attempt(t)?;
-        if let Err(failure) = self.attempt(t, h) {
-            return Err(Budget::error(failure, t, h, 0));
+        if let Err(failure) = self.interval(t, h) {
+            return Ok(Outcome::Failed {
+                failure,
+                retry: Retry::Policy,
+                iterations: 0,
+            });
         }
         self.accept(t, h);
         if !self.done {
-            self.h = self.fixed.unwrap_or(h);
-            self.clip_to_end();
+            let (interval, last) = self.steps.toward_end(self.t, self.m as f64 * h);
+            self.set_step(interval, last);
         }
         if self.h == h {
             self.sweep.carry_over();
@@ -291,68 +299,51 @@ impl<'a> Integrator<'a> {
             self.sweep.restart_at(&self.y);
             self.have_jacobian = false;
         }
-        Ok(())
+        Ok(Outcome::Accepted)
     }
 
     /// Error control: the Jacobian at the start of each interval, every
     /// level started from the accepted value, the difference of the last
     /// two corrections at the end of the interval as error estimate.
-    fn step_adaptive(&mut self) -> Result<(), SolveError> {
-        let span = self.t_end - self.t0;
+    fn attempt_adaptive(&mut self) -> Result<Outcome, SolveError> {
         let order = self.corrections.min(self.m) as f64;
-        loop {
-            let (t, h) = (self.t, self.h);
-            if h < control::h_min(t, span) {
-                return Err(SolveError::StepSizeTooSmall { t, h });
-            }
-            if !self.have_jacobian {
-                self.jacobian(t)?;
-                self.have_jacobian = true;
-            }
-            self.budget.attempt(t)?;
-            self.sweep.restart_at(&self.y);
-            let outcome = self.attempt(t, h);
-            let err = match outcome {
-                Ok(()) => self.error_norm(h),
-                Err(_) => f64::NAN,
-            };
-            if !err.is_finite() {
-                self.stats.rejected += 1;
-                let failure = outcome.err().unwrap_or(Failure::NonFinite("solution"));
-                if self.budget.failed(failure) {
-                    return Err(Budget::error(failure, t, h, 0));
-                }
-                self.retry(0.5 * h);
-                continue;
-            }
-            let ratio = if err == 0.0 {
-                RATIO_MAX
-            } else {
-                (FAC * err.powf(-1.0 / (order + 1.0))).clamp(RATIO_MIN, RATIO_MAX)
-            };
-            if err > 1.0 {
-                self.stats.rejected += 1;
-                self.retry(h * ratio);
-                continue;
-            }
-            self.accept(t, h);
-            if !self.done {
-                let ratio = if self.reject { ratio.min(1.0) } else { ratio };
-                self.reject = false;
-                self.have_jacobian = false;
-                self.h = (h * ratio).min(self.h_max);
-                self.clip_to_end();
-            }
-            return Ok(());
+        let (t, h) = (self.t, self.h);
+        if !self.have_jacobian {
+            self.jacobian(t)?;
+            self.have_jacobian = true;
         }
-    }
-
-    /// After a failed or rejected attempt: try again with Euler step `h`.
-    fn retry(&mut self, h: f64) {
-        self.reject = true;
-        self.last = false;
-        self.h = h.min(self.h_max);
-        self.clip_to_end();
+        self.sweep.restart_at(&self.y);
+        let outcome = self.interval(t, h);
+        let err = match outcome {
+            Ok(()) => self.error_norm(h),
+            Err(_) => f64::NAN,
+        };
+        if !err.is_finite() {
+            self.reject = true;
+            return Ok(Outcome::Failed {
+                failure: outcome.err().unwrap_or(Failure::NonFinite("solution")),
+                retry: Retry::Policy,
+                iterations: 0,
+            });
+        }
+        let ratio = if err == 0.0 {
+            RATIO_MAX
+        } else {
+            (FAC * err.powf(-1.0 / (order + 1.0))).clamp(RATIO_MIN, RATIO_MAX)
+        };
+        let m = self.m as f64;
+        if err > 1.0 {
+            self.reject = true;
+            return Ok(Outcome::ErrorTest { h: m * h * ratio });
+        }
+        self.accept(t, h);
+        if !self.done {
+            let ratio = if self.reject { ratio.min(1.0) } else { ratio };
+            self.reject = false;
+            self.have_jacobian = false;
+            self.h = (h * ratio).min(self.steps.h_max / m);
+        }
+        Ok(Outcome::Accepted)
     }
 
     /// `‖η^[J] − η^[J−1]‖` at the end of the interval, weighted at the

@@ -140,8 +140,8 @@ mod history;
 mod stages;
 mod step;
 
-use crate::core::driver::{Method, Startup};
-use crate::core::{control as limits, policy};
+use crate::core::driver::Method;
+use crate::core::{policy, startup};
 use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
 use crate::{NotApplicable, Options, Problem, SolveError, Solver, Stats};
 use dae_core::system::FormulationInfo;
@@ -219,16 +219,8 @@ fn start<'a>(
     };
 
     // Constant step: k − 1 starting values from an adaptive run.
-    let (nsteps, h) = limits::constant_grid(span, h_request, options.max_steps, t0)?;
-    let grid = move |j: usize| {
-        if j == nsteps {
-            t_end
-        } else {
-            t0 + j as f64 * h
-        }
-    };
     let k = order - 1;
-    let constant = move |spent: Stats| Config {
+    let constant = move |spent: Stats, h: f64| Config {
         max_order: order,
         fixed_order: true,
         fixed_step: true,
@@ -238,42 +230,43 @@ fn start<'a>(
             .saturating_sub(spent.steps + spent.rejected),
         ..cfg
     };
-    let m = (k - 1).min(nsteps);
-    if m == 0 {
-        let mut integ = integrator(constant(spent), spent);
-        integ.start(t0, problem.y0, &yp0, h);
+    let (y0, yp0) = (problem.y0, &yp0);
+    let from_start = |h: f64| {
+        let mut integ = integrator(constant(spent, h), spent);
+        integ.start(t0, y0, yp0, h);
         integ.p = order;
-        return Ok(Box::new(integ));
-    }
-    let mut startup = integrator(
-        Config {
+        integ
+    };
+    let startup = |t_end: f64, h: f64| {
+        let cfg = Config {
             max_order: coeffs::MAX_ORDER.min(6),
             fixed_order: false,
-            t_end: grid(m),
+            t_end,
             ..cfg
-        },
-        spent,
-    );
-    let h0 = startup.initial_step(problem.y0, &yp0).min(h);
-    startup.start(t0, problem.y0, &yp0, h0);
-    let y0 = problem.y0;
-    let build = move |startup: &Integrator<'a>, values: &[Vec<f64>]| {
-        if m == nsteps {
-            return None;
-        }
-        let mut integ = integrator(constant(startup.stats), Stats::default());
-        let mut history: Vec<&[f64]> = Vec::with_capacity(k);
-        history.push(y0);
-        history.extend(values.iter().map(|v| v.as_slice()));
-        integ.start_from_values(grid(k - 1), &history, h, order);
-        Some(integ)
+        };
+        let mut startup = integrator(cfg, spent);
+        let h0 = startup.initial_step(y0, yp0).min(h);
+        startup.start(t0, y0, yp0, h0);
+        startup
+    };
+    let make = integrator.clone();
+    let from_history = move |startup: &Integrator<'a>, t: f64, history: &[&[f64]], h: f64| {
+        let mut integ = make(constant(startup.stats, h), Stats::default());
+        integ.start_from_values(t, history, h, order);
+        integ
     };
     // Both runs' dense output is of degree at most the order bound.
     let degree = order.max(coeffs::MAX_ORDER.min(6));
-    Ok(Box::new(Startup::new(
+    startup::constant_step(
+        t0,
+        t_end,
+        h_request,
+        options.max_steps,
+        k - 1,
+        y0,
+        from_start,
         startup,
-        (1..=m).map(grid),
-        build,
+        from_history,
         degree,
-    )))
+    )
 }

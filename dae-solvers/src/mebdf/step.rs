@@ -5,7 +5,7 @@
 use super::coeffs::{Coefficients, MAX_ORDER};
 use super::history::History;
 use super::stages::JacState;
-use crate::core::control::{self, Budget, Rejection};
+use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, SquareLu};
@@ -112,8 +112,13 @@ pub(super) struct Integrator<'a> {
 
     /// Work counters.
     pub(super) stats: Stats,
-    /// Step attempts and failures on this step.
-    pub(super) budget: Budget,
+    /// The attempt loop's state: budgets, limits, the end rule.
+    pub(super) steps: Steps,
+    /// Error-test failures on this step.
+    error_failures: usize,
+    /// Step and error of the last order-one attempt rejected by the error
+    /// test on this step (see [`Integrator::restart`]).
+    order_one: Option<(f64, f64)>,
 }
 
 impl Method for Integrator<'_> {
@@ -134,10 +139,32 @@ impl Method for Integrator<'_> {
         self.t >= self.cfg.t_end
     }
     fn step(&mut self) -> Result<(), SolveError> {
-        Integrator::step(self)
+        self.error_failures = 0;
+        self.order_one = None;
+        attempt::step(self)
     }
     fn stats(&self) -> Stats {
         self.stats
+    }
+}
+
+impl Attempts for Integrator<'_> {
+    fn steps(&mut self) -> &mut Steps {
+        &mut self.steps
+    }
+    fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+    fn point(&self) -> (f64, f64) {
+        (self.t, self.h)
+    }
+    fn set_step(&mut self, h: f64, last: bool) {
+        self.h = h;
+        self.last = last;
+        self.fit_history();
+    }
+    fn attempt(&mut self) -> Result<Outcome, SolveError> {
+        Integrator::attempt_step(self)
     }
 }
 
@@ -193,7 +220,16 @@ impl<'a> Integrator<'a> {
             yp: vec![0.0; n],
             delta: vec![0.0; n],
             stats: Stats::default(),
-            budget: Budget::new(cfg.max_steps),
+            steps: Steps::new(
+                Policy::MEBDF,
+                cfg.max_steps,
+                cfg.t_end,
+                cfg.span,
+                cfg.hmax,
+                cfg.fixed_step,
+            ),
+            error_failures: 0,
+            order_one: None,
         }
     }
 
@@ -229,83 +265,45 @@ impl<'a> Integrator<'a> {
         self.hist.start_from_values(values, h);
     }
 
-    /// Take one step (retrying with smaller steps or lower order as needed).
-    fn step(&mut self) -> Result<(), SolveError> {
-        let remaining = self.cfg.t_end - self.t;
-        let fixed = self.cfg.fixed_step;
-        (self.h, self.last) =
-            control::approach_end(self.h, remaining, self.cfg.hmax, self.cfg.t_end, fixed);
-        self.fit_history();
-        let hmin = control::h_min(self.t, self.cfg.span);
-        if !self.last && self.h < hmin {
-            return Err(SolveError::StepSizeTooSmall {
-                t: self.t,
-                h: self.h,
-            });
-        }
-        let mut error_failures = 0usize;
-        // Step and error of the last order-one attempt rejected by the
-        // error test on this step (see `restart`).
-        let mut order_one: Option<(f64, f64)> = None;
-        loop {
-            self.budget.attempt(self.t)?;
-            self.weights.update_scaled(self.hist.y(), self.h);
-            let rejection = match self.attempt() {
-                Ok(()) if fixed => {
-                    self.accept(0.0);
-                    return Ok(());
-                }
-                Ok(()) => {
-                    let err = self.error_estimate();
-                    if err <= 1.0 {
-                        self.accept(err);
-                        return Ok(());
-                    }
-                    if self.p == 1 {
-                        if let Some((h_prev, err_prev)) = order_one {
-                            if self.h <= STALLED_CUT * h_prev
-                                && err > STALLED_FALL * err_prev
-                                && self.since_restart >= RESTART_SPACING
-                            {
-                                return self.restart();
-                            }
-                        }
-                        order_one = Some((self.h, err));
-                    }
-                    Rejection::ErrorTest(err)
-                }
-                Err(fail) => Rejection::Newton(fail),
-            };
-            self.stats.rejected += 1;
-            self.ramp = false;
-            self.last = false;
-            let h_failed = self.h;
-            if let Rejection::ErrorTest(_) = rejection {
-                error_failures += 1;
+    /// One attempt from `t` with `h` and order `p`; after a rejected
+    /// error test, the order and step of the retry.
+    fn attempt_step(&mut self) -> Result<Outcome, SolveError> {
+        self.weights.update_scaled(self.hist.y(), self.h);
+        let err = match self.attempt() {
+            Ok(()) if self.cfg.fixed_step => {
+                self.accept(0.0);
+                return Ok(Outcome::Accepted);
             }
-            match rejection {
-                Rejection::Newton(fail) => match self.budget.retry_after(fail, self.h, hmin, fixed)
+            Ok(()) => self.error_estimate(),
+            Err(failure) => {
+                self.ramp = false;
+                return Ok(Outcome::Failed {
+                    failure,
+                    retry: Retry::Policy,
+                    iterations: self.last_iterations,
+                });
+            }
+        };
+        if err <= 1.0 {
+            self.accept(err);
+            return Ok(Outcome::Accepted);
+        }
+        if self.p == 1 {
+            if let Some((h_prev, err_prev)) = self.order_one {
+                if self.h <= STALLED_CUT * h_prev
+                    && err > STALLED_FALL * err_prev
+                    && self.since_restart >= RESTART_SPACING
                 {
-                    Some(h) => self.h = h,
-                    None => {
-                        return Err(Budget::error(fail, self.t, h_failed, self.last_iterations))
-                    }
-                },
-                Rejection::ErrorTest(err) => {
-                    self.reject(err, error_failures);
-                    if self.h < hmin {
-                        return Err(SolveError::StepSizeTooSmall {
-                            t: self.t,
-                            h: self.h,
-                        });
-                    }
+                    self.restart()?;
+                    return Ok(Outcome::Accepted);
                 }
             }
-            let remaining = self.cfg.t_end - self.t;
-            (self.h, self.last) =
-                control::approach_end(self.h, remaining, self.cfg.hmax, self.cfg.t_end, fixed);
-            self.fit_history();
+            self.order_one = Some((self.h, err));
         }
+        self.ramp = false;
+        self.error_failures += 1;
+        self.reject(err, self.error_failures);
+        Ok(Outcome::ErrorTest { h: self.h })
     }
 
     /// Accept the current order-one attempt although its error estimate
@@ -334,7 +332,6 @@ impl<'a> Integrator<'a> {
         let yp = initial_derivative_with(&*self.sys, t, &y, &DerivativeRule::SOLVER)?;
         self.stats.residual_evals += 1;
         self.stats.steps += 1;
-        self.budget.accepted();
         let h = self.h;
         self.start(t, &y, &yp, h);
         self.since_restart = 0;
@@ -370,7 +367,6 @@ impl<'a> Integrator<'a> {
         };
         self.stats.steps += 1;
         self.since_restart += 1;
-        self.budget.accepted();
         self.p_old = self.p;
         if p_next != self.p || r != 1.0 {
             self.same = 0;

@@ -4,8 +4,8 @@
 
 use super::step::Integrator;
 use super::tableau::Collocation;
-use super::{FACL, FACR, QUOT1, QUOT2, SAFE, UROUND};
-use crate::core::control::Budget;
+use super::{FACL, FACR, QUOT1, QUOT2, SAFE};
+use crate::core::attempt::Steps;
 use crate::core::matrix::StageSystems;
 
 /// What the step loop does next (RADAU5's labels 10, 20, 30).
@@ -28,8 +28,6 @@ pub(super) struct Control {
     pub(super) t_lo: f64,
     /// Step size of the next attempt.
     pub(super) h: f64,
-    /// Largest step.
-    pub(super) h_max: f64,
     /// Constant step size (no error control), if any.
     pub(super) fixed: Option<f64>,
     /// The next attempt reaches `t_end`.
@@ -49,8 +47,8 @@ pub(super) struct Control {
     pub(super) h_acc: f64,
     /// Its error norm, at least `10⁻²` (`ERRACC`).
     pub(super) err_acc: f64,
-    /// Attempted steps and the failure budgets.
-    pub(super) budget: Budget,
+    /// The attempt loop's state: budgets, limits, the end rule.
+    pub(super) steps: Steps,
     /// What the step loop does next.
     pub(super) next: Next,
     /// The quasi-constant step rule of a symmetric method.
@@ -65,15 +63,6 @@ impl Control {
             Next::Factor
         } else {
             Next::Jacobian
-        }
-    }
-
-    /// A step ending within this of `t_end` is stretched to it: round-off
-    /// for adaptive steps, a relative 1e-8 for fixed ones.
-    pub(super) fn end_slack(&self, t: f64, h: f64, t_end: f64) -> f64 {
-        match self.fixed {
-            Some(_) => 1e-8 * h,
-            None => 100.0 * UROUND * t.abs().max(t_end.abs()),
         }
     }
 }
@@ -190,7 +179,6 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// Size of the next step after one accepted with proposal `h_new`, and
     /// whether the factorisation (or the Jacobian) can be kept.
     pub(super) fn next_step(&mut self, mut h_new: f64) {
-        let t_end = self.t_end;
         let theta = if K::SLOW_EXIT {
             self.newton.theta
         } else {
@@ -201,13 +189,8 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         let c = &mut self.c;
         let (t, h) = (c.t, c.h);
         if let Some(hf) = c.fixed {
-            let remaining = t_end - t;
-            let h_next = if t + hf >= t_end - c.end_slack(t, hf, t_end) {
-                c.last = true;
-                remaining
-            } else {
-                hf
-            };
+            let (h_next, last) = c.steps.toward_end(t, hf);
+            c.last = last;
             let new_h = h_next != h;
             c.h = h_next;
             c.next = match (small_theta, new_h) {
@@ -217,29 +200,20 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
             };
             return;
         }
-        h_new = h_new.min(c.h_max);
         if c.reject {
             h_new = h_new.min(h);
         }
         c.reject = false;
-        if t + h_new >= t_end - c.end_slack(t, h_new, t_end) {
-            c.h = t_end - t;
-            c.last = true;
-        } else {
-            if t + 2.0 * h_new > t_end {
-                // Split the rest evenly rather than end with a short step:
-                // after a large step-size ratio the index-2 and index-3
-                // components lose accuracy (HW VII.4), and the last step is
-                // where they are reported.
-                h_new = 0.5 * (t_end - t);
-            }
-            let qt = h_new / h;
+        let (h_end, last) = c.steps.toward_end(t, h_new);
+        c.last = last;
+        if !last {
+            let qt = h_end / h;
             if small_theta && (QUOT1..=QUOT2).contains(&qt) {
                 c.next = Next::Step;
                 return;
             }
-            c.h = h_new;
         }
+        c.h = h_end;
         c.next = if small_theta {
             Next::Factor
         } else {

@@ -6,7 +6,8 @@ use super::control::{classical_quotient, predictive_quotient, Control, Hold, Nex
 use super::stages::{Newton, Work};
 use super::tableau::{dense, Collocation};
 use super::{smallest_tolerance, H0_DEFAULT, TIGHT_NEWTON, TIGHT_TOL, UROUND};
-use crate::core::control::{self, Budget, Failure};
+use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
+use crate::core::control::{self, Failure};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::StageSystems;
@@ -83,10 +84,33 @@ impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
         self.c.done
     }
     fn step(&mut self) -> Result<(), SolveError> {
-        Integrator::step(self)
+        attempt::step(self)
     }
     fn stats(&self) -> Stats {
         self.stats
+    }
+}
+
+impl<S: StageSystems, K: Collocation> Attempts for Integrator<'_, S, K> {
+    fn steps(&mut self) -> &mut Steps {
+        &mut self.c.steps
+    }
+    fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+    fn point(&self) -> (f64, f64) {
+        (self.c.t, self.c.h)
+    }
+    fn set_step(&mut self, h: f64, last: bool) {
+        let c = &mut self.c;
+        if h != c.h && c.next == Next::Step {
+            c.next = Next::Factor;
+        }
+        c.h = h;
+        c.last = last;
+    }
+    fn attempt(&mut self) -> Result<Outcome, SolveError> {
+        Integrator::attempt(self)
     }
 }
 
@@ -167,7 +191,6 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 t: problem.t0,
                 t_lo: 0.0,
                 h: 0.0,
-                h_max: options.h_max.unwrap_or(span).min(span),
                 fixed: options.fixed_step,
                 last: false,
                 done: false,
@@ -177,7 +200,14 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 h_old: 0.0,
                 h_acc: 0.0,
                 err_acc: 1e-2,
-                budget: Budget::new(options.max_steps),
+                steps: Steps::new(
+                    Policy::HALVE,
+                    options.max_steps,
+                    problem.t_end,
+                    span,
+                    options.h_max.unwrap_or(span).min(span),
+                    options.fixed_step.is_some(),
+                ),
                 next: Next::Jacobian,
                 hold: Hold::default(),
             },
@@ -226,193 +256,173 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 .options
                 .h0
                 .unwrap_or(H0_DEFAULT)
-                .min(c.h_max)
+                .min(c.steps.h_max)
                 .max(100.0 * control::h_min(t0, span)),
         };
-        if t0 + c.h >= t_end - c.end_slack(t0, c.h, t_end) {
-            c.h = span;
-            c.last = true;
-        }
+        (c.h, c.last) = c.steps.toward_end(t0, c.h);
         c.h_old = c.h;
         c.h_acc = c.h;
         Ok(())
     }
 
-    /// One accepted step from `c.t` (RADAU5's loop from label 10 to the
-    /// acceptance of a step), then the size of the next one.
-    fn step(&mut self) -> Result<(), SolveError> {
+    /// One attempt from `c.t` with `c.h` (RADAU5's loop from label 10 to
+    /// the acceptance of a step); when accepted, the size of the next one.
+    fn attempt(&mut self) -> Result<Outcome, SolveError> {
         let t_end = self.t_end;
-        let span = t_end - self.t0;
-        loop {
-            let (t, h, fixed) = (self.c.t, self.c.h, self.c.fixed);
-            if fixed.is_none() && h < control::h_min(t, span) {
-                return Err(SolveError::StepSizeTooSmall { t, h });
-            }
-            if self.c.next == Next::Jacobian {
-                self.jacobian(t)?;
-                self.c.caljac = true;
-                self.c.next = Next::Factor;
-            }
-            if self.c.next == Next::Factor {
-                if self.factor(h).is_err() {
-                    let c = &mut self.c;
-                    if fixed.is_some() || c.budget.failed(Failure::Singular) {
-                        return Err(SolveError::SingularMatrix { t, h });
-                    }
-                    c.h *= 0.5;
-                    c.reject = true;
-                    c.last = false;
-                    c.next = c.after_failure();
-                    continue;
-                }
-                self.stats.factorizations += 1;
-            }
-            self.c.budget.attempt(t)?;
-
-            // ---- one step attempt from t with h ----
-            self.w.weights.update_scaled(&self.w.y, h);
-            self.starting_values(self.c.first, h / self.c.h_old);
-
-            let outcome = self.newton(t, h, fixed.is_none());
-            let newt = match outcome {
-                Newton::Converged(k) => k,
-                Newton::TooSlow { iterations, .. }
-                | Newton::Diverged(iterations)
-                | Newton::NonFinite(iterations) => iterations,
-            };
-            self.stats.newton_iterations += newt;
-
-            let failed_factor = match outcome {
-                Newton::Converged(_) => None,
-                Newton::TooSlow { factor, .. } => Some(factor),
-                Newton::Diverged(_) | Newton::NonFinite(_) => Some(0.5),
-            };
-            // Error estimate and proposed step (adaptive mode only).
-            let mut err = 0.0;
-            let mut h_new = h;
-            let mut non_finite = matches!(outcome, Newton::NonFinite(_));
-            let mut newton_failed = failed_factor.is_some();
-            if !newton_failed && fixed.is_none() {
-                err = self.error_norm(t, h, self.c.first || self.c.reject);
-                if err.is_finite() {
-                    h_new = h / classical_quotient(err, newt, K::MAX_NEWTON);
-                } else {
-                    non_finite = true;
-                    newton_failed = true;
-                }
-            }
-
-            let c = &mut self.c;
-            if newton_failed {
-                // ---- Newton failure (RADAU5's label 78) ----
-                self.stats.rejected += 1;
-                let failure = if non_finite {
-                    Failure::NonFinite("residual")
-                } else {
-                    Failure::Newton
-                };
-                let exhausted = c.budget.failed(failure);
-                if fixed.is_some() && !c.caljac {
-                    c.next = Next::Jacobian;
-                    continue;
-                }
-                if fixed.is_some() || exhausted {
-                    return Err(Budget::error(failure, t, h, newt));
-                }
-                c.h *= failed_factor.unwrap_or(0.5);
-                if K::QUASI_CONSTANT {
-                    c.hold.rejected();
-                }
+        let (t, h, fixed) = (self.c.t, self.c.h, self.c.fixed);
+        if self.c.next == Next::Jacobian {
+            self.jacobian(t)?;
+            self.c.caljac = true;
+            self.c.next = Next::Factor;
+        }
+        if self.c.next == Next::Factor {
+            if self.factor(h).is_err() {
+                let c = &mut self.c;
                 c.reject = true;
-                c.last = false;
                 c.next = c.after_failure();
-                continue;
-            }
-
-            if err >= 1.0 {
-                // ---- rejected by the error test ----
-                self.stats.rejected += 1;
-                c.reject = true;
-                c.last = false;
-                if c.first {
-                    c.h *= 0.1;
-                } else {
-                    c.h = h_new;
-                }
-                if K::QUASI_CONSTANT {
-                    c.hold.rejected();
-                }
-                c.next = c.after_failure();
-                continue;
-            }
-
-            // ---- accepted ----
-            c.budget.accepted();
-            if fixed.is_none() {
-                if self.stats.steps > 0 {
-                    let quot = (h / h_new).max(predictive_quotient(err, c.err_acc, h, c.h_acc));
-                    h_new = h / quot;
-                }
-                c.h_acc = h;
-                c.err_acc = err.max(1e-2);
-                if K::QUASI_CONSTANT {
-                    h_new = c.hold.accepted(h, err, h_new);
-                }
-            }
-            c.first = false;
-            if c.last {
-                (c.t, c.t_lo) = (t_end, 0.0);
-            } else if self.compensated {
-                (c.t, c.t_lo) = two_sum(t, h + c.t_lo);
-            } else {
-                c.t = t + h;
-            }
-            c.h_old = h;
-            c.caljac = false;
-            self.advance(h);
-            self.stats.steps += 1;
-            let t = self.c.t;
-            if !all_finite(&self.w.y) {
-                return Err(SolveError::NonFinite {
-                    t,
-                    what: "solution",
+                return Ok(Outcome::Failed {
+                    failure: Failure::Singular,
+                    retry: Retry::Policy,
+                    iterations: 0,
                 });
             }
-            if K::END.is_some() {
-                // Not stiffly accurate: the end point is made consistent,
-                // keeping the differential part of the step just taken:
-                // `E(y_n)`, not `E(y_{n+1})`, where the rows a formulation
-                // chooses may change (`mex0`).
-                if !self.constant_leading {
-                    self.w.e_step.copy_from(&self.w.e_n);
-                }
-                self.evaluate_at_step_point(t, false)?;
-                // One simplified Newton step makes a linear algebraic part
-                // consistent (λ in rcd0). Constraints kept as rows (psi0,
-                // mex0) are nonlinear in the state and take a few, with `f`
-                // and `E` evaluated again after each; a dummy state left
-                // one step off its constraint loses the method's order.
-                for _ in 0..PROJECTION_STEPS {
-                    let (again, size) = self.project(t, h)?;
-                    let converged = size <= self.newton_floor;
-                    if !again || (converged && self.c.last) {
-                        break;
-                    }
-                    self.evaluate_at_step_point(t, false)?;
-                    if converged {
-                        break;
-                    }
-                }
-            }
-            if self.c.last {
-                self.c.done = true;
-                return Ok(());
-            }
-            if K::END.is_none() {
-                self.evaluate_at_step_point(t, false)?;
-            }
-            self.next_step(h_new);
-            return Ok(());
+            self.stats.factorizations += 1;
         }
+
+        // ---- one step attempt from t with h ----
+        self.w.weights.update_scaled(&self.w.y, h);
+        self.starting_values(self.c.first, h / self.c.h_old);
+
+        let outcome = self.newton(t, h, fixed.is_none());
+        let newt = match outcome {
+            Newton::Converged(k) => k,
+            Newton::TooSlow { iterations, .. }
+            | Newton::Diverged(iterations)
+            | Newton::NonFinite(iterations) => iterations,
+        };
+        self.stats.newton_iterations += newt;
+
+        let retry = match outcome {
+            Newton::Converged(_) => None,
+            Newton::TooSlow { factor, .. } => Some(Retry::Shrink(factor)),
+            Newton::Diverged(_) | Newton::NonFinite(_) => Some(Retry::Policy),
+        };
+        // Error estimate and proposed step (adaptive mode only).
+        let mut err = 0.0;
+        let mut h_new = h;
+        let mut non_finite = matches!(outcome, Newton::NonFinite(_));
+        let mut retry = retry;
+        if retry.is_none() && fixed.is_none() {
+            err = self.error_norm(t, h, self.c.first || self.c.reject);
+            if err.is_finite() {
+                h_new = h / classical_quotient(err, newt, K::MAX_NEWTON);
+            } else {
+                non_finite = true;
+                retry = Some(Retry::Policy);
+            }
+        }
+
+        let c = &mut self.c;
+        if let Some(mut retry) = retry {
+            // ---- Newton failure (RADAU5's label 78) ----
+            let failure = if non_finite {
+                Failure::NonFinite("residual")
+            } else {
+                Failure::Newton
+            };
+            if fixed.is_some() && !c.caljac {
+                c.next = Next::Jacobian;
+                retry = Retry::Refresh;
+            } else {
+                if K::QUASI_CONSTANT {
+                    c.hold.rejected();
+                }
+                c.reject = true;
+                c.next = c.after_failure();
+            }
+            return Ok(Outcome::Failed {
+                failure,
+                retry,
+                iterations: newt,
+            });
+        }
+
+        if err >= 1.0 {
+            // ---- rejected by the error test ----
+            c.reject = true;
+            let h = if c.first { 0.1 * h } else { h_new };
+            if K::QUASI_CONSTANT {
+                c.hold.rejected();
+            }
+            c.next = c.after_failure();
+            return Ok(Outcome::ErrorTest { h });
+        }
+
+        // ---- accepted ----
+        if fixed.is_none() {
+            if self.stats.steps > 0 {
+                let quot = (h / h_new).max(predictive_quotient(err, c.err_acc, h, c.h_acc));
+                h_new = h / quot;
+            }
+            c.h_acc = h;
+            c.err_acc = err.max(1e-2);
+            if K::QUASI_CONSTANT {
+                h_new = c.hold.accepted(h, err, h_new);
+            }
+        }
+        c.first = false;
+        if c.last {
+            (c.t, c.t_lo) = (t_end, 0.0);
+        } else if self.compensated {
+            (c.t, c.t_lo) = two_sum(t, h + c.t_lo);
+        } else {
+            c.t = t + h;
+        }
+        c.h_old = h;
+        c.caljac = false;
+        self.advance(h);
+        self.stats.steps += 1;
+        let t = self.c.t;
+        if !all_finite(&self.w.y) {
+            return Err(SolveError::NonFinite {
+                t,
+                what: "solution",
+            });
+        }
+        if K::END.is_some() {
+            // Not stiffly accurate: the end point is made consistent,
+            // keeping the differential part of the step just taken:
+            // `E(y_n)`, not `E(y_{n+1})`, where the rows a formulation
+            // chooses may change (`mex0`).
+            if !self.constant_leading {
+                self.w.e_step.copy_from(&self.w.e_n);
+            }
+            self.evaluate_at_step_point(t, false)?;
+            // One simplified Newton step makes a linear algebraic part
+            // consistent (λ in rcd0). Constraints kept as rows (psi0,
+            // mex0) are nonlinear in the state and take a few, with `f`
+            // and `E` evaluated again after each; a dummy state left
+            // one step off its constraint loses the method's order.
+            for _ in 0..PROJECTION_STEPS {
+                let (again, size) = self.project(t, h)?;
+                let converged = size <= self.newton_floor;
+                if !again || (converged && self.c.last) {
+                    break;
+                }
+                self.evaluate_at_step_point(t, false)?;
+                if converged {
+                    break;
+                }
+            }
+        }
+        if self.c.last {
+            self.c.done = true;
+            return Ok(Outcome::Accepted);
+        }
+        if K::END.is_none() {
+            self.evaluate_at_step_point(t, false)?;
+        }
+        self.next_step(h_new);
+        Ok(Outcome::Accepted)
     }
 }
