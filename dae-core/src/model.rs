@@ -207,6 +207,7 @@ impl Model {
     /// against unknowns ([`check_counts`]), invariants and the formulation
     /// list. Each phase reports into the same [`Errors`].
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
+        let _budget = expr::Budget::start(expr::WORK_BUDGET);
         let mut errors = Errors::default();
         let mut decl = declare_names(ast, &mut errors);
         derive_parameters(&mut decl, &mut errors);
@@ -677,9 +678,32 @@ fn lower_definitions<'a>(
     // every later use.
     scope.forward = def_decls.iter().map(|d| (*d).clone()).collect();
     let mut definitions = Vec::new();
+    scope.forward_index = def_decls
+        .iter()
+        .enumerate()
+        .map(|(k, d)| (d.name.name.clone(), k))
+        .collect();
     for (k, d) in def_decls.iter().enumerate() {
         scope.mode = Mode::Definition(k);
-        match scope.lower(&d.expr, errors) {
+        if expr::exhausted() {
+            // The budget is spent (reported once, at the definition that
+            // spent it): the rest stay quiet.
+            scope.failed.insert(d.name.name.clone());
+            continue;
+        }
+        let lowered = scope
+            .lower(&d.expr, errors)
+            .and_then(|e| match expr::check_growth(&e) {
+                Ok(()) => Some(e),
+                Err(grew) => {
+                    errors.push(
+                        d.name.span,
+                        format!("{DEFINITION} `{}` {grew}", d.name.name),
+                    );
+                    None
+                }
+            });
+        match lowered {
             Some(e) => {
                 scope.defs.insert(d.name.name.clone(), e.clone());
                 definitions.push(DefinitionDef {
@@ -727,6 +751,11 @@ fn lower_equations(
     // equations afterwards would only add a cascade of "too few".
     let mut lowered_all = true;
     for eq in &ast.equations {
+        if expr::exhausted() {
+            // Reported once, where the budget was spent.
+            lowered_all = false;
+            continue;
+        }
         let (Some(lhs), Some(rhs)) = (scope.lower(&eq.lhs, errors), scope.lower(&eq.rhs, errors))
         else {
             lowered_all = false;
@@ -735,6 +764,11 @@ fn lower_equations(
         // Equation-level errors point at the equation's first token.
         let eq_span = eq.lhs.span();
         let r = expr::sub(&lhs, &rhs);
+        if let Err(grew) = expr::check_growth(&r) {
+            errors.push(eq_span, format!("this equation {grew}"));
+            lowered_all = false;
+            continue;
+        }
         let (ders, rest) = expr::split_ders(&r);
         if ders.is_empty() {
             let g = if lhs.is_zero() {
@@ -1114,6 +1148,9 @@ struct Scope<'a> {
     /// The definitions, or the derived parameters, being lowered in order:
     /// to tell a use before the definition from a cycle.
     forward: Vec<crate::dsl::NamedExpr>,
+    /// Position in `forward` of each definition's name (a lookup per use,
+    /// not a scan: 40,000 definitions stay linear).
+    forward_index: HashMap<String, usize>,
     mode: Mode,
 }
 
@@ -1136,6 +1173,7 @@ impl<'a> Scope<'a> {
             failed: HashSet::new(),
             definition_names: HashSet::new(),
             forward: Vec::new(),
+            forward_index: HashMap::new(),
             mode: Mode::Model,
         }
     }
@@ -1231,7 +1269,7 @@ impl Scope<'_> {
                 if self.failed.contains(name) {
                     return Some(None);
                 }
-                let to = self.forward.iter().position(|d| d.name.name == name)?;
+                let to = *self.forward_index.get(name)?;
                 (to >= from).then(|| Some(self.forward_use(from, to, DEFINITION)))
             }
             Mode::Derived(from, n_base) => {
