@@ -678,6 +678,10 @@ impl Expr {
     /// symbol may be reported more than once); stop when `f` returns
     /// `false`.
     fn visit_syms(&self, f: &mut dyn FnMut(Sym) -> bool) {
+        // Below this size a walk of the tree is cheaper than remembering
+        // the shared nodes.
+        const SHARED: u64 = 4096;
+        let remember = self.size() > SHARED;
         let mut seen: std::collections::HashSet<*const ()> = std::collections::HashSet::new();
         let mut stack: Vec<&Expr> = vec![self];
         while let Some(e) = stack.pop() {
@@ -694,8 +698,7 @@ impl Expr {
                 Expr::Pow(x) => Rc::as_ptr(x) as *const (),
                 Expr::Func(x) => Rc::as_ptr(x) as *const (),
             };
-            // Small subtrees are cheaper to walk again than to remember.
-            if e.size() > 16 && !seen.insert(ptr) {
+            if remember && e.size() > 16 && !seen.insert(ptr) {
                 continue;
             }
             match e {
@@ -709,6 +712,49 @@ impl Expr {
                 Expr::Num(_) | Expr::Sym(_) => {}
             }
         }
+    }
+
+    /// The outermost subexpression free of symbols whose value is not a
+    /// finite real number (`sqrt(-1)`, `ln(0)`, `(-8)^(1/3)`), if any.
+    /// Such constants are valid expressions (they print and read back), but
+    /// a model holding one fails every evaluation, so model checking
+    /// refuses it. A loop over the distinct nodes, no recursion beyond
+    /// [`Expr::eval`] of a constant.
+    ///
+    /// ```
+    /// use dae_core::expr::{add, sqrt, Expr};
+    /// let e = add(&Expr::var(0), &sqrt(&Expr::int(-1)));
+    /// assert_eq!(e.non_finite_constant(), Some(sqrt(&Expr::int(-1))));
+    /// assert_eq!(sqrt(&Expr::int(4)).non_finite_constant(), None);
+    /// ```
+    pub fn non_finite_constant(&self) -> Option<Expr> {
+        let mut seen: std::collections::HashSet<*const ()> = std::collections::HashSet::new();
+        let mut stack: Vec<&Expr> = vec![self];
+        while let Some(e) = stack.pop() {
+            let Some(key) = node_key(e) else {
+                continue;
+            };
+            if !seen.insert(key) {
+                continue;
+            }
+            if e.sym_mask() == 0 {
+                if !e.eval(&|_| f64::NAN).is_finite() {
+                    return Some(e.clone());
+                }
+                continue;
+            }
+            match e {
+                Expr::Sum(sum) => stack.extend(sum.terms.iter().rev().map(|(t, _)| t)),
+                Expr::Prod(p) => stack.extend(p.factors.iter().rev().map(|(b, _)| b)),
+                Expr::Pow(p) => {
+                    stack.push(&p.exponent);
+                    stack.push(&p.base);
+                }
+                Expr::Func(c) => stack.push(&c.arg),
+                Expr::Num(_) | Expr::Sym(_) => {}
+            }
+        }
+        None
     }
 
     /// Evaluate with `env` giving every symbol's value.
@@ -1189,7 +1235,20 @@ pub fn func(f: Func, arg: &Expr) -> Expr {
 
 /// `∂e/∂s`.
 pub fn diff(e: &Expr, s: Sym) -> Expr {
-    diff_memo(e, s, &mut HashMap::new())
+    // Below this size a walk of the tree costs less than remembering the
+    // shared nodes (the tree's size bounds the work without the memo).
+    const SHARED: u64 = 4096;
+    let mut memo = Memo {
+        on: e.size() > SHARED,
+        map: HashMap::new(),
+    };
+    diff_memo(e, s, &mut memo)
+}
+
+/// Derivatives of shared nodes met so far in one [`diff`], when on.
+struct Memo {
+    on: bool,
+    map: HashMap<*const (), Expr>,
 }
 
 /// Key of a compound node for the memo of [`diff_memo`]: its address (the
@@ -1207,20 +1266,20 @@ fn node_key(e: &Expr) -> Option<*const ()> {
 /// [`diff`] remembering the derivative of every shared node it has met
 /// (pasted definitions make a tree share its subtrees: without the memo a
 /// chain `d_i = sin(d_{i-1}) + d_{i-1}*x` differentiates `2^n` times).
-fn diff_memo(e: &Expr, s: Sym, memo: &mut HashMap<*const (), Expr>) -> Expr {
+fn diff_memo(e: &Expr, s: Sym, memo: &mut Memo) -> Expr {
     // Small subtrees are cheaper to differentiate again than to remember.
-    let key = node_key(e).filter(|_| e.size() > 8);
-    if let Some(d) = key.and_then(|k| memo.get(&k)) {
+    let key = node_key(e).filter(|_| memo.on && e.size() > 64);
+    if let Some(d) = key.and_then(|k| memo.map.get(&k)) {
         return d.clone();
     }
     let d = diff_node(e, s, memo);
     if let Some(k) = key {
-        memo.insert(k, d.clone());
+        memo.map.insert(k, d.clone());
     }
     d
 }
 
-fn diff_node(e: &Expr, s: Sym, memo: &mut HashMap<*const (), Expr>) -> Expr {
+fn diff_node(e: &Expr, s: Sym, memo: &mut Memo) -> Expr {
     // A subtree without `s` differentiates to zero; the mask says so
     // without a walk (a walk per level would make a deep chain quadratic).
     if e.sym_mask() & sym_bit(s) == 0 || exhausted() {

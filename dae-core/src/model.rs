@@ -702,7 +702,8 @@ fn lower_definitions<'a>(
                     );
                     None
                 }
-            });
+            })
+            .filter(|e| check_constants(e, d.name.span, errors));
         match lowered {
             Some(e) => {
                 scope.defs.insert(d.name.name.clone(), e.clone());
@@ -766,6 +767,10 @@ fn lower_equations(
         let r = expr::sub(&lhs, &rhs);
         if let Err(grew) = expr::check_growth(&r) {
             errors.push(eq_span, format!("this equation {grew}"));
+            lowered_all = false;
+            continue;
+        }
+        if !check_constants(&r, eq_span, errors) {
             lowered_all = false;
             continue;
         }
@@ -1464,6 +1469,29 @@ impl Scope<'_> {
             }
         }
     }
+}
+
+/// Refuse a constant that is not a finite real number (`sqrt(-1)`,
+/// `ln(0)`) at `span`: every evaluation of the model would give `NaN` or an
+/// infinity. Checked on what a model's definitions and equations lower to,
+/// not in `Scope::lower` itself, which also reads single expressions back
+/// ([`Model::parse_expr`]), where `ln(-1)` is a valid expression of the
+/// language (the property test `printed_text_reads_back` generates such
+/// constants and expects them to read back). `true` when there is none.
+fn check_constants(e: &Expr, span: Span, errors: &mut Errors) -> bool {
+    let Some(c) = e.non_finite_constant() else {
+        return true;
+    };
+    let names = |s: Sym| format!("{s}");
+    errors.push(
+        span,
+        format!(
+            "the constant `{}` is {}: not a finite real number, so every evaluation would fail",
+            crate::print::text(&c, &names),
+            c.eval(&|_| f64::NAN)
+        ),
+    );
+    false
 }
 
 fn has_der(e: &Expr) -> bool {

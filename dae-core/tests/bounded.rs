@@ -159,3 +159,26 @@ fn every_family_derives_or_stops_at_what_grew_within_the_budget() {
         }
     }
 }
+
+/// Issue 27, defect 9: a constant that is not a finite real number passed
+/// derive and failed every run with `non_finite`; it is refused at the
+/// definition or equation that holds it. (Before: derived without error.)
+#[test]
+fn non_finite_constants_are_refused_where_they_are_written() {
+    let cases = [
+        (model(&[], "x - sqrt(-1)"), 7, "sqrt(-1)"),
+        (model(&[], "x + ln(0)*v"), 7, "ln(0)"),
+        (model(&["c = 2*sqrt(-4)".into()], "x - c"), 5, "sqrt(-4)"),
+    ];
+    for (src, line, what) in cases {
+        let e = Derived::from_str(&src)
+            .map(|_| ())
+            .map_err(|e| render_error(&e, "m.dae"))
+            .expect_err(what);
+        assert_eq!(e.lines().count(), 1, "{e}");
+        assert!(e.starts_with(&format!("m.dae:{line}:")), "{what}: {e}");
+        assert!(e.contains("not a finite real number"), "{what}: {e}");
+    }
+    // A constant in the domain is fine.
+    Derived::from_str(&model(&[], "x - sqrt(4) + ln(1)")).unwrap();
+}
