@@ -1,6 +1,7 @@
 //! The front half in one call: text or tokens → checked model → index
 //! analysis → formulations, with every error at its token.
 
+use crate::expr;
 use crate::formulation::{self, Formulation};
 use crate::index::{self, Analysis};
 use crate::model::Model;
@@ -33,15 +34,34 @@ impl Derived {
     }
 
     /// Derive from a parsed model.
+    ///
+    /// The whole derivation spends at most [`expr::WORK_BUDGET`] units of
+    /// symbolic work ([`expr::Budget`]); a model that needs more stops with
+    /// an error at the definition, equation or constraint that grew, or at
+    /// the model's name for a formulation.
     pub fn from_ast(ast: &crate::dsl::ModelAst) -> Result<Derived, syn::Error> {
+        let _budget = expr::Budget::start(expr::WORK_BUDGET);
         let model = Model::check(ast)?;
         let analysis = index::analyse(&model)?;
+        let grew = |what: &str| {
+            expr::exhausted().then(|| {
+                let why = expr::Grew::Work {
+                    limit: expr::WORK_BUDGET,
+                };
+                syn::Error::new(model.name_span, format!("{what} {why}"))
+            })
+        };
+        if let Some(e) = grew("the hidden constraints' analysis") {
+            return Err(e);
+        }
         let names = formulation::provided(&model, &analysis)?;
         let mut formulations = Vec::new();
         for n in names {
-            let f = formulation::build(&model, &analysis, n)
-                .map_err(|why| syn::Error::new(model.name_span, why))?;
-            formulations.push(f);
+            let f = formulation::build(&model, &analysis, n);
+            if let Some(e) = grew(&format!("formulation `{n}`")) {
+                return Err(e);
+            }
+            formulations.push(f.map_err(|why| syn::Error::new(model.name_span, why))?);
         }
         Ok(Derived {
             model,

@@ -25,7 +25,7 @@ use num_integer::Integer;
 use num_rational::BigRational;
 use num_traits::{One, Signed, ToPrimitive, Zero};
 use std::cmp::Ordering;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fmt;
 use std::hash::{Hash, Hasher};
 use std::rc::Rc;
@@ -144,6 +144,10 @@ struct Meta {
     hash: u64,
     /// Bit [`sym_bit`] of every symbol the expression contains.
     syms: u64,
+    /// Number of nodes of the expression written out as a tree (shared
+    /// children counted at every use), saturating: what a walk that does
+    /// not remember shared nodes (printing, evaluation) visits.
+    size: u64,
 }
 
 impl Meta {
@@ -152,17 +156,21 @@ impl Meta {
     fn of<'a>(tag: u8, children: impl Iterator<Item = &'a Expr>, extra: &dyn Fn(&mut Fnv)) -> Meta {
         let mut h = Fnv::new();
         h.write_u8(tag);
-        let (mut height, mut syms) = (0u32, 0u64);
+        let (mut height, mut syms, mut size, mut work) = (0u32, 0u64, 1u64, 1u64);
         for c in children {
             height = height.max(c.height());
             syms |= c.sym_mask();
+            size = size.saturating_add(c.size());
+            work += 1;
             h.write_u64(c.structural_hash());
         }
         extra(&mut h);
+        add_work(work);
         Meta {
             height: height.saturating_add(1),
             hash: h.finish(),
             syms,
+            size,
         }
     }
 }
@@ -244,6 +252,19 @@ impl Expr {
         self.meta().map_or(0, |m| m.height)
     }
 
+    /// Number of nodes of the expression written out as a tree, shared
+    /// subexpressions counted at every use (saturating at `u64::MAX`):
+    /// numbers and symbols count 1.
+    ///
+    /// ```
+    /// use dae_core::expr::{add, func, Expr, Func};
+    /// let s = func(Func::Sin, &Expr::var(0));
+    /// assert_eq!(add(&s, &Expr::var(1)).size(), 4); // sum, sin, y0, y1
+    /// ```
+    pub fn size(&self) -> u64 {
+        self.meta().map_or(1, |m| m.size)
+    }
+
     /// Mask of the symbols below (a superset test: a clear bit means the
     /// symbol is absent).
     fn sym_mask(&self) -> u64 {
@@ -299,17 +320,157 @@ impl Expr {
 
 thread_local! {
     static WORK: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+    static LIMIT: std::cell::Cell<u64> = const { std::cell::Cell::new(u64::MAX) };
 }
 
-/// Symbolic work done on this thread so far: structural comparison steps
-/// and derivative steps. A measure of cost that does not depend on the
-/// machine, for tests that bound how work grows with a model.
+/// Symbolic work done on this thread so far: structural comparison steps,
+/// derivative steps and node constructions (one per node and child). A
+/// measure of cost that does not depend on the machine, for tests that
+/// bound how work grows with a model, and what a [`Budget`] limits.
 pub fn work() -> u64 {
     WORK.with(std::cell::Cell::get)
 }
 
 fn count_work() {
-    WORK.with(|w| w.set(w.get() + 1));
+    add_work(1);
+}
+
+fn add_work(n: u64) {
+    WORK.with(|w| w.set(w.get().saturating_add(n)));
+}
+
+/// Work units [`Derived`](crate::Derived) and [`Model::check`](crate::model::Model::check)
+/// may spend on a model. The largest shipped model (`andrews_natural`, 0.45 M
+/// units), the 60-link chain of BENCHMARKS.md (0.19 M) and the 200-link chain
+/// (0.76 M) take at most a thirteenth of it; an optimised build spends it in
+/// a few seconds (about 0.4 µs a unit on the products of sums that cost the
+/// most per unit), so a model that needs more stops with a located error
+/// well inside issue 27's 10 s.
+pub const WORK_BUDGET: u64 = 10_000_000;
+
+/// Largest height ([`Expr::height`]) of an expression a model may lower to or
+/// derive: the passes over expressions recurse once per level or a few, so
+/// this is what keeps them inside a worker thread's 2 MiB stack. An
+/// expression nested [`MAX_DEPTH`](crate::dsl::MAX_DEPTH) deep in the text
+/// lowers to at most three levels per nesting level (`sin(2*x*…)`: a call, a
+/// scaled sum, a product); definitions used inside definitions add their
+/// heights.
+pub const MAX_HEIGHT: u32 = 3 * crate::dsl::MAX_DEPTH as u32 + 16;
+
+/// Largest size ([`Expr::size`]) of an expression written out: printing,
+/// evaluation and code generation visit shared subexpressions at every use,
+/// so this bounds their time and output (the report of a model whose
+/// constraint is 2 M nodes at its second derivative takes 7 s to print).
+/// A constraint holding 199 nested `sin`, differentiated twice, is
+/// 4.0 M nodes written out, 80 MB of text: refused.
+pub const MAX_SIZE: u64 = 1_000_000;
+
+/// A limit on the work ([`work`]) of this thread, in force while the guard
+/// lives. Nested budgets keep the smaller limit; dropping one restores the
+/// limit before it.
+///
+/// Once the limit is passed, [`exhausted`] is `true` and the expensive
+/// constructions (derivatives, substitutions, expansions of products of
+/// sums) return zero at once, so a derivation that outgrew its budget ends
+/// quickly; its result is meaningless and its caller reports [`Grew::Work`].
+///
+/// ```
+/// use dae_core::expr::{self, Budget};
+/// let b = Budget::start(10);
+/// let mut e = expr::Expr::var(0);
+/// for _ in 0..20 {
+///     e = expr::func(expr::Func::Sin, &e);
+/// }
+/// assert!(expr::exhausted());
+/// drop(b);
+/// assert!(!expr::exhausted());
+/// ```
+#[derive(Debug)]
+pub struct Budget {
+    previous: u64,
+}
+
+impl Budget {
+    /// Allow `units` more work on this thread (or less, if an enclosing
+    /// budget ends earlier).
+    pub fn start(units: u64) -> Budget {
+        let previous = LIMIT.with(std::cell::Cell::get);
+        let limit = work().saturating_add(units).min(previous);
+        LIMIT.with(|l| l.set(limit));
+        Budget { previous }
+    }
+}
+
+impl Drop for Budget {
+    fn drop(&mut self) {
+        LIMIT.with(|l| l.set(self.previous));
+    }
+}
+
+/// Has this thread's work passed the limit of the innermost [`Budget`]?
+pub fn exhausted() -> bool {
+    work() > LIMIT.with(std::cell::Cell::get)
+}
+
+/// How an expression outgrew what derivation allows: the error that model
+/// checking and derivation turn into a message at the definition, equation
+/// or constraint being built.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum Grew {
+    /// The work budget ([`WORK_BUDGET`]) was spent.
+    #[error("grew past the derivation budget ({limit} units of symbolic work)")]
+    Work {
+        /// The budget.
+        limit: u64,
+    },
+    /// Nested deeper than [`MAX_HEIGHT`] (definitions substituted).
+    #[error("nests {height} levels deep with its definitions substituted (limit {limit})")]
+    Height {
+        /// Its height.
+        height: u32,
+        /// The limit.
+        limit: u32,
+    },
+    /// Larger than [`MAX_SIZE`] nodes written out.
+    #[error("grew to {size} nodes written out with its definitions substituted (limit {limit})")]
+    Size {
+        /// Its size (saturating).
+        size: u64,
+        /// The limit.
+        limit: u64,
+    },
+}
+
+/// Check `e` against [`MAX_HEIGHT`] and [`MAX_SIZE`], and the work budget
+/// against [`exhausted`].
+///
+/// ```
+/// use dae_core::expr::{self, Expr, Func, Grew};
+/// let mut e = Expr::var(0);
+/// for _ in 0..expr::MAX_HEIGHT {
+///     e = expr::func(Func::Sin, &e);
+/// }
+/// assert!(expr::check_growth(&e).is_ok());
+/// let e = expr::func(Func::Sin, &e);
+/// assert!(matches!(expr::check_growth(&e), Err(Grew::Height { .. })));
+/// ```
+pub fn check_growth(e: &Expr) -> Result<(), Grew> {
+    if exhausted() {
+        return Err(Grew::Work { limit: WORK_BUDGET });
+    }
+    if e.height() > MAX_HEIGHT {
+        return Err(Grew::Height {
+            height: e.height(),
+            limit: MAX_HEIGHT,
+        });
+    }
+    if e.size() > MAX_SIZE {
+        return Err(Grew::Size {
+            size: e.size(),
+            limit: MAX_SIZE,
+        });
+    }
+    Ok(())
 }
 
 impl PartialEq for Expr {
@@ -491,38 +652,109 @@ impl Expr {
     }
 
     /// Does the expression contain any symbol satisfying `pred`?
+    ///
+    /// A loop with an explicit stack that visits each shared node once: no
+    /// recursion, and time linear in the number of distinct nodes.
     pub fn any_sym(&self, pred: &dyn Fn(Sym) -> bool) -> bool {
-        match self {
-            Expr::Num(_) => false,
-            Expr::Sym(t) => pred(*t),
-            Expr::Sum(sum) => sum.terms.iter().any(|(t, _)| t.any_sym(pred)),
-            Expr::Prod(p) => p.factors.iter().any(|(b, _)| b.any_sym(pred)),
-            Expr::Pow(p) => p.base.any_sym(pred) || p.exponent.any_sym(pred),
-            Expr::Func(c) => c.arg.any_sym(pred),
-        }
+        let mut found = false;
+        self.visit_syms(&mut |s| {
+            found = found || pred(s);
+            !found
+        });
+        found
     }
 
     /// All symbols, sorted.
     pub fn symbols(&self) -> Vec<Sym> {
         let mut out = std::collections::BTreeSet::new();
-        self.collect_symbols(&mut out);
+        self.visit_syms(&mut |s| {
+            out.insert(s);
+            true
+        });
         out.into_iter().collect()
     }
 
-    fn collect_symbols(&self, out: &mut std::collections::BTreeSet<Sym>) {
-        match self {
-            Expr::Num(_) => {}
-            Expr::Sym(t) => {
-                out.insert(*t);
+    /// Call `f` on the symbols below, each distinct node visited once (a
+    /// symbol may be reported more than once); stop when `f` returns
+    /// `false`.
+    fn visit_syms(&self, f: &mut dyn FnMut(Sym) -> bool) {
+        // Below this size a walk of the tree is cheaper than remembering
+        // the shared nodes.
+        const SHARED: u64 = 4096;
+        let remember = self.size() > SHARED;
+        let mut seen: std::collections::HashSet<*const ()> = std::collections::HashSet::new();
+        let mut stack: Vec<&Expr> = vec![self];
+        while let Some(e) = stack.pop() {
+            let ptr = match e {
+                Expr::Num(_) => continue,
+                Expr::Sym(s) => {
+                    if !f(*s) {
+                        return;
+                    }
+                    continue;
+                }
+                Expr::Sum(x) => Rc::as_ptr(x) as *const (),
+                Expr::Prod(x) => Rc::as_ptr(x) as *const (),
+                Expr::Pow(x) => Rc::as_ptr(x) as *const (),
+                Expr::Func(x) => Rc::as_ptr(x) as *const (),
+            };
+            if remember && e.size() > 16 && !seen.insert(ptr) {
+                continue;
             }
-            Expr::Sum(sum) => sum.terms.iter().for_each(|(t, _)| t.collect_symbols(out)),
-            Expr::Prod(p) => p.factors.iter().for_each(|(b, _)| b.collect_symbols(out)),
-            Expr::Pow(p) => {
-                p.base.collect_symbols(out);
-                p.exponent.collect_symbols(out);
+            match e {
+                Expr::Sum(sum) => stack.extend(sum.terms.iter().rev().map(|(t, _)| t)),
+                Expr::Prod(p) => stack.extend(p.factors.iter().rev().map(|(b, _)| b)),
+                Expr::Pow(p) => {
+                    stack.push(&p.exponent);
+                    stack.push(&p.base);
+                }
+                Expr::Func(c) => stack.push(&c.arg),
+                Expr::Num(_) | Expr::Sym(_) => {}
             }
-            Expr::Func(c) => c.arg.collect_symbols(out),
         }
+    }
+
+    /// The outermost subexpression free of symbols whose value is not a
+    /// finite real number (`sqrt(-1)`, `ln(0)`, `(-8)^(1/3)`), if any.
+    /// Such constants are valid expressions (they print and read back), but
+    /// a model holding one fails every evaluation, so model checking
+    /// refuses it. A loop over the distinct nodes, no recursion beyond
+    /// [`Expr::eval`] of a constant.
+    ///
+    /// ```
+    /// use dae_core::expr::{add, sqrt, Expr};
+    /// let e = add(&Expr::var(0), &sqrt(&Expr::int(-1)));
+    /// assert_eq!(e.non_finite_constant(), Some(sqrt(&Expr::int(-1))));
+    /// assert_eq!(sqrt(&Expr::int(4)).non_finite_constant(), None);
+    /// ```
+    pub fn non_finite_constant(&self) -> Option<Expr> {
+        let mut seen: std::collections::HashSet<*const ()> = std::collections::HashSet::new();
+        let mut stack: Vec<&Expr> = vec![self];
+        while let Some(e) = stack.pop() {
+            let Some(key) = node_key(e) else {
+                continue;
+            };
+            if !seen.insert(key) {
+                continue;
+            }
+            if e.sym_mask() == 0 {
+                if !e.eval(&|_| f64::NAN).is_finite() {
+                    return Some(e.clone());
+                }
+                continue;
+            }
+            match e {
+                Expr::Sum(sum) => stack.extend(sum.terms.iter().rev().map(|(t, _)| t)),
+                Expr::Prod(p) => stack.extend(p.factors.iter().rev().map(|(b, _)| b)),
+                Expr::Pow(p) => {
+                    stack.push(&p.exponent);
+                    stack.push(&p.base);
+                }
+                Expr::Func(c) => stack.push(&c.arg),
+                Expr::Num(_) | Expr::Sym(_) => {}
+            }
+        }
+        None
     }
 
     /// Evaluate with `env` giving every symbol's value.
@@ -786,6 +1018,9 @@ fn term_count(e: &Expr) -> usize {
 
 /// Expand `a · b` for two sums (or a sum and a monomial).
 fn distribute(a: &Expr, b: &Expr) -> Expr {
+    if exhausted() {
+        return Expr::zero();
+    }
     let parts = |e: &Expr| -> Vec<(Q, Expr)> {
         match e {
             Expr::Sum(s) => {
@@ -1000,9 +1235,54 @@ pub fn func(f: Func, arg: &Expr) -> Expr {
 
 /// `∂e/∂s`.
 pub fn diff(e: &Expr, s: Sym) -> Expr {
+    // Below this size a walk of the tree costs less than remembering the
+    // shared nodes (the tree's size bounds the work without the memo).
+    const SHARED: u64 = 4096;
+    let mut memo = Memo {
+        on: e.size() > SHARED,
+        map: HashMap::new(),
+    };
+    diff_memo(e, s, &mut memo)
+}
+
+/// Derivatives of shared nodes met so far in one [`diff`], when on.
+struct Memo {
+    on: bool,
+    map: HashMap<*const (), Expr>,
+}
+
+/// Key of a compound node for the memo of [`diff_memo`]: its address (the
+/// node is alive for the whole call, borrowed from `e`).
+fn node_key(e: &Expr) -> Option<*const ()> {
+    match e {
+        Expr::Num(_) | Expr::Sym(_) => None,
+        Expr::Sum(x) => Some(Rc::as_ptr(x) as *const ()),
+        Expr::Prod(x) => Some(Rc::as_ptr(x) as *const ()),
+        Expr::Pow(x) => Some(Rc::as_ptr(x) as *const ()),
+        Expr::Func(x) => Some(Rc::as_ptr(x) as *const ()),
+    }
+}
+
+/// [`diff`] remembering the derivative of every shared node it has met
+/// (pasted definitions make a tree share its subtrees: without the memo a
+/// chain `d_i = sin(d_{i-1}) + d_{i-1}*x` differentiates `2^n` times).
+fn diff_memo(e: &Expr, s: Sym, memo: &mut Memo) -> Expr {
+    // Small subtrees are cheaper to differentiate again than to remember.
+    let key = node_key(e).filter(|_| memo.on && e.size() > 64);
+    if let Some(d) = key.and_then(|k| memo.map.get(&k)) {
+        return d.clone();
+    }
+    let d = diff_node(e, s, memo);
+    if let Some(k) = key {
+        memo.map.insert(k, d.clone());
+    }
+    d
+}
+
+fn diff_node(e: &Expr, s: Sym, memo: &mut Memo) -> Expr {
     // A subtree without `s` differentiates to zero; the mask says so
     // without a walk (a walk per level would make a deep chain quadratic).
-    if e.sym_mask() & sym_bit(s) == 0 {
+    if e.sym_mask() & sym_bit(s) == 0 || exhausted() {
         return Expr::zero();
     }
     count_work();
@@ -1015,11 +1295,15 @@ pub fn diff(e: &Expr, s: Sym) -> Expr {
                 Expr::zero()
             }
         }
-        Expr::Sum(sum) => add_all(sum.terms.iter().map(|(t, c)| scale(c, &diff(t, s)))),
+        Expr::Sum(sum) => add_all(
+            sum.terms
+                .iter()
+                .map(|(t, c)| scale(c, &diff_memo(t, s, memo))),
+        ),
         Expr::Prod(p) => {
             let mut terms = Vec::new();
             for (i, (b, x)) in p.factors.iter().enumerate() {
-                let db = diff(b, s);
+                let db = diff_memo(b, s, memo);
                 if db.is_zero() {
                     continue;
                 }
@@ -1037,8 +1321,8 @@ pub fn diff(e: &Expr, s: Sym) -> Expr {
             // d(b^e) = b^e · (e' ln b + e b'/b)
             let (b, x) = (&p.base, &p.exponent);
             let inner = add(
-                &mul(&diff(x, s), &func(Func::Ln, b)),
-                &mul_all([x.clone(), diff(b, s), pow_rational(b, &q(-1))]),
+                &mul(&diff_memo(x, s, memo), &func(Func::Ln, b)),
+                &mul_all([x.clone(), diff_memo(b, s, memo), pow_rational(b, &q(-1))]),
             );
             mul(e, &inner)
         }
@@ -1052,7 +1336,7 @@ pub fn diff(e: &Expr, s: Sym) -> Expr {
                 factors.push(outer_derivative(c, link));
                 link = &c.arg;
             }
-            factors.push(diff(link, s));
+            factors.push(diff_memo(link, s, memo));
             mul_all(factors)
         }
     }
@@ -1092,6 +1376,10 @@ pub fn split_ders(e: &Expr) -> (Vec<(usize, Expr)>, Expr) {
 
 /// Replace symbols: `map(s)` returns the replacement or `None` to keep `s`.
 pub fn subs(e: &Expr, map: &dyn Fn(Sym) -> Option<Expr>) -> Expr {
+    if exhausted() {
+        return Expr::zero();
+    }
+    count_work();
     match e {
         Expr::Num(_) => e.clone(),
         Expr::Sym(s) => map(*s).unwrap_or_else(|| e.clone()),

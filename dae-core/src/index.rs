@@ -198,7 +198,19 @@ pub fn analyse(model: &Model) -> Result<Analysis, syn::Error> {
         let mut ok = true;
         while levels.len() <= depth {
             let last = levels.last().cloned().unwrap_or_else(Expr::zero);
-            match expr::time_derivative(&last, &rate_of) {
+            let derived = expr::time_derivative(&last, &rate_of);
+            if let Err(grew) = derived.as_ref().map_or(Ok(()), expr::check_growth) {
+                errors.push(
+                    c.span,
+                    format!(
+                        "this constraint's time derivative of order {} {grew}",
+                        levels.len()
+                    ),
+                );
+                ok = false;
+                break;
+            }
+            match derived {
                 Ok(d) if d.is_zero() => {
                     errors.push(
                         c.span,

@@ -207,6 +207,7 @@ impl Model {
     /// against unknowns ([`check_counts`]), invariants and the formulation
     /// list. Each phase reports into the same [`Errors`].
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
+        let _budget = expr::Budget::start(expr::WORK_BUDGET);
         let mut errors = Errors::default();
         let mut decl = declare_names(ast, &mut errors);
         derive_parameters(&mut decl, &mut errors);
@@ -677,9 +678,33 @@ fn lower_definitions<'a>(
     // every later use.
     scope.forward = def_decls.iter().map(|d| (*d).clone()).collect();
     let mut definitions = Vec::new();
+    scope.forward_index = def_decls
+        .iter()
+        .enumerate()
+        .map(|(k, d)| (d.name.name.clone(), k))
+        .collect();
     for (k, d) in def_decls.iter().enumerate() {
         scope.mode = Mode::Definition(k);
-        match scope.lower(&d.expr, errors) {
+        if expr::exhausted() {
+            // The budget is spent (reported once, at the definition that
+            // spent it): the rest stay quiet.
+            scope.failed.insert(d.name.name.clone());
+            continue;
+        }
+        let lowered = scope
+            .lower(&d.expr, errors)
+            .and_then(|e| match expr::check_growth(&e) {
+                Ok(()) => Some(e),
+                Err(grew) => {
+                    errors.push(
+                        d.name.span,
+                        format!("{DEFINITION} `{}` {grew}", d.name.name),
+                    );
+                    None
+                }
+            })
+            .filter(|e| check_constants(e, d.name.span, errors));
+        match lowered {
             Some(e) => {
                 scope.defs.insert(d.name.name.clone(), e.clone());
                 definitions.push(DefinitionDef {
@@ -727,6 +752,11 @@ fn lower_equations(
     // equations afterwards would only add a cascade of "too few".
     let mut lowered_all = true;
     for eq in &ast.equations {
+        if expr::exhausted() {
+            // Reported once, where the budget was spent.
+            lowered_all = false;
+            continue;
+        }
         let (Some(lhs), Some(rhs)) = (scope.lower(&eq.lhs, errors), scope.lower(&eq.rhs, errors))
         else {
             lowered_all = false;
@@ -735,6 +765,15 @@ fn lower_equations(
         // Equation-level errors point at the equation's first token.
         let eq_span = eq.lhs.span();
         let r = expr::sub(&lhs, &rhs);
+        if let Err(grew) = expr::check_growth(&r) {
+            errors.push(eq_span, format!("this equation {grew}"));
+            lowered_all = false;
+            continue;
+        }
+        if !check_constants(&r, eq_span, errors) {
+            lowered_all = false;
+            continue;
+        }
         let (ders, rest) = expr::split_ders(&r);
         if ders.is_empty() {
             let g = if lhs.is_zero() {
@@ -1114,6 +1153,9 @@ struct Scope<'a> {
     /// The definitions, or the derived parameters, being lowered in order:
     /// to tell a use before the definition from a cycle.
     forward: Vec<crate::dsl::NamedExpr>,
+    /// Position in `forward` of each definition's name (a lookup per use,
+    /// not a scan: 40,000 definitions stay linear).
+    forward_index: HashMap<String, usize>,
     mode: Mode,
 }
 
@@ -1136,6 +1178,7 @@ impl<'a> Scope<'a> {
             failed: HashSet::new(),
             definition_names: HashSet::new(),
             forward: Vec::new(),
+            forward_index: HashMap::new(),
             mode: Mode::Model,
         }
     }
@@ -1231,7 +1274,7 @@ impl Scope<'_> {
                 if self.failed.contains(name) {
                     return Some(None);
                 }
-                let to = self.forward.iter().position(|d| d.name.name == name)?;
+                let to = *self.forward_index.get(name)?;
                 (to >= from).then(|| Some(self.forward_use(from, to, DEFINITION)))
             }
             Mode::Derived(from, n_base) => {
@@ -1426,6 +1469,29 @@ impl Scope<'_> {
             }
         }
     }
+}
+
+/// Refuse a constant that is not a finite real number (`sqrt(-1)`,
+/// `ln(0)`) at `span`: every evaluation of the model would give `NaN` or an
+/// infinity. Checked on what a model's definitions and equations lower to,
+/// not in `Scope::lower` itself, which also reads single expressions back
+/// ([`Model::parse_expr`]), where `ln(-1)` is a valid expression of the
+/// language (the property test `printed_text_reads_back` generates such
+/// constants and expects them to read back). `true` when there is none.
+fn check_constants(e: &Expr, span: Span, errors: &mut Errors) -> bool {
+    let Some(c) = e.non_finite_constant() else {
+        return true;
+    };
+    let names = |s: Sym| format!("{s}");
+    errors.push(
+        span,
+        format!(
+            "the constant `{}` is {}: not a finite real number, so every evaluation would fail",
+            crate::print::text(&c, &names),
+            c.eval(&|_| f64::NAN)
+        ),
+    );
+    false
 }
 
 fn has_der(e: &Expr) -> bool {
