@@ -80,6 +80,7 @@ impl Inputs {
             samples: &[],
             repeats: 1,
             max_steps: None,
+            events: &scene.events,
         }
     }
 }
@@ -327,6 +328,7 @@ pub fn model(scene: &Scene) -> Result<Box<dyn Model + Send + Sync>, InputError> 
     let vars: Vec<&str> = info.variables.iter().map(|v| v.name.as_str()).collect();
     let params: Vec<&str> = info.parameters.iter().map(|p| p.name.as_str()).collect();
     scene.check_names(&vars, &params)?;
+    scene.check_events(&info.events, &vars)?;
     for p in &scene.parameters {
         model
             .set_parameter(&p.name, p.value)

@@ -62,6 +62,10 @@ pub struct RunSpec<'a> {
     /// library's [`Options::max_steps`]); a run stopped there is a
     /// `step_limit` error record, not a hang.
     pub max_steps: Option<usize>,
+    /// How the model's events are treated (a scene's `[events]`;
+    /// [`Options::events`]): each located event is listed in
+    /// [`RunRecord::events`].
+    pub events: &'a [dae_solvers::EventSpec],
 }
 
 /// Error information of a failed run.
@@ -218,6 +222,12 @@ pub struct RunRecord {
     /// run used (see [`run`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub selector: Option<&'static str>,
+    /// The located events in time order: name, time, direction, action
+    /// and, for a reset, the values it assigned and the consistent ones
+    /// the run restarted from ([`dae_solvers::Event`]). Omitted when the
+    /// model has no events.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub events: Option<Vec<dae_solvers::Event>>,
 }
 
 /// The accuracy verdict of a run that reached the end of its horizon.
@@ -698,6 +708,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<(RunRecord, Option<Fa
         initialisation: Vec::new(),
         trajectory: Trajectory::default(),
         selector: selector.map(SelectorKind::as_str),
+        events: (!sys.event_names().is_empty()).then(Vec::new),
     };
     let fail = |mut record: RunRecord, e: SolveError| {
         record.status = "error";
@@ -765,6 +776,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<(RunRecord, Option<Fa
         // step points) only: a sweep's long runs should not keep every
         // step's dense output.
         dense_output: false,
+        events: spec.events.to_vec(),
         ..defaults
     };
     let problem = Problem {
@@ -808,6 +820,9 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<(RunRecord, Option<Fa
     record.tsim_s = minimum(&times);
     record.wall_s = minimum(&walls);
     record.stats = sol.stats;
+    if let Some(events) = &mut record.events {
+        events.clone_from(&sol.events);
+    }
     record.t_end = sol.t.last().copied().unwrap_or(spec.t_end);
     if let Some(last) = sol.last() {
         record.final_values = named(&info, last);

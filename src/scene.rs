@@ -455,6 +455,20 @@ pub enum SceneError {
         /// The model's variables.
         known: Vec<String>,
     },
+    /// An `[events.NAME]` table for an event the model does not have.
+    #[error(
+        "{at}: `events.{name}`: the model has no event `{name}`{} ({})",
+        hint(name, known),
+        if known.is_empty() { "it has no `events { … }` section".to_string() } else { format!("events: {}", known.join(", ")) }
+    )]
+    UnknownEvent {
+        /// Where.
+        at: Location,
+        /// The name given.
+        name: String,
+        /// The model's events.
+        known: Vec<String>,
+    },
     /// A `[parameters]` entry the model does not have.
     #[error(
         "{at}: `parameters.{name}`: the model has no parameter `{name}`{} (parameters: {})",
@@ -677,6 +691,12 @@ pub struct Scene {
     /// Tolerances of `dae run` (`[tolerance]`; the sweep uses
     /// [`Sweep::tolerances`]).
     pub tolerance: ToleranceSpec,
+    /// How the model's events are treated (`[events.NAME]`), in file
+    /// order: which crossings count, and whether one stops the run or
+    /// resets unknowns ([`dae_solvers::EventSpec`]). The names are checked
+    /// against the model by [`Scene::check_events`].
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<dae_solvers::EventSpec>,
     /// Where `model`, `time`, `time.start`, `time.end` and `reference.kind`
     /// are in the text, for problems found after parsing ([`Scene::locate`]).
     /// Entries are `(field, line, column)`; the file is [`Scene::origin`].
@@ -886,6 +906,55 @@ impl Scene {
         Ok(())
     }
 
+    /// Check `[events.NAME]` against the model: each `NAME` one of its
+    /// `events` (the model's `events { … }` section), each unknown a reset
+    /// names one of its `variables`. The first unknown name is reported
+    /// with its line and, when a known name is close, a suggestion.
+    ///
+    /// ```
+    /// let text = "name = \"t\"\nmodel = \"pendulum\"\n[initial]\nx = 1\n[time]\nend = 1\n\
+    ///             [events.wall]\ndirection = \"falling\"\nscale = { v = -0.8, w = -0.8 }\n";
+    /// let s = dae::scene::Scene::parse(text, "t.toml", None).unwrap();
+    /// let vars = ["x", "y", "v", "w", "lambda"];
+    /// assert!(s.check_events(&["wall".to_string()], &vars).is_ok());
+    /// let err = s.check_events(&["wal".to_string()], &vars).unwrap_err();
+    /// assert_eq!(
+    ///     err.to_string(),
+    ///     "t.toml:7:9: `events.wall`: the model has no event `wall`; did you mean `wal`? (events: wal)"
+    /// );
+    /// let err = s.check_events(&["wall".to_string()], &["x", "y", "v"]).unwrap_err();
+    /// let msg = err.to_string();
+    /// assert!(msg.starts_with("t.toml:9:") && msg.contains("`events.wall.scale.w`"), "{msg}");
+    /// ```
+    pub fn check_events(&self, events: &[String], variables: &[&str]) -> Result<(), SceneError> {
+        for e in &self.events {
+            if !events.contains(&e.name) {
+                return Err(SceneError::UnknownEvent {
+                    at: self.locate(&format!("events.{}", e.name)),
+                    name: e.name.clone(),
+                    known: events.to_vec(),
+                });
+            }
+            if let dae_solvers::EventAction::Reset(rules) = &e.action {
+                for (u, r) in rules {
+                    if !variables.contains(&u.as_str()) {
+                        let kind = match r {
+                            dae_solvers::Reset::Scale(_) => "scale",
+                            dae_solvers::Reset::Value(_) => "set",
+                        };
+                        return Err(SceneError::UnknownVariable {
+                            at: self.locate(&format!("events.{}.{kind}.{u}", e.name)),
+                            section: "events",
+                            name: format!("{}.{kind}.{u}", e.name),
+                            known: variables.iter().map(|s| s.to_string()).collect(),
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Where a field (`initial.x`, `parameters.g`, `time.end`, `model`,
     /// `reference.kind`, …) is in the scene text, for problems found after
     /// parsing (an exact reference that cannot be built from the start, …).
@@ -956,6 +1025,42 @@ struct RawScene {
     reference: Option<Spanned<RawReference>>,
     sweep: Option<RawSweep>,
     tolerance: Option<RawTolerance>,
+    events: Option<RawEvents>,
+}
+
+/// `[events.NAME]`: `direction = "both" | "rising" | "falling"`, and
+/// `stop = true`, or a reset: `scale = { w = -0.8 }` (`w = −0.8 w`) and/or
+/// `set = { lambda = 0 }`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEvent {
+    direction: Option<Spanned<String>>,
+    stop: Option<Spanned<bool>>,
+    scale: Option<RawNamed>,
+    set: Option<RawNamed>,
+}
+
+/// The `[events.NAME]` tables, in file order, with spans.
+struct RawEvents(Vec<(Spanned<String>, Spanned<RawEvent>)>);
+
+impl<'de> Deserialize<'de> for RawEvents {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct EventsVisitor;
+        impl<'de> Visitor<'de> for EventsVisitor {
+            type Value = RawEvents;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a table of `[events.NAME]` tables")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<RawEvents, A::Error> {
+                let mut entries = Vec::new();
+                while let Some(key) = map.next_key::<Spanned<String>>()? {
+                    entries.push((key, map.next_value::<Spanned<RawEvent>>()?));
+                }
+                Ok(RawEvents(entries))
+            }
+        }
+        deserializer.deserialize_map(EventsVisitor)
+    }
 }
 
 #[derive(Deserialize)]
@@ -1327,6 +1432,14 @@ impl Source<'_> {
                 atol: self.tol_spec("tolerance.atol", t.atol)?,
             },
         };
+        let mut events = Vec::new();
+        let mut reset_places = Vec::new();
+        for (key, raw) in raw.events.map(|e| e.0).unwrap_or_default() {
+            let name = key.get_ref().clone();
+            place(&format!("events.{name}"), key.span());
+            events.push(self.event(&name, raw, &mut reset_places)?);
+        }
+        places.extend(reset_places);
         Ok(Scene {
             origin: self.origin.to_string(),
             name: name.into_inner(),
@@ -1338,7 +1451,72 @@ impl Source<'_> {
             reference,
             sweep,
             tolerance,
+            events,
             places,
+        })
+    }
+
+    /// One `[events.NAME]` table; the reset entries' places are recorded
+    /// as `events.NAME.scale.UNKNOWN` (`set` likewise).
+    fn event(
+        &self,
+        name: &str,
+        raw: Spanned<RawEvent>,
+        places: &mut Vec<(String, usize, usize)>,
+    ) -> Result<dae_solvers::EventSpec, SceneError> {
+        use dae_solvers::{Direction, EventAction, EventSpec, Reset};
+        let span = raw.span();
+        let raw = raw.into_inner();
+        let direction = match &raw.direction {
+            None => Direction::Both,
+            Some(d) => match d.get_ref().as_str() {
+                "both" => Direction::Both,
+                "rising" => Direction::Rising,
+                "falling" => Direction::Falling,
+                other => {
+                    return Err(SceneError::InvalidValue {
+                        at: self.at(&d.span()),
+                        field: format!("events.{name}.direction"),
+                        reason: format!(
+                            "= \"{other}\" is not a direction (\"both\", \"rising\" or \"falling\")"
+                        ),
+                    })
+                }
+            },
+        };
+        let mut rules = Vec::new();
+        for (kind, table) in [("scale", raw.scale), ("set", raw.set)] {
+            let Some(table) = table else { continue };
+            let field = format!("events.{name}.{kind}");
+            for v in self.named(&field, table)? {
+                places.push((format!("{field}.{}", v.name), v.line, v.column));
+                let rule = if kind == "scale" {
+                    Reset::Scale(v.value)
+                } else {
+                    Reset::Value(v.value)
+                };
+                rules.push((v.name, rule));
+            }
+        }
+        let stop = raw.stop.as_ref().is_some_and(|s| *s.get_ref());
+        let action = match (stop, rules.is_empty()) {
+            (false, true) => EventAction::Record,
+            (true, true) => EventAction::Stop,
+            (false, false) => EventAction::Reset(rules),
+            (true, false) => {
+                return Err(SceneError::InvalidValue {
+                    at: self.at(&span),
+                    field: format!("events.{name}"),
+                    reason: "both stops the run (`stop = true`) and resets unknowns \
+                             (`scale`/`set`): choose one"
+                        .into(),
+                })
+            }
+        };
+        Ok(EventSpec {
+            name: name.to_string(),
+            direction,
+            action,
         })
     }
 

@@ -57,6 +57,7 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
         initialisation: Vec::new(),
         trajectory: Trajectory::default(),
         selector: None,
+        events: None,
     }
 }
 

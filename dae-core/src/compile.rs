@@ -59,6 +59,10 @@ pub struct Compiled {
     pub constraints_jacobian: Sparse,
     /// The invariants.
     pub invariants: Tape,
+    /// The event functions, one output each.
+    pub events: Tape,
+    /// Names of the event functions.
+    pub event_names: Vec<String>,
     /// Default parameter values.
     pub parameter_defaults: Vec<f64>,
     /// For a model with a mass matrix whose chain holds der(): the model's
@@ -229,6 +233,10 @@ fn compile_with(d: &Derived, f: &Formulation, grads: &mut Gradients) -> Compiled
     for i in &model.invariants {
         inv.output(&i.expr);
     }
+    let mut events = TapeBuilder::new();
+    for e in &model.events {
+        events.output(&e.expr);
+    }
     Compiled {
         info,
         residual: res.finish(),
@@ -239,6 +247,8 @@ fn compile_with(d: &Derived, f: &Formulation, grads: &mut Gradients) -> Compiled
         constraints: cons.finish(),
         constraints_jacobian: Sparse::build(cj_cells),
         invariants: inv.finish(),
+        events: events.finish(),
+        event_names: model.events.iter().map(|e| e.name.clone()).collect(),
         parameter_defaults: model.params.iter().map(|p| p.default).collect(),
         accel,
     }

@@ -101,6 +101,7 @@ impl Derived {
                 .collect(),
             constraints: self.constraint_infos(),
             invariants: m.invariants.iter().map(|i| i.name.clone()).collect(),
+            events: m.events.iter().map(|e| e.name.clone()).collect(),
             formulations: self
                 .formulations
                 .iter()

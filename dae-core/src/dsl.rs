@@ -155,6 +155,9 @@ pub struct ModelAst {
     pub equations: Vec<Equation>,
     /// Invariants in order.
     pub invariants: Vec<InvariantDecl>,
+    /// Event functions (`events { hit = x + 0.5; }`) in order: the same
+    /// shape as an invariant.
+    pub events: Vec<NamedExpr>,
     /// Derived parameters (`derived { k = m * l^2; }`) in order.
     pub derived: Vec<NamedExpr>,
     /// Definitions (`definitions { r2 = x^2 + y^2; }`) in order.
@@ -341,6 +344,7 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
         algebraic: Vec::new(),
         equations: Vec::new(),
         invariants: Vec::new(),
+        events: Vec::new(),
         derived: Vec::new(),
         definitions: Vec::new(),
         formulations: None,
@@ -353,7 +357,7 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
         let TokenTree::Ident(kw) = &sections[j] else {
             errors.push(
                 sections[j].span(),
-                "expected a section: parameters, derived, differential, algebraic, definitions, equations, invariants or formulations",
+                "expected a section: parameters, derived, differential, algebraic, definitions, equations, invariants, events or formulations",
             );
             break;
         };
@@ -376,12 +380,13 @@ pub fn parse(tokens: TokenStream) -> Result<ModelAst, syn::Error> {
             "algebraic" => model.algebraic.extend(parse_names(&inner, &mut errors)),
             "equations" => model.equations.extend(parse_equations(&inner, &mut errors)),
             "invariants" => model.invariants.extend(parse_invariants(&inner, &mut errors)),
+            "events" => model.events.extend(parse_invariants(&inner, &mut errors)),
             "derived" => model.derived.extend(parse_invariants(&inner, &mut errors)),
             "definitions" => model.definitions.extend(parse_invariants(&inner, &mut errors)),
             "formulations" => model.formulations = Some(parse_names(&inner, &mut errors)),
             other => errors.push(
                 kw.span(),
-                format!("unknown section `{other}` (expected parameters, derived, differential, algebraic, definitions, equations, invariants or formulations)"),
+                format!("unknown section `{other}` (expected parameters, derived, differential, algebraic, definitions, equations, invariants, events or formulations)"),
             ),
         }
         j += 2;

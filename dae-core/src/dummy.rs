@@ -638,6 +638,12 @@ impl<S: DaeSystem> DaeSystem for DummyDerivatives<S> {
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.inner.invariants(t, y, out)
     }
+    fn event_names(&self) -> &[String] {
+        self.inner.event_names()
+    }
+    fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        self.inner.events(t, y, out)
+    }
 }
 
 /// The blocks of `model`'s `mex0`, read off the symbolic chain (what

@@ -169,6 +169,7 @@ impl InterpretedSystem {
             &c.constraints,
             &c.constraints_jacobian.tape,
             &c.invariants,
+            &c.events,
         ]
         .iter()
         .map(|t| t.nodes.len())
@@ -255,6 +256,12 @@ impl DaeSystem for InterpretedSystem {
     }
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.dense(&self.c.invariants, self.inputs(t, y, &[], &[]), out)
+    }
+    fn event_names(&self) -> &[String] {
+        &self.c.event_names
+    }
+    fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        self.dense(&self.c.events, self.inputs(t, y, &[], &[]), out)
     }
 }
 

@@ -112,6 +112,11 @@ pub struct InvariantDef {
     pub span: Span,
 }
 
+/// A named event function (`events { hit = x + 0.5; }`): each zero
+/// crossing of `expr` along a solution is an event. The same shape as an
+/// invariant.
+pub type EventDef = InvariantDef;
+
 /// A checked model.
 #[derive(Clone, Debug)]
 pub struct Model {
@@ -151,6 +156,8 @@ pub struct Model {
     pub constraints: Vec<ConstraintDef>,
     /// Invariants in order.
     pub invariants: Vec<InvariantDef>,
+    /// Event functions in order.
+    pub events: Vec<EventDef>,
     /// Requested formulations (`None`: all that apply).
     pub requested: Option<Vec<Name>>,
 }
@@ -239,6 +246,7 @@ impl Model {
             &mut errors,
         );
         let invariants = lower_invariants(ast, &scope, &mut errors);
+        let events = lower_events(ast, &scope, &mut errors);
         check_formulation_list(ast, &mut errors);
         errors.finish(Model {
             name: ast.name.name.clone(),
@@ -259,6 +267,7 @@ impl Model {
             },
             constraints,
             invariants,
+            events,
             requested: ast.formulations.clone(),
         })
     }
@@ -1087,6 +1096,43 @@ fn lower_invariants(ast: &ModelAst, scope: &Scope<'_>, errors: &mut Errors) -> V
         }
     }
     invariants
+}
+
+/// Phase 7b: event functions, each named once, free of der(), and not
+/// identically zero (after canonicalisation: `x - x` is refused, as it has
+/// no crossing to locate).
+fn lower_events(ast: &ModelAst, scope: &Scope<'_>, errors: &mut Errors) -> Vec<EventDef> {
+    let mut events = Vec::new();
+    let mut names: HashMap<&str, Span> = HashMap::new();
+    for ev in &ast.events {
+        let name = ev.name.name.as_str();
+        if let Some(first) = names.get(name) {
+            errors.push(ev.name.span, format!("event `{name}` is declared twice"));
+            errors.push(*first, format!("event `{name}` is first declared here"));
+            continue;
+        }
+        names.insert(name, ev.name.span);
+        let Some(e) = scope.lower(&ev.expr, errors) else {
+            continue;
+        };
+        if e.any_sym(&|s| matches!(s, Sym::Der(_))) {
+            errors.push(ev.expr.span(), "event functions may not contain der()");
+            continue;
+        }
+        if e.is_zero() {
+            errors.push(
+                ev.expr.span(),
+                format!("event `{name}` is identically zero: it has no crossing to locate"),
+            );
+            continue;
+        }
+        events.push(EventDef {
+            name: ev.name.name.clone(),
+            expr: e,
+            span: ev.name.span,
+        });
+    }
+    events
 }
 
 /// Phase 8: a `formulations { … }` list names known formulations, once each.

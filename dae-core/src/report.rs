@@ -27,6 +27,10 @@ pub struct Report {
     pub constraints: Vec<crate::system::ConstraintInfo>,
     /// Invariants.
     pub invariants: Vec<Invariant>,
+    /// Event functions (`events { … }`), with the same shape as
+    /// invariants; omitted from JSON when the model has none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<Invariant>,
     /// Formulations.
     pub formulations: Vec<FormulationReport>,
     /// The paper's formulations this model does not offer, each with why.
@@ -194,6 +198,14 @@ impl Report {
                     expr: m.text(&i.expr),
                 })
                 .collect(),
+            events: m
+                .events
+                .iter()
+                .map(|e| Invariant {
+                    name: e.name.clone(),
+                    expr: m.text(&e.expr),
+                })
+                .collect(),
             formulations: d
                 .formulations
                 .iter()
@@ -298,6 +310,12 @@ pub fn text(d: &Derived) -> String {
         let _ = writeln!(s, "\ninvariants");
         for i in &r.invariants {
             let _ = writeln!(s, "  {} = {}", i.name, i.expr);
+        }
+    }
+    if !r.events.is_empty() {
+        let _ = writeln!(s, "\nevents (zero crossings located along a solution)");
+        for e in &r.events {
+            let _ = writeln!(s, "  {} = {}", e.name, e.expr);
         }
     }
     let _ = writeln!(s, "\nformulations");

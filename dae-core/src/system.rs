@@ -247,6 +247,38 @@ pub trait DaeSystem {
 
     /// The model's invariants (e.g. energy) into `out` (length I).
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]);
+
+    /// Names of the model's event functions (`events { … }`), in the
+    /// order of [`DaeSystem::events`]; none unless the model has them.
+    ///
+    /// ```
+    /// use dae::prelude::*;
+    ///
+    /// dae! {
+    ///     /// A falling mass; `ground` crosses zero when it lands.
+    ///     pub Fall {
+    ///         parameters { g = 9.81 }
+    ///         differential { h, v }
+    ///         equations { der(h) = v; der(v) = -g; }
+    ///         events { ground = h; }
+    ///     }
+    /// }
+    /// let sys = Fall::default().ori2();
+    /// assert_eq!(sys.event_names(), ["ground"]);
+    /// let mut g = [0.0];
+    /// sys.events(0.0, &[2.0, 0.0], &mut g);
+    /// assert_eq!(g, [2.0]);
+    /// ```
+    fn event_names(&self) -> &[String] {
+        &[]
+    }
+
+    /// The event functions at `(t, y)` into `out` (length
+    /// `event_names().len()`): a solver locates their zero crossings
+    /// along the solution. Nothing to write unless the model has events.
+    fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        let _ = (t, y, out);
+    }
 }
 
 /// Forward every method through a pointer type.
@@ -282,6 +314,12 @@ macro_rules! forward_dae_system {
             }
             fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
                 (**self).invariants(t, y, out)
+            }
+            fn event_names(&self) -> &[String] {
+                (**self).event_names()
+            }
+            fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
+                (**self).events(t, y, out)
             }
         }
     )*};
@@ -321,6 +359,10 @@ pub struct ModelInfo {
     pub constraints: Vec<ConstraintInfo>,
     /// Invariant names.
     pub invariants: Vec<String>,
+    /// Event function names (`events { … }`), in the order of
+    /// [`DaeSystem::events`].
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<String>,
     /// Formulations this model provides.
     pub formulations: Vec<String>,
 }

@@ -554,6 +554,7 @@ fn model_info(info: &ModelInfo) -> TokenStream {
             .collect(),
     );
     let formulations = strings(&info.formulations);
+    let events = strings(&info.events);
     quote! {
         ::dae::__private::ModelInfo {
             name: #name,
@@ -562,6 +563,7 @@ fn model_info(info: &ModelInfo) -> TokenStream {
             parameters: #parameters,
             constraints: constraint_chain(),
             invariants: invariant_names(),
+            events: #events,
             formulations: #formulations,
         }
     }
@@ -1020,6 +1022,22 @@ fn system_impl(
         ),
     };
     let invariants = t_y_slice("invariants", dense(&c.invariants, all));
+    // The event functions: only for a model that has them (the trait's
+    // defaults say "none" otherwise).
+    let events = if c.event_names.is_empty() {
+        TokenStream::new()
+    } else {
+        let names = strings(&c.event_names);
+        let eval = t_y_slice("events", dense(&c.events, all));
+        quote! {
+            fn event_names(&self) -> &[::dae::__private::String] {
+                static NAMES: ::dae::__private::OnceLock<::dae::__private::Vec<::dae::__private::String>> =
+                    ::dae::__private::OnceLock::new();
+                NAMES.get_or_init(|| #names)
+            }
+            #eval
+        }
+    };
     let rhs_jacobian = t_y_matrix("rhs_jacobian", sparse(&c.rhs_jacobian, all));
 
     let residual = t_y_yp_slice(
@@ -1064,6 +1082,7 @@ fn system_impl(
             #constraints
             #constraints_jacobian
             #invariants
+            #events
         }
 
         #accel

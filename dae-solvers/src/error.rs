@@ -129,6 +129,58 @@ pub enum SolveError {
         /// The end of the horizon.
         to: f64,
     },
+    /// [`crate::Options::events`] names an event the model does not have.
+    #[error(
+        "no event named `{name}`{}; {}",
+        suggestion.as_ref().map(|s| format!(" (did you mean `{s}`?)")).unwrap_or_default(),
+        if known.is_empty() { "the model has no events".to_string() } else { format!("the model's events are {}", known.join(", ")) }
+    )]
+    UnknownEvent {
+        /// The name given.
+        name: String,
+        /// The closest event name, if one is close.
+        suggestion: Option<String>,
+        /// The model's event names.
+        known: Vec<String>,
+    },
+    /// An event's reset names an unknown the formulation does not have.
+    #[error(
+        "the reset of event `{event}` names `{name}`, which is not an unknown{}; the unknowns are {}",
+        suggestion.as_ref().map(|s| format!(" (did you mean `{s}`?)")).unwrap_or_default(),
+        known.join(", ")
+    )]
+    UnknownResetTarget {
+        /// The event.
+        event: String,
+        /// The name given.
+        name: String,
+        /// The closest unknown's name, if one is close.
+        suggestion: Option<String>,
+        /// The formulation's unknowns.
+        known: Vec<String>,
+    },
+    /// The values an event's reset made could not be made consistent
+    /// again: the projection onto the constraints failed (the reset left
+    /// them violated beyond repair), or gave non-finite values.
+    #[error("the reset of event `{event}` at t = {t:e} leaves the constraints violated beyond repair: {source}")]
+    ResetInconsistent {
+        /// The event.
+        event: String,
+        /// Time of the event.
+        t: f64,
+        /// Why the projection failed.
+        source: Box<SolveError>,
+    },
+    /// A run restarted after resets more often than
+    /// [`crate::core::events::MAX_RESETS`] allows: a chattering or Zeno
+    /// reset (a bouncing ball coming to rest).
+    #[error("{resets} restarts after event resets by t = {t:e}: a chattering or Zeno reset")]
+    TooManyResets {
+        /// Time of the last reset.
+        t: f64,
+        /// Restarts made.
+        resets: usize,
+    },
 }
 
 impl SolveError {
@@ -146,6 +198,10 @@ impl SolveError {
             SolveError::ToleranceOutOfRange { .. } => "tolerance_out_of_range",
             SolveError::InvalidInput { .. } => "invalid_input",
             SolveError::OutOfReach { .. } => "out_of_reach",
+            SolveError::UnknownEvent { .. } => "unknown_event",
+            SolveError::UnknownResetTarget { .. } => "unknown_reset_target",
+            SolveError::ResetInconsistent { .. } => "reset_inconsistent",
+            SolveError::TooManyResets { .. } => "too_many_resets",
         }
     }
 
@@ -158,6 +214,9 @@ impl SolveError {
             | SolveError::NonFinite { t, .. }
             | SolveError::StepLimit { t, .. } => Some(*t),
             SolveError::Init(e) => Some(e.t()),
+            SolveError::ResetInconsistent { t, .. } | SolveError::TooManyResets { t, .. } => {
+                Some(*t)
+            }
             _ => None,
         }
     }
@@ -180,12 +239,14 @@ impl SolveError {
             SolveError::StepSizeTooSmall { .. }
             | SolveError::NewtonFailure { .. }
             | SolveError::SingularMatrix { .. } => Failure::Breakdown,
-            SolveError::StepLimit { .. } => Failure::Budget,
+            SolveError::StepLimit { .. } | SolveError::TooManyResets { .. } => Failure::Budget,
             SolveError::NonFinite { .. } => Failure::NonFinite,
-            SolveError::InconsistentInitialValues { .. } | SolveError::Init(_) => {
-                Failure::Initialisation
-            }
+            SolveError::InconsistentInitialValues { .. }
+            | SolveError::Init(_)
+            | SolveError::ResetInconsistent { .. } => Failure::Initialisation,
             SolveError::NotApplicable(_)
+            | SolveError::UnknownEvent { .. }
+            | SolveError::UnknownResetTarget { .. }
             | SolveError::ToleranceOutOfRange { .. }
             | SolveError::InvalidInput { .. }
             | SolveError::OutOfReach { .. } => Failure::Refused,

@@ -2,7 +2,12 @@
 //! [`Solver::integrator`](crate::Solver::integrator).
 
 use crate::core::driver::{Method, Record};
-use crate::{Options, Problem, Solution, SolveError, Stats, Stopped};
+use crate::core::events::{Cut, Events};
+use crate::{Event, Options, Problem, Solution, SolveError, Stats, Stopped};
+
+/// Where a run restarts after a reset: the time, the consistent values,
+/// and the events (positions) that fired there.
+pub(crate) type Restart = (f64, Vec<f64>, Vec<usize>);
 
 /// What one call of [`Integrator::step`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -16,6 +21,16 @@ pub enum StepOutcome {
     /// it had been reached before and nothing was done.
     Finished {
         /// `t_end`.
+        t: f64,
+    },
+    /// An event that stops the run or resets the state
+    /// ([`crate::EventAction`]) cut the step just taken at `t`: the
+    /// integration ends there ([`Integrator::t`] is `t`,
+    /// [`Integrator::y`] the dense-output value there). After a reset,
+    /// [`Integrator::restart`] gives the consistent values to go on from;
+    /// [`Solver::run`](crate::Solver::run) does so with a fresh stepper.
+    Event {
+        /// Time of the event.
         t: f64,
     },
 }
@@ -67,6 +82,12 @@ pub struct Integrator<'a> {
     failed: Option<SolveError>,
     /// The value [`Integrator::advance_to`] returns.
     out: Vec<f64>,
+    /// The event service, when the model has events.
+    events: Option<Events<'a>>,
+    /// The events located so far.
+    log: Vec<Event>,
+    /// The step cut at a stop or reset: the integration ends there.
+    cut: Option<Cut>,
 }
 
 impl<'a> Integrator<'a> {
@@ -74,10 +95,15 @@ impl<'a> Integrator<'a> {
     /// output rules of `options`.
     pub(crate) fn new(
         method: Box<dyn Method + 'a>,
-        problem: &Problem<'_>,
+        problem: &Problem<'a>,
         options: &Options,
     ) -> Self {
         let y0 = method.y().to_vec();
+        // The rules were checked with the problem (`Problem::check`).
+        let (events, failed) = match Events::new(problem.system, options, problem.t0, &y0) {
+            Ok(events) => (events, None),
+            Err(e) => (None, Some(e)),
+        };
         let record = Record::new(
             options,
             problem.t0,
@@ -98,21 +124,53 @@ impl<'a> Integrator<'a> {
             t0: problem.t0,
             t_end: problem.t_end,
             t_prev: problem.t0,
-            failed: None,
+            failed,
             out: vec![0.0; y0.len()],
             y0,
             method,
+            events,
+            log: Vec::new(),
+            cut: None,
         }
     }
 
-    /// Current time: `t₀`, then the end of the last accepted step.
+    /// Watch the events at positions `fired` only once they have left zero:
+    /// a run restarted at their root after a reset.
+    pub(crate) fn mask_events(&mut self, fired: &[usize]) {
+        if let Some(events) = &mut self.events {
+            events.mask(fired);
+        }
+    }
+
+    /// The events located so far, in time order ([`crate::Event`]).
+    pub fn events(&self) -> &[Event] {
+        &self.log
+    }
+
+    /// After a reset event ended the integration
+    /// ([`StepOutcome::Event`]): the time and the consistent values to
+    /// restart from, which [`Solver::run`](crate::Solver::run) does with a
+    /// fresh stepper. `None` otherwise.
+    pub fn restart(&self) -> Option<(f64, &[f64])> {
+        let cut = self.cut.as_ref()?;
+        Some((cut.t, cut.restart.as_deref()?))
+    }
+
+    /// Current time: `t₀`, then the end of the last accepted step (or the
+    /// event that cut it, [`StepOutcome::Event`]).
     pub fn t(&self) -> f64 {
-        self.method.t()
+        match &self.cut {
+            Some(cut) => cut.t,
+            None => self.method.t(),
+        }
     }
 
     /// The solution at [`Integrator::t`].
     pub fn y(&self) -> &[f64] {
-        self.method.y()
+        match &self.cut {
+            Some(cut) => &cut.y,
+            None => self.method.y(),
+        }
     }
 
     /// The horizon `[t₀, t_end]`.
@@ -130,9 +188,9 @@ impl<'a> Integrator<'a> {
         self.method.stats()
     }
 
-    /// Whether `t_end` has been reached.
+    /// Whether `t_end` has been reached, or an event ended the run.
     pub fn finished(&self) -> bool {
-        self.method.finished()
+        self.cut.is_some() || self.method.finished()
     }
 
     /// Take one accepted step (rejected attempts are retried inside, as in
@@ -143,6 +201,9 @@ impl<'a> Integrator<'a> {
         if let Some(e) = &self.failed {
             return Err(e.clone());
         }
+        if let Some(cut) = &self.cut {
+            return Ok(StepOutcome::Event { t: cut.t });
+        }
         if !self.method.finished() {
             let t_prev = self.method.t();
             if let Err(e) = self.method.step() {
@@ -150,6 +211,22 @@ impl<'a> Integrator<'a> {
                 return Err(e);
             }
             self.t_prev = t_prev;
+            let cut = match &mut self.events {
+                Some(events) => match events.after_step(&*self.method, t_prev, &mut self.log) {
+                    Ok(cut) => cut,
+                    Err(e) => {
+                        self.failed = Some(e.clone());
+                        return Err(e);
+                    }
+                },
+                None => None,
+            };
+            if let Some(cut) = cut {
+                self.record.after_step_until(&*self.method, cut.t, &cut.y);
+                let t = cut.t;
+                self.cut = Some(cut);
+                return Ok(StepOutcome::Event { t });
+            }
             self.record.after_step(&*self.method);
         }
         let t = self.method.t();
@@ -168,15 +245,23 @@ impl<'a> Integrator<'a> {
     /// A time already passed is answered from the last step, or from the
     /// recorded dense output ([`Options::dense_output`]); without it, a
     /// time before the start of the last step is [`SolveError::OutOfReach`],
-    /// as is any time outside `[t₀, t_end]`.
+    /// as is any time outside `[t₀, t_end]`, or after an event that ended
+    /// the run.
     pub fn advance_to(&mut self, t: f64) -> Result<&[f64], SolveError> {
         let to = self.t_end;
         let reach = |from: f64| SolveError::OutOfReach { t, from, to };
         if !(t >= self.t0 && t <= self.t_end) {
             return Err(reach(self.t0));
         }
-        while self.method.t() < t {
+        while self.t() < t && !self.finished() {
             self.step()?;
+        }
+        if t > self.t() {
+            return Err(SolveError::OutOfReach {
+                t,
+                from: self.t0,
+                to: self.t(),
+            });
         }
         if t == self.t0 {
             self.out.copy_from_slice(&self.y0);
@@ -230,18 +315,39 @@ impl<'a> Integrator<'a> {
         loop {
             match self.step() {
                 Ok(StepOutcome::Accepted { .. }) => {}
-                Ok(StepOutcome::Finished { .. }) => break,
+                Ok(StepOutcome::Finished { .. } | StepOutcome::Event { .. }) => break,
                 Err(error) => {
                     return Err(Box::new(Stopped {
                         error,
                         stats: self.method.stats(),
-                        t: self.method.t(),
-                        y: self.method.y().to_vec(),
+                        t: self.t(),
+                        y: self.y().to_vec(),
                     }))
                 }
             }
         }
         let stats = self.method.stats();
-        Ok(self.record.finish(stats, self.names))
+        let mut solution = match &self.cut {
+            Some(cut) => {
+                let stop = cut.restart.is_none();
+                self.record
+                    .finish_cut(stats, self.names, cut.t, &cut.y, stop)
+            }
+            None => self.record.finish(stats, self.names),
+        };
+        solution.events = self.log;
+        Ok(solution)
+    }
+
+    /// [`Integrator::run`], and the restart a reset asks for: the time,
+    /// the consistent values and the events to mask there.
+    pub(crate) fn run_segment(mut self) -> Result<(Solution, Option<Restart>), Box<Stopped>> {
+        // Step to the end or the cut (an error is returned again by `run`).
+        while let Ok(StepOutcome::Accepted { .. }) = self.step() {}
+        let restart = self.cut.as_ref().and_then(|cut| {
+            let y = cut.restart.as_ref()?;
+            Some((cut.t, y.clone(), cut.fired.clone()))
+        });
+        self.run().map(|solution| (solution, restart))
     }
 }

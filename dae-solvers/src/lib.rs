@@ -54,6 +54,7 @@ pub mod sensitivity;
 pub mod solution;
 pub mod stats;
 
+pub use core::events::{Crossing, Direction, Event, EventAction, EventSpec, Reset, ResetReport};
 pub use error::{InitError, NotApplicable, SolutionError, SolveError, Stopped};
 pub use init::{consistent, consistent_from, initial_derivative, InitMode, InitOptions, Start};
 pub use integrator::{Integrator, StepOutcome};
@@ -106,6 +107,8 @@ impl Problem<'_> {
                 what: "initial values",
             });
         }
+        // The event rules name the model's events and unknowns.
+        core::events::Events::new(self.system, options, self.t0, self.y0)?;
         Ok(())
     }
 }
@@ -158,8 +161,11 @@ pub trait Solver {
     /// keeping the dense output of every step for [`Solution::at`] when
     /// [`Options::dense_output`] is on. This is [`Solver::integrator`] run
     /// to the end ([`Integrator::finish`]).
+    ///
+    /// A reset event ([`EventAction::Reset`]) restarts the integration
+    /// at the event with a fresh stepper, as [`Solver::run`] does.
     fn solve(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, SolveError> {
-        self.integrator(problem, options)?.finish()
+        self.run(problem, options).map_err(|stopped| stopped.error)
     }
 
     /// [`Solver::solve`], and when the run stops before `t_end`, the error
@@ -182,16 +188,57 @@ pub trait Solver {
     /// assert!(stopped.stats.steps > 0 && stopped.stats.residual_evals > 0);
     /// assert!(stopped.t > 0.0);
     /// ```
+    ///
+    /// After a reset event ([`EventAction::Reset`]) the integration
+    /// restarts at the event from the consistent values the reset made
+    /// ([`Event::reset`]), with a fresh stepper of this solver
+    /// ([`Solver::integrator`]): the solution is the runs joined (output
+    /// times, step points, dense output, events; the work counters
+    /// summed). Each run has the budget [`Options::max_steps`]; more than
+    /// [`core::events::MAX_RESETS`] restarts is
+    /// [`SolveError::TooManyResets`].
     fn run(&self, problem: &Problem<'_>, options: &Options) -> Result<Solution, Box<Stopped>> {
-        match self.integrator(problem, options) {
-            Ok(integrator) => integrator.run(),
-            Err(error) => Err(Box::new(Stopped {
+        let refused = |error: SolveError, t: f64, y: &[f64], stats: Stats| {
+            Box::new(Stopped {
                 error,
-                stats: Stats::default(),
-                t: problem.t0,
-                y: problem.y0.to_vec(),
-            })),
+                stats,
+                t,
+                y: y.to_vec(),
+            })
+        };
+        let (mut solution, mut restart) = match self.integrator(problem, options) {
+            Ok(integrator) => integrator.run_segment()?,
+            Err(error) => return Err(refused(error, problem.t0, problem.y0, Stats::default())),
+        };
+        let mut resets = 0;
+        while let Some((t0, y0, fired)) = restart.take() {
+            resets += 1;
+            if resets > core::events::MAX_RESETS {
+                let error = SolveError::TooManyResets { t: t0, resets };
+                return Err(refused(error, t0, &y0, solution.stats));
+            }
+            let later = Problem {
+                t0,
+                y0: &y0,
+                ..*problem
+            };
+            let mut integrator = match self.integrator(&later, options) {
+                Ok(integrator) => integrator,
+                Err(error) => return Err(refused(error, t0, &y0, solution.stats)),
+            };
+            integrator.mask_events(&fired);
+            match integrator.run_segment() {
+                Ok((next, again)) => {
+                    solution.append(next);
+                    restart = again;
+                }
+                Err(mut stopped) => {
+                    stopped.stats += solution.stats;
+                    return Err(stopped);
+                }
+            }
         }
+        Ok(solution)
     }
 }
 

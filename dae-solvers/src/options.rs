@@ -307,6 +307,15 @@ pub struct Options {
     /// methods and step number 5 (orders up to 6) for `mebdf`;
     /// `max_order = 7` lets `mebdf` reach order 8.
     pub max_order: usize,
+    /// How the model's events (its `events { … }` section,
+    /// [`dae_core::system::DaeSystem::events`]) are treated: each rule
+    /// names one event and says which crossings count and whether it
+    /// stops the run or resets state ([`crate::EventSpec`]). Every event
+    /// of the model is located and reported in
+    /// [`crate::Solution::events`]; one not named here is recorded in both
+    /// directions. A rule naming no event of the model is
+    /// [`SolveError::UnknownEvent`]. See [`crate::core::events`].
+    pub events: Vec<crate::EventSpec>,
 }
 
 impl Default for Options {
@@ -323,6 +332,7 @@ impl Default for Options {
             fixed_step: None,
             fixed_order: None,
             max_order: 5,
+            events: Vec::new(),
         }
     }
 }

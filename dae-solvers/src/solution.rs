@@ -62,9 +62,30 @@ pub struct Solution {
     /// The dense output of every accepted step, when
     /// [`Options::dense_output`](crate::Options::dense_output) is on.
     pub dense: Option<DenseOutput>,
+    /// The located events ([`crate::core::events`]), in time order: the
+    /// zero crossings of the model's event functions that
+    /// [`Options::events`](crate::Options::events) admits.
+    pub events: Vec<crate::Event>,
 }
 
 impl Solution {
+    /// Append the run that restarted at the end of this one after a reset
+    /// (its output times, step points, dense output, events and work).
+    pub(crate) fn append(&mut self, later: Solution) {
+        self.t.extend(later.t);
+        self.y.extend(later.y);
+        self.steps.extend(later.steps);
+        self.stats += later.stats;
+        self.events.extend(later.events);
+        let joined = match (&mut self.dense, &later.dense) {
+            (Some(dense), Some(later)) => dense.append(later),
+            _ => false,
+        };
+        if !joined {
+            self.dense = None;
+        }
+    }
+
     /// The value at the last output time.
     pub fn last(&self) -> Option<&[f64]> {
         self.y.last().map(|v| v.as_slice())
@@ -264,6 +285,19 @@ impl DenseOutput {
             nodes,
             weights,
         }
+    }
+
+    /// Append the steps of `later`, a run of the same method that starts
+    /// where this one ends (after a reset: its first step starts from the
+    /// reset values, and the time of the reset answers this run's value).
+    /// `false` (nothing appended) when the two differ in size or degree.
+    pub(crate) fn append(&mut self, later: &DenseOutput) -> bool {
+        if later.n != self.n || later.degree != self.degree {
+            return false;
+        }
+        self.t.extend_from_slice(&later.t[1..]);
+        self.values.extend_from_slice(&later.values[self.n..]);
+        true
     }
 
     /// Record the accepted step ending at `t` with value `y`, its interior

@@ -259,6 +259,7 @@ fn stepper_to_the_end_is_solve() {
                         assert_eq!(t, T_END);
                         break;
                     }
+                    StepOutcome::Event { t } => panic!("{case:?}: no events, one at {t}"),
                 }
             }
             // Finished stays finished.

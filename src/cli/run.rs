@@ -333,6 +333,24 @@ pub fn text(r: &RunRecord) -> String {
     for (k, v) in &r.invariant_drift.0 {
         let _ = writeln!(s, "  drift of {k}: {v:.3e}");
     }
+    if let Some(events) = &r.events {
+        let _ = writeln!(s, "  events: {}", events.len());
+        for e in events {
+            let moved = e
+                .reset
+                .as_ref()
+                .map(|r| format!(" (projection moved {:.1e})", r.moved))
+                .unwrap_or_default();
+            let _ = writeln!(
+                s,
+                "    t = {:<22} {} {} {}{moved}",
+                format!("{:.15e}", e.t),
+                e.name,
+                e.direction.name(),
+                e.action
+            );
+        }
+    }
     s
 }
 

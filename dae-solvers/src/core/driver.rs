@@ -124,6 +124,19 @@ impl Record {
         }
     }
 
+    /// After an accepted step of `method` cut at an event at `t` (inside
+    /// the step) with the dense-output value `y` there: what
+    /// [`Record::after_step`] does, for the step up to `t`.
+    pub(crate) fn after_step_until<M: Method + ?Sized>(&mut self, method: &M, t: f64, y: &[f64]) {
+        self.grid.emit(t, |tau, out| method.dense(tau, out));
+        if self.record_steps {
+            self.steps.push((t, y.to_vec()));
+        }
+        if let Some(dense) = &mut self.dense {
+            dense.push(t, y, |tau, out| method.dense(tau, out));
+        }
+    }
+
     /// The dense output kept so far.
     pub(crate) fn dense(&self) -> Option<&DenseOutput> {
         self.dense.as_ref()
@@ -140,6 +153,35 @@ impl Record {
             stats,
             names,
             dense: self.dense,
+            events: Vec::new(),
+        }
+    }
+
+    /// The [`Solution`] of a run cut at an event at `t`: the output times
+    /// before `t`, then — when the run stops there (`stop`) — the event
+    /// point `(t, y)` itself as the last point; after a reset the times
+    /// from `t` on are the restarted run's.
+    pub(crate) fn finish_cut(
+        self,
+        stats: Stats,
+        names: Vec<String>,
+        t_cut: f64,
+        y_cut: &[f64],
+        stop: bool,
+    ) -> Solution {
+        let (mut t, mut y) = self.grid.finish_before(t_cut);
+        if stop {
+            t.push(t_cut);
+            y.push(y_cut.to_vec());
+        }
+        Solution {
+            t,
+            y,
+            steps: self.steps,
+            stats,
+            names,
+            dense: self.dense,
+            events: Vec::new(),
         }
     }
 }

@@ -305,6 +305,12 @@ impl DaeSystem for Eliminated<'_> {
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.inner.invariants(t, y, out);
     }
+    fn event_names(&self) -> &[String] {
+        self.inner.event_names()
+    }
+    fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        self.inner.events(t, y, out)
+    }
 }
 
 /// The formulation an integrator runs on: the caller's, or an

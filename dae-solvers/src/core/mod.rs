@@ -23,6 +23,9 @@
 //!   fills the output grid, records steps and assembles the solution — also
 //!   for a start-up run feeding a second run (BDF with a constant step), so
 //!   that no method assembles a solution itself.
+//! - [`events`]: the zero crossings of the model's event functions,
+//!   located on the dense output after every accepted step, for every
+//!   method; stops and resets (a reset restarts with a fresh method).
 //! - [`policy`]: the defaults a formulation implies (which unknowns enter the
 //!   error test, square or least-squares linear algebra), decided in one
 //!   place for the library and the command line alike.
@@ -36,6 +39,7 @@ pub(crate) mod attempt;
 pub(crate) mod control;
 pub(crate) mod driver;
 pub(crate) mod eliminate;
+pub mod events;
 pub(crate) mod matrix;
 pub(crate) mod newton;
 pub(crate) mod output;

@@ -60,6 +60,17 @@ impl OutputGrid {
         (self.times, self.values)
     }
 
+    /// The times before `t` and their values (all filled once the
+    /// integration reached `t`): the output of a run cut at an event, the
+    /// times from `t` on being another run's (after a reset) or none (after
+    /// a stop).
+    pub(crate) fn finish_before(mut self, t: f64) -> (Vec<f64>, Vec<Vec<f64>>) {
+        let keep = self.times.partition_point(|&s| s < t).min(self.next);
+        self.times.truncate(keep);
+        self.values.truncate(keep);
+        (self.times, self.values)
+    }
+
     /// The values filled so far, by position.
     pub(crate) fn values(&self) -> &[Vec<f64>] {
         &self.values[..self.next]
