@@ -671,6 +671,14 @@ impl DaeSystem for SensitivitySystem {
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.state.invariants(t, &y[..self.state_unknowns()], out);
     }
+
+    fn event_names(&self) -> &[String] {
+        self.state.event_names()
+    }
+
+    fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        self.state.events(t, &y[..self.state_unknowns()], out)
+    }
 }
 
 /// [`SensitivitySystem::frozen`]: the sensitivities with the state fixed.
