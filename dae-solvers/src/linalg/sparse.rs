@@ -245,6 +245,6 @@ mod tests {
         assert_eq!(x, [1.0, 1.0, 1.0, 1.0]);
         // Column 1 all zero: singular.
         let singular = |r: usize, c: usize| if c == 1 { 0.0 } else { full(r, c) };
-        assert_eq!(f.factor(&p, singular), Err(Singular));
+        assert!(f.factor(&p, singular).is_err(), "a zero column is singular");
     }
 }
