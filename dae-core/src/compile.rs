@@ -375,6 +375,7 @@ mod tests {
     /// the dense ones' entries, also for a pattern that is not the
     /// system's own.
     #[test]
+    #[allow(clippy::type_complexity)] // a table of three closures, once
     fn sparsity_covers_the_matrices_and_the_values_are_the_dense_entries() {
         use crate::system::{Model, Pattern};
         let m = crate::interp::InterpretedModel::from_str(

@@ -204,6 +204,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::needless_range_loop)] // r indexes the rows of a product
     fn real_and_complex_solves_match_the_dense_products() {
         let n = 6;
         let p = Pattern::new(n, |r, c| entry(r, c) != 0.0).expect("analysed");
