@@ -94,8 +94,15 @@ pub fn load(spec: &str) -> Result<Box<dyn Model + Send + Sync>, ModelError> {
         return Ok(Box::new(builtin::Pendulum::default()));
     }
     let src = source(spec)?;
-    let d = derive(&src)?;
-    Ok(Box::new(InterpretedModel::new(&d)))
+    lazy(&src)
+}
+
+/// The interpreted model of `src`, each formulation lowered when first
+/// asked for.
+fn lazy(src: &ModelText) -> Result<Box<dyn Model + Send + Sync>, ModelError> {
+    let m = InterpretedModel::lazy(&src.text)
+        .map_err(|e| ModelError::Invalid(render_error(&e, &src.label)))?;
+    Ok(Box::new(m))
 }
 
 /// The runnable model a scene names: a built-in by name, a file by its
@@ -116,8 +123,7 @@ pub fn load_source(
                 path: label.clone(),
                 source,
             })?;
-            let d = derive(&ModelText { label, text })?;
-            Ok(Box::new(InterpretedModel::new(&d)))
+            lazy(&ModelText { label, text })
         }
     }
 }

@@ -136,6 +136,38 @@ pub fn compile_all(d: &Derived) -> Vec<Compiled> {
         .collect()
 }
 
+/// Lower the formulations of `d` at positions `which` (into
+/// `d.formulations`), in that order, with one memo of gradients as
+/// [`compile_all`]: what a run that uses some of a model's formulations
+/// needs, without the cost of the others.
+///
+/// ```
+/// use dae_core::compile::{compile, compile_selected};
+/// use dae_core::derive::Derived;
+///
+/// let d = Derived::from_str(
+///     "pub M { differential { x, v } algebraic { la } \
+///      equations { der(x) = v; der(v) = -la*x; 0 = x^2 - 1; } }",
+/// )
+/// .unwrap();
+/// let last = d.formulations.len() - 1;
+/// let some = compile_selected(&d, &[last, 0]);
+/// assert_eq!(some.len(), 2);
+/// assert_eq!(some[0], compile(&d, &d.formulations[last]));
+/// assert_eq!(some[1], compile(&d, &d.formulations[0]));
+/// ```
+///
+/// # Panics
+///
+/// If a position is out of range (a programming error).
+pub fn compile_selected(d: &Derived, which: &[usize]) -> Vec<Compiled> {
+    let mut grads = Gradients::default();
+    which
+        .iter()
+        .map(|&k| compile_with(d, &d.formulations[k], &mut grads))
+        .collect()
+}
+
 /// The non-zero partial derivatives of expressions with respect to the
 /// unknowns, each expression differentiated once (the key's hash is cached
 /// in the expression, so a look-up does not walk it).
@@ -346,6 +378,85 @@ mod tests {
     use crate::system::DaeSystem;
     use nalgebra::DMatrix;
     use std::sync::Arc;
+
+    /// Each formulation of a two-link chain reports the structural
+    /// non-zeros of its matrices (no non-zero outside them at a generic
+    /// point; far fewer than all entries), and the sparse evaluations give
+    /// the dense ones' entries, also for a pattern that is not the
+    /// system's own.
+    #[test]
+    #[allow(clippy::type_complexity)] // a table of three closures, once
+    fn sparsity_covers_the_matrices_and_the_values_are_the_dense_entries() {
+        use crate::system::{Model, Pattern};
+        let m = crate::interp::InterpretedModel::from_str(
+            "pub C { parameters { g = 9.81 } differential { x1, y1, x2, y2, u1, v1, u2, v2 } \
+             algebraic { a1, a2 } equations { der(x1) = u1; der(y1) = v1; der(x2) = u2; \
+             der(y2) = v2; der(u1) = -2*a1*x1 + 2*a2*(x2 - x1); \
+             der(v1) = -2*a1*y1 + 2*a2*(y2 - y1) - g; der(u2) = -2*a2*(x2 - x1); \
+             der(v2) = -2*a2*(y2 - y1) - g; 0 = x1^2 + y1^2 - 1; \
+             0 = (x2 - x1)^2 + (y2 - y1)^2 - 1; } }",
+        )
+        .expect("the chain derives");
+        let names = m.model_info().formulations.clone();
+        assert!(names.iter().any(|n| n == "rcd0"), "{names:?}");
+        for name in &names {
+            let sys = m.system(name).expect("provided");
+            let info = sys.info();
+            let (rows, cols) = (info.equations(), info.unknowns());
+            let y: Vec<f64> = (0..cols).map(|k| 0.3 + 0.17 * k as f64).collect();
+            let z: Vec<f64> = (0..cols).map(|k| 1.0 - 0.11 * k as f64).collect();
+            let sp = sys.sparsity();
+            let dense = Pattern::dense(rows, cols);
+            let mut j = DMatrix::zeros(rows, cols);
+            let checks: [(
+                &Pattern,
+                &dyn Fn(&mut DMatrix<f64>),
+                &dyn Fn(&Pattern, &mut [f64]),
+            ); 3] = [
+                (
+                    &sp.rhs_jacobian,
+                    &|j| sys.rhs_jacobian(0.5, &y, j),
+                    &|p, v| sys.rhs_jacobian_values(0.5, &y, p, v),
+                ),
+                (&sp.leading, &|j| sys.leading(0.5, &y, j), &|p, v| {
+                    sys.leading_values(0.5, &y, p, v)
+                }),
+                (
+                    &sp.leading_jacobian,
+                    &|j| sys.leading_jacobian(0.5, &y, &z, j),
+                    &|p, v| sys.leading_jacobian_values(0.5, &y, &z, p, v),
+                ),
+            ];
+            for (k, (p, eval, values)) in checks.iter().enumerate() {
+                eval(&mut j);
+                for r in 0..rows {
+                    for c in 0..cols {
+                        assert!(
+                            j[(r, c)] == 0.0 || p.contains(r, c),
+                            "{name} matrix {k}: ({r}, {c}) = {} outside the pattern",
+                            j[(r, c)]
+                        );
+                    }
+                }
+                for pat in [*p, &dense] {
+                    let mut v = vec![f64::NAN; pat.nnz()];
+                    values(pat, &mut v);
+                    for (v, (r, c)) in v.iter().zip(pat.entries()) {
+                        assert_eq!(*v, j[(r, c)], "{name} matrix {k} at ({r}, {c})");
+                    }
+                }
+            }
+            // The projected formulations (psi1, psi0) mix rows and are
+            // denser; the others hold each row's own unknowns only.
+            let iteration = sp.iteration();
+            assert!(
+                name.starts_with("psi") || iteration.nnz() * 2 < rows * cols,
+                "{name}: {} of {} entries",
+                iteration.nnz(),
+                rows * cols
+            );
+        }
+    }
 
     /// A formulation whose row of `E` holds the time: `(1 + t)·x·der(x)`,
     /// made by hand from the model's `x·der(x)` (the model checker does not

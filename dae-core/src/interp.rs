@@ -2,17 +2,17 @@
 //! run time: the same tapes the macro turns into straight-line code,
 //! evaluated node by node.
 
-use crate::compile::{compile_all, Compiled, Sparse};
+use crate::compile::{compile_all, compile_selected, Compiled, Sparse};
 use crate::derive::Derived;
 use crate::expr::Expr;
 use crate::system::{
     check_parameter, BoxedSystem, DaeSystem, FormulationError, FormulationInfo, Model, ModelInfo,
-    ParameterError,
+    ParameterError, Pattern, Sparsity,
 };
 use crate::tape::{Inputs, Tape, TapeBuilder};
 use nalgebra::DMatrix;
-use std::cell::RefCell;
-use std::sync::Arc;
+use std::cell::{OnceCell, RefCell};
+use std::sync::{Arc, OnceLock};
 
 /// A model loaded at run time.
 #[derive(Clone, Debug)]
@@ -24,12 +24,83 @@ pub struct InterpretedModel {
     n_base: usize,
     /// The derived parameters from the base ones: one output each.
     derived: Tape,
-    formulations: Vec<Arc<Compiled>>,
+    /// The lowered formulations, shared by clones.
+    lowered: Arc<Lowered>,
+}
+
+/// The formulations of an [`InterpretedModel`], lowered when first asked
+/// for (a model read for one run lowers one).
+#[derive(Debug)]
+struct Lowered {
+    /// The model text, derived again to lower a formulation not lowered
+    /// yet (the derived model itself holds `Rc`s and cannot be kept by a
+    /// model that moves between threads); `None` when all are lowered.
+    source: Option<Arc<str>>,
+    /// One slot per provided formulation, in the order of
+    /// `ModelInfo::formulations`.
+    slots: Vec<OnceLock<Arc<Compiled>>>,
 }
 
 impl InterpretedModel {
-    /// Compile every provided formulation of a derived model.
+    /// Compile every provided formulation of a derived model now.
+    ///
+    /// ```
+    /// use dae_core::derive::Derived;
+    /// use dae_core::interp::InterpretedModel;
+    /// use dae_core::system::Model;
+    ///
+    /// let d = Derived::from_str(
+    ///     "pub M { differential { x } algebraic { z } equations { der(x) = -z; 0 = z - x; } }",
+    /// )
+    /// .unwrap();
+    /// let m = InterpretedModel::new(&d);
+    /// assert!(m.formulation(&d.formulations[0].name).is_ok());
+    /// ```
     pub fn new(d: &Derived) -> Self {
+        let slots = compile_all(d)
+            .into_iter()
+            .map(|c| OnceLock::from(Arc::new(c)))
+            .collect();
+        Self::with(
+            d,
+            Lowered {
+                source: None,
+                slots,
+            },
+        )
+    }
+
+    /// Parse, check and derive model text; lower each formulation when it
+    /// is first asked for ([`InterpretedModel::system`],
+    /// [`Model::formulation`]) or all of a set at once
+    /// ([`Model::prepare`], with the gradients of the rows they share
+    /// computed once). A run that uses one formulation of a model with
+    /// six lowers one: the set-up of a large model is mostly lowering
+    /// (BENCHMARKS.md §10). Lowering later derives the text again.
+    ///
+    /// ```
+    /// use dae_core::interp::InterpretedModel;
+    /// use dae_core::system::Model;
+    ///
+    /// let src = "pub M { differential { x, v } algebraic { la } \
+    ///            equations { der(x) = v; der(v) = -la*x; 0 = x^2 - 1; } }";
+    /// let lazy = InterpretedModel::lazy(src).unwrap();
+    /// let eager = InterpretedModel::from_str(src).unwrap();
+    /// let (a, b) = (lazy.system("ggl1").unwrap(), eager.system("ggl1").unwrap());
+    /// assert_eq!(a.compiled(), b.compiled());
+    /// ```
+    pub fn lazy(src: &str) -> Result<Self, syn::Error> {
+        let d = Derived::from_str(src)?;
+        Ok(Self::with(
+            &d,
+            Lowered {
+                source: Some(Arc::from(src)),
+                slots: d.formulations.iter().map(|_| OnceLock::new()).collect(),
+            },
+        ))
+    }
+
+    fn with(d: &Derived, lowered: Lowered) -> Self {
         InterpretedModel {
             info: d.model_info(),
             params: d.model.params.iter().map(|p| p.default).collect(),
@@ -41,22 +112,48 @@ impl InterpretedModel {
                 }
                 b.finish()
             },
-            formulations: compile_all(d).into_iter().map(Arc::new).collect(),
+            lowered: Arc::new(lowered),
         }
     }
 
-    /// Parse, check, derive and compile model text.
+    /// Parse, check, derive and compile model text (every formulation,
+    /// now; [`InterpretedModel::lazy`] lowers them when asked for).
     #[allow(clippy::should_implement_trait)] // returns `syn::Error` with spans, unlike `str::parse`
     pub fn from_str(src: &str) -> Result<Self, syn::Error> {
         Ok(Self::new(&Derived::from_str(src)?))
     }
 
+    /// Lower the formulations at positions `which` that are not lowered
+    /// yet, together (one derivation, one memo of gradients).
+    fn lower(&self, which: &[usize]) {
+        let slots = &self.lowered.slots;
+        let missing: Vec<usize> = which
+            .iter()
+            .copied()
+            .filter(|&k| slots[k].get().is_none())
+            .collect();
+        let Some(src) = &self.lowered.source else {
+            return;
+        };
+        if missing.is_empty() {
+            return;
+        }
+        // The text derived when the model was made: it derives again, to
+        // the same formulations (derivation is deterministic).
+        let d = Derived::from_str(src).expect("the model's text derived before");
+        for (k, c) in missing.iter().zip(compile_selected(&d, &missing)) {
+            // Another thread may have lowered it meanwhile: the same tapes.
+            let _ = slots[*k].set(Arc::new(c));
+        }
+    }
+
     /// The interpreted system for `name` (concrete type).
     pub fn system(&self, name: &str) -> Result<InterpretedSystem, FormulationError> {
-        let c = self
+        let k = self
+            .info
             .formulations
             .iter()
-            .find(|c| c.info.name == name)
+            .position(|f| f == name)
             .ok_or_else(|| {
                 if crate::system::FORMULATION_NAMES.contains(&name) {
                     FormulationError::NotProvided {
@@ -70,6 +167,13 @@ impl InterpretedModel {
                     }
                 }
             })?;
+        let slot = &self.lowered.slots[k];
+        if slot.get().is_none() {
+            self.lower(&[k]);
+        }
+        let c = slot
+            .get()
+            .expect("a formulation is lowered before its system is made");
         Ok(InterpretedSystem::new(c.clone(), self.params.clone()))
     }
 }
@@ -140,6 +244,13 @@ impl Model for InterpretedModel {
         self.params = base;
         Ok(())
     }
+    fn prepare(&self, names: &[&str]) {
+        let which: Vec<usize> = names
+            .iter()
+            .filter_map(|n| self.info.formulations.iter().position(|f| f == n))
+            .collect();
+        self.lower(&which);
+    }
     fn formulation(&self, name: &str) -> Result<BoxedSystem, FormulationError> {
         let sys = self.system(name)?;
         if name == crate::dummy::NAME {
@@ -155,6 +266,28 @@ pub struct InterpretedSystem {
     c: Arc<Compiled>,
     params: Vec<f64>,
     scratch: RefCell<Vec<f64>>,
+    /// The patterns of the sparse tapes, made when first asked for.
+    structure: OnceCell<Structure>,
+}
+
+/// The patterns of a formulation's sparse tapes and where each tape output
+/// goes in its pattern's order.
+#[derive(Debug)]
+struct Structure {
+    sparsity: Sparsity,
+    leading: Vec<usize>,
+    rhs_jacobian: Vec<usize>,
+    leading_jacobian: Vec<usize>,
+}
+
+/// The pattern of `sp` (`m × n`) and the position of each output in it.
+fn pattern_of(sp: &Sparse, m: usize, n: usize) -> (Pattern, Vec<usize>) {
+    let cells = || sp.entries.iter().map(|&(i, j)| (i as usize, j as usize));
+    let p = Pattern::from_entries(m, n, cells());
+    let at = cells()
+        .map(|(i, j)| p.position(i, j).expect("every entry is in its pattern"))
+        .collect();
+    (p, at)
 }
 
 impl InterpretedSystem {
@@ -189,7 +322,52 @@ impl InterpretedSystem {
             c,
             params,
             scratch: RefCell::new(vec![0.0; size]),
+            structure: OnceCell::new(),
         }
+    }
+
+    fn structure(&self) -> &Structure {
+        self.structure.get_or_init(|| {
+            let (m, n) = (self.c.info.equations(), self.c.info.unknowns());
+            let (leading, l) = pattern_of(&self.c.leading, m, n);
+            let (rhs_jacobian, r) = pattern_of(&self.c.rhs_jacobian, m, n);
+            let (leading_jacobian, lj) = pattern_of(&self.c.leading_jacobian, m, n);
+            Structure {
+                sparsity: Sparsity {
+                    leading,
+                    rhs_jacobian,
+                    leading_jacobian,
+                },
+                leading: l,
+                rhs_jacobian: r,
+                leading_jacobian: lj,
+            }
+        })
+    }
+
+    /// The outputs of `sp` into `values` at positions `at`.
+    fn values(&self, sp: &Sparse, at: &[usize], inputs: Inputs<'_>, values: &mut [f64]) {
+        let mut s = self.scratch.borrow_mut();
+        sp.tape.eval(&inputs, &mut s);
+        for (k, &pos) in at.iter().enumerate() {
+            values[pos] = sp.tape.output(&s, k);
+        }
+    }
+
+    /// The tapes this system evaluates.
+    ///
+    /// ```
+    /// use dae_core::interp::InterpretedModel;
+    ///
+    /// let m = InterpretedModel::from_str(
+    ///     "pub M { differential { x } algebraic { z } equations { der(x) = -z; 0 = z - x; } }",
+    /// )
+    /// .unwrap();
+    /// let name = m.system("rcd0").map(|s| s.compiled().info.name.clone());
+    /// assert_eq!(name.as_deref(), Ok("rcd0"));
+    /// ```
+    pub fn compiled(&self) -> &Compiled {
+        &self.c
     }
 
     fn dense(&self, tape: &Tape, inputs: Inputs<'_>, out: &mut [f64]) {
@@ -262,6 +440,54 @@ impl DaeSystem for InterpretedSystem {
     }
     fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.dense(&self.c.events, self.inputs(t, y, &[], &[]), out)
+    }
+    fn sparsity(&self) -> Sparsity {
+        self.structure().sparsity.clone()
+    }
+    fn rhs_jacobian_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
+        let s = self.structure();
+        if *pattern != s.sparsity.rhs_jacobian {
+            return gather_dense(pattern, values, |j| self.rhs_jacobian(t, y, j));
+        }
+        let inputs = self.inputs(t, y, &[], &[]);
+        self.values(&self.c.rhs_jacobian, &s.rhs_jacobian, inputs, values)
+    }
+    fn leading_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
+        let s = self.structure();
+        if *pattern != s.sparsity.leading {
+            return gather_dense(pattern, values, |e| self.leading(t, y, e));
+        }
+        let inputs = self.inputs(t, y, &[], &[]);
+        self.values(&self.c.leading, &s.leading, inputs, values)
+    }
+    fn leading_jacobian_values(
+        &self,
+        t: f64,
+        y: &[f64],
+        z: &[f64],
+        pattern: &Pattern,
+        values: &mut [f64],
+    ) {
+        let s = self.structure();
+        if *pattern != s.sparsity.leading_jacobian {
+            return gather_dense(pattern, values, |j| self.leading_jacobian(t, y, z, j));
+        }
+        let inputs = self.inputs(t, y, &[], z);
+        self.values(
+            &self.c.leading_jacobian,
+            &s.leading_jacobian,
+            inputs,
+            values,
+        )
+    }
+}
+
+/// A pattern not the system's own: the dense matrix, then its entries.
+fn gather_dense(pattern: &Pattern, values: &mut [f64], eval: impl FnOnce(&mut DMatrix<f64>)) {
+    let mut m = DMatrix::zeros(pattern.rows, pattern.cols);
+    eval(&mut m);
+    for (v, (r, c)) in values.iter_mut().zip(pattern.entries()) {
+        *v = m[(r, c)];
     }
 }
 

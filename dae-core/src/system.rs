@@ -179,6 +179,161 @@ impl FormulationInfo {
     }
 }
 
+/// The structural non-zeros of a `rows × cols` matrix of a formulation,
+/// in compressed-column form: the entries of column `c` are at rows
+/// `row_idx[col_ptr[c]..col_ptr[c + 1]]`, ascending. An entry outside the
+/// pattern is zero wherever the matrix is evaluated; one inside it may be
+/// zero at some points.
+///
+/// ```
+/// use dae_core::system::Pattern;
+///
+/// let p = Pattern::from_entries(3, 2, [(2, 0), (0, 0), (1, 1)]);
+/// assert_eq!((p.col_ptr.as_slice(), p.row_idx.as_slice()), ([0, 2, 3].as_slice(), [0, 2, 1].as_slice()));
+/// assert!(p.contains(2, 0) && !p.contains(2, 1));
+/// assert_eq!(Pattern::dense(2, 2).nnz(), 4);
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Pattern {
+    /// Number of rows.
+    pub rows: usize,
+    /// Number of columns.
+    pub cols: usize,
+    /// Start of each column's entries in `row_idx` (length `cols + 1`).
+    pub col_ptr: Vec<usize>,
+    /// Row of each entry, column by column, ascending in each.
+    pub row_idx: Vec<usize>,
+}
+
+impl Pattern {
+    /// Every entry: what a system that knows no structure reports.
+    pub fn dense(rows: usize, cols: usize) -> Self {
+        Pattern {
+            rows,
+            cols,
+            col_ptr: (0..=cols).map(|c| c * rows).collect(),
+            row_idx: (0..cols).flat_map(|_| 0..rows).collect(),
+        }
+    }
+
+    /// The entries `(row, column)` given in any order (repeats counted
+    /// once).
+    ///
+    /// # Panics
+    ///
+    /// If an entry is outside `rows × cols` (a programming error).
+    pub fn from_entries(
+        rows: usize,
+        cols: usize,
+        entries: impl IntoIterator<Item = (usize, usize)>,
+    ) -> Self {
+        let mut all: Vec<(usize, usize)> = entries
+            .into_iter()
+            .inspect(|&(r, c)| {
+                assert!(
+                    r < rows && c < cols,
+                    "entry ({r}, {c}) outside {rows}×{cols}"
+                )
+            })
+            .map(|(r, c)| (c, r))
+            .collect();
+        all.sort_unstable();
+        all.dedup();
+        let mut col_ptr = vec![0; cols + 1];
+        for &(c, _) in &all {
+            col_ptr[c + 1] += 1;
+        }
+        for c in 0..cols {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        Pattern {
+            rows,
+            cols,
+            col_ptr,
+            row_idx: all.into_iter().map(|(_, r)| r).collect(),
+        }
+    }
+
+    /// Number of structural non-zeros.
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// Whether `(row, col)` is a structural non-zero.
+    pub fn contains(&self, row: usize, col: usize) -> bool {
+        col < self.cols
+            && self.row_idx[self.col_ptr[col]..self.col_ptr[col + 1]]
+                .binary_search(&row)
+                .is_ok()
+    }
+
+    /// The position in `row_idx` (and in a value array in this order) of
+    /// `(row, col)`, if it is a structural non-zero.
+    pub fn position(&self, row: usize, col: usize) -> Option<usize> {
+        if col >= self.cols {
+            return None;
+        }
+        let (a, b) = (self.col_ptr[col], self.col_ptr[col + 1]);
+        self.row_idx[a..b].binary_search(&row).ok().map(|k| a + k)
+    }
+
+    /// The entries of `self` or `other` (same shape).
+    ///
+    /// # Panics
+    ///
+    /// If the shapes differ (a programming error).
+    pub fn union(&self, other: &Pattern) -> Pattern {
+        assert_eq!(
+            (self.rows, self.cols),
+            (other.rows, other.cols),
+            "Pattern::union: shapes differ"
+        );
+        Pattern::from_entries(self.rows, self.cols, self.entries().chain(other.entries()))
+    }
+
+    /// The entries `(row, column)`, column by column.
+    pub fn entries(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        (0..self.cols).flat_map(move |c| {
+            self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]]
+                .iter()
+                .map(move |&r| (r, c))
+        })
+    }
+}
+
+/// The structural non-zeros of a formulation's matrices, from its
+/// symbolic rows: a Newton iteration matrix `c E − ∂f/∂y + ∂(E z)/∂y` has
+/// at most the union of the three ([`Sparsity::iteration`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Sparsity {
+    /// `E` (M×N).
+    pub leading: Pattern,
+    /// `∂f/∂y` (M×N).
+    pub rhs_jacobian: Pattern,
+    /// `∂(E z)/∂y` (M×N; empty when `E` is constant).
+    pub leading_jacobian: Pattern,
+}
+
+impl Sparsity {
+    /// Every entry of every matrix: what a system that knows no structure
+    /// reports ([`DaeSystem::sparsity`]'s default).
+    pub fn dense(info: &FormulationInfo) -> Self {
+        let (m, n) = (info.equations(), info.unknowns());
+        Sparsity {
+            leading: Pattern::dense(m, n),
+            rhs_jacobian: Pattern::dense(m, n),
+            leading_jacobian: Pattern::dense(m, n),
+        }
+    }
+
+    /// The union of the three: the entries an iteration matrix can have.
+    pub fn iteration(&self) -> Pattern {
+        self.leading
+            .union(&self.rhs_jacobian)
+            .union(&self.leading_jacobian)
+    }
+}
+
 /// A formulation `E(t, y) y' = f(t, y)` ready to integrate.
 ///
 /// All methods write into caller-owned buffers and never allocate. Slices
@@ -279,6 +434,53 @@ pub trait DaeSystem {
     fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
         let _ = (t, y, out);
     }
+
+    /// The structural non-zeros of `E`, `∂f/∂y` and `∂(E z)/∂y`, from the
+    /// symbolic rows. The default, for a system that knows no structure
+    /// (a wrapper), is dense. Allocates: ask once per run.
+    fn sparsity(&self) -> Sparsity {
+        Sparsity::dense(self.info())
+    }
+
+    /// `∂f/∂y` at the entries of `pattern` (this system's
+    /// `sparsity().rhs_jacobian`, or any pattern of its shape), in its
+    /// order, into `values` (length `pattern.nnz()`). The default
+    /// evaluates the dense matrix and picks the entries (allocates).
+    fn rhs_jacobian_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
+        let mut j = DMatrix::zeros(pattern.rows, pattern.cols);
+        self.rhs_jacobian(t, y, &mut j);
+        gather(&j, pattern, values);
+    }
+
+    /// `E` at the entries of `pattern` (see
+    /// [`DaeSystem::rhs_jacobian_values`]).
+    fn leading_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
+        let mut e = DMatrix::zeros(pattern.rows, pattern.cols);
+        self.leading(t, y, &mut e);
+        gather(&e, pattern, values);
+    }
+
+    /// `∂(E z)/∂y` at the entries of `pattern` (see
+    /// [`DaeSystem::rhs_jacobian_values`]).
+    fn leading_jacobian_values(
+        &self,
+        t: f64,
+        y: &[f64],
+        z: &[f64],
+        pattern: &Pattern,
+        values: &mut [f64],
+    ) {
+        let mut j = DMatrix::zeros(pattern.rows, pattern.cols);
+        self.leading_jacobian(t, y, z, &mut j);
+        gather(&j, pattern, values);
+    }
+}
+
+/// The entries of `m` at `pattern`, in its order.
+fn gather(m: &DMatrix<f64>, pattern: &Pattern, values: &mut [f64]) {
+    for (v, (r, c)) in values.iter_mut().zip(pattern.entries()) {
+        *v = m[(r, c)];
+    }
 }
 
 /// Forward every method through a pointer type.
@@ -320,6 +522,25 @@ macro_rules! forward_dae_system {
             }
             fn events(&self, t: f64, y: &[f64], out: &mut [f64]) {
                 (**self).events(t, y, out)
+            }
+            fn sparsity(&self) -> Sparsity {
+                (**self).sparsity()
+            }
+            fn rhs_jacobian_values(&self, t: f64, y: &[f64], p: &Pattern, v: &mut [f64]) {
+                (**self).rhs_jacobian_values(t, y, p, v)
+            }
+            fn leading_values(&self, t: f64, y: &[f64], p: &Pattern, v: &mut [f64]) {
+                (**self).leading_values(t, y, p, v)
+            }
+            fn leading_jacobian_values(
+                &self,
+                t: f64,
+                y: &[f64],
+                z: &[f64],
+                p: &Pattern,
+                v: &mut [f64],
+            ) {
+                (**self).leading_jacobian_values(t, y, z, p, v)
             }
         }
     )*};
@@ -463,6 +684,27 @@ pub trait Model {
     fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), ParameterError>;
     /// Build the named formulation with the current parameter values.
     fn formulation(&self, name: &str) -> Result<BoxedSystem, FormulationError>;
+    /// Make ready the formulations `names` (unknown names are skipped):
+    /// a model that builds its formulations when first asked for
+    /// ([`crate::interp::InterpretedModel::lazy`]) builds these together,
+    /// sharing the work they have in common, before a caller that will
+    /// ask for each of them (a sweep). Nothing for a model that has them
+    /// all already (the default).
+    ///
+    /// ```
+    /// use dae_core::interp::InterpretedModel;
+    /// use dae_core::system::Model;
+    ///
+    /// let m = InterpretedModel::lazy(
+    ///     "pub M { differential { x } algebraic { z } equations { der(x) = -z; 0 = z - x; } }",
+    /// )
+    /// .unwrap();
+    /// m.prepare(&["rcd0", "no such"]);
+    /// assert!(m.formulation("rcd0").is_ok());
+    /// ```
+    fn prepare(&self, names: &[&str]) {
+        let _ = names;
+    }
 }
 
 /// Perturbed points [`chain_pattern`] probes besides the given one.

@@ -529,6 +529,7 @@ pub fn pairs(
     solvers: &[String],
     formulations: &[String],
 ) -> Result<Vec<Pair>, SweepError> {
+    prepare(model, formulations);
     let mut out = Vec::new();
     for s in solvers {
         let solver = dae_solvers::solver_by_name(s)
@@ -554,6 +555,20 @@ pub fn pairs(
         }
     }
     Ok(out)
+}
+
+/// Have `model` build the grid's formulations together (a model read at
+/// run time lowers them when first asked for, sharing the rows they have
+/// in common only when asked together), with the `ovd1`/`ovd0` a
+/// numerical selector builds `psi1`/`psi0` from.
+fn prepare(model: &dyn Model, formulations: &[String]) {
+    let mut names: Vec<&str> = formulations.iter().map(String::as_str).collect();
+    for (psi, source) in [("psi1", "ovd1"), ("psi0", "ovd0")] {
+        if names.contains(&psi) && !names.contains(&source) {
+            names.push(source);
+        }
+    }
+    model.prepare(&names);
 }
 
 /// One run of the grid.
@@ -816,6 +831,9 @@ fn parallel(
     progress: bool,
 ) -> Result<Vec<SweepRun>, SweepError> {
     let threads = threads.min(jobs.len().max(1));
+    let mut formulations: Vec<String> = jobs.iter().map(|j| j.formulation.clone()).collect();
+    formulations.sort();
+    formulations.dedup();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("dae-sweep-{i}"))
@@ -836,7 +854,10 @@ fn parallel(
                     .and_then(|i| models.get(i))
                     .ok_or(SweepError::WorkerPanicked)?;
                 let model = slot.get_or_init(|| match crate::inputs::model(ctx.scene) {
-                    Ok(m) => Some(m),
+                    Ok(m) => {
+                        prepare(&*m, &formulations);
+                        Some(m)
+                    }
                     Err(e) => {
                         if let Ok(mut first) = load_error.lock() {
                             first.get_or_insert(e);

@@ -60,9 +60,27 @@
 //! projection is the exact solve.
 
 use crate::linalg::lstsq::{null_space, split_rows};
+use crate::linalg::sparse::{Pattern, SparseFactor};
 use crate::linalg::{ComplexLu, ConstrainedLstsq, DenseLu, Pivoting, Singular};
 use dae_core::system::{FormulationInfo, RowKind};
 use nalgebra::{Complex, DMatrix};
+
+/// Unknowns from which a square iteration matrix is factorised by the
+/// sparse LU ([`crate::linalg::sparse`]) rather than the dense one, unless
+/// it is denser than [`SPARSE_DENSITY`]. Chosen by measurement
+/// (BENCHMARKS.md §14).
+pub(crate) const SPARSE_FROM: usize = 60;
+
+/// Largest share of structural non-zeros of the first iteration matrix for
+/// which a large system stays on the sparse path; a denser one is
+/// factorised dense from then on.
+pub(crate) const SPARSE_DENSITY: f64 = 0.2;
+
+/// Whether an `n × n` matrix with `nnz` structural non-zeros (the diagonal
+/// included) is factorised sparse.
+fn sparse_enough(n: usize, nnz: usize) -> bool {
+    (nnz as f64) <= SPARSE_DENSITY * (n as f64) * (n as f64)
+}
 
 /// Whether a multistep method's Jacobian (and the iteration matrix formed
 /// from it) is current: the reuse policy DASSL and MEBDF share.
@@ -164,23 +182,83 @@ pub(crate) trait Corrector {
     fn solve(&mut self, b: &mut [f64]);
 }
 
-/// DASSL's LU (LINPACK conventions) for square systems.
-pub(crate) struct SquareLu(DenseLu);
+/// DASSL's LU (LINPACK conventions) for square systems; from
+/// [`SPARSE_FROM`] unknowns on, a sparse LU of the matrix's non-zeros
+/// unless the first matrix is denser than [`SPARSE_DENSITY`].
+pub(crate) struct SquareLu {
+    lu: DenseLu,
+    /// The sparse path: the matrix is written into `a`, then gathered.
+    sparse: Option<SparseLu>,
+}
+
+/// The sparse path of [`SquareLu`].
+struct SparseLu {
+    a: DMatrix<f64>,
+    pattern: Option<Pattern>,
+    factor: SparseFactor<f64>,
+}
 
 impl Corrector for SquareLu {
     const LEAST_SQUARES: bool = false;
     fn new(m: usize, n: usize) -> Self {
         debug_assert_eq!(m, n);
-        SquareLu(DenseLu::new(n, Pivoting::Linpack))
+        if n >= SPARSE_FROM {
+            SquareLu {
+                lu: DenseLu::new(0, Pivoting::Linpack),
+                sparse: Some(SparseLu {
+                    a: DMatrix::zeros(n, n),
+                    pattern: None,
+                    factor: SparseFactor::new(),
+                }),
+            }
+        } else {
+            SquareLu {
+                lu: DenseLu::new(n, Pivoting::Linpack),
+                sparse: None,
+            }
+        }
     }
+    #[inline]
     fn matrix_mut(&mut self) -> &mut DMatrix<f64> {
-        self.0.matrix_mut()
+        match &mut self.sparse {
+            None => self.lu.matrix_mut(),
+            Some(s) => &mut s.a,
+        }
     }
     fn factor(&mut self, _rows: &Rows) -> Result<(), Singular> {
-        self.0.factor()
+        let Some(s) = &mut self.sparse else {
+            return self.lu.factor();
+        };
+        let a = &s.a;
+        let nonzero = |r: usize, c: usize| a[(r, c)] != 0.0;
+        match &mut s.pattern {
+            Some(p) => p.cover(nonzero)?,
+            None => {
+                let n = a.nrows();
+                let p = Pattern::new(n, nonzero)?;
+                if !sparse_enough(n, p.nnz()) {
+                    // Too dense to gain: the dense LU from now on.
+                    let mut lu = DenseLu::new(n, Pivoting::Linpack);
+                    lu.matrix_mut().copy_from(a);
+                    self.lu = lu;
+                    self.sparse = None;
+                    return self.lu.factor();
+                }
+                s.pattern = Some(p);
+            }
+        }
+        let p = s.pattern.as_ref().expect("the pattern was made above");
+        s.factor.factor(p, |r, c| a[(r, c)])
     }
+    #[inline]
     fn solve(&mut self, b: &mut [f64]) {
-        self.0.solve(b)
+        match &mut self.sparse {
+            None => self.lu.solve(b),
+            Some(s) => {
+                let p = s.pattern.as_ref().expect("solve follows a factorisation");
+                s.factor.solve(p, b)
+            }
+        }
     }
 }
 
@@ -225,19 +303,54 @@ pub(crate) trait StageSystems {
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]);
 }
 
-/// RADAU5's two LU factorisations (non-finite pivots count as singular).
+/// RADAU5's two LU factorisations (non-finite pivots count as singular):
+/// dense, or from [`SPARSE_FROM`] unknowns on sparse (one pattern and
+/// analysis for both, unless the first matrix is denser than
+/// [`SPARSE_DENSITY`]).
 pub(crate) struct SquareStages {
     real: DenseLu,
     complex: ComplexLu,
+    sparse: Option<SparseStages>,
+}
+
+/// The sparse path of [`SquareStages`].
+struct SparseStages {
+    n: usize,
+    pattern: Option<Pattern>,
+    real: SparseFactor<f64>,
+    complex: SparseFactor<Complex<f64>>,
+    /// The complex right-hand side, then the solution.
+    buf: Vec<Complex<f64>>,
+}
+
+impl SquareStages {
+    /// The dense factorisations for `n` unknowns.
+    fn dense(n: usize) -> Self {
+        SquareStages {
+            real: DenseLu::new(n, Pivoting::Checked),
+            complex: ComplexLu::new(n),
+            sparse: None,
+        }
+    }
 }
 
 impl StageSystems for SquareStages {
     const LEAST_SQUARES: bool = false;
     fn new(m: usize, n: usize) -> Self {
         debug_assert_eq!(m, n);
-        SquareStages {
-            real: DenseLu::new(n, Pivoting::Checked),
-            complex: ComplexLu::new(n),
+        if n >= SPARSE_FROM {
+            SquareStages {
+                sparse: Some(SparseStages {
+                    n,
+                    pattern: None,
+                    real: SparseFactor::new(),
+                    complex: SparseFactor::new(),
+                    buf: vec![Complex::new(0.0, 0.0); n],
+                }),
+                ..SquareStages::dense(0)
+            }
+        } else {
+            SquareStages::dense(n)
         }
     }
     fn factor(
@@ -249,6 +362,29 @@ impl StageSystems for SquareStages {
         b: f64,
         _rows: &Rows,
     ) -> Result<(), Singular> {
+        if let Some(s) = &mut self.sparse {
+            let nonzero = |r: usize, c: usize| e[(r, c)] != 0.0 || j[(r, c)] != 0.0;
+            match &mut s.pattern {
+                Some(p) => p.cover(nonzero)?,
+                None => {
+                    let p = Pattern::new(s.n, nonzero)?;
+                    if sparse_enough(s.n, p.nnz()) {
+                        s.pattern = Some(p);
+                    } else {
+                        // Too dense to gain: the dense LUs from now on.
+                        *self = SquareStages::dense(s.n);
+                    }
+                }
+            }
+        }
+        if let Some(s) = &mut self.sparse {
+            let p = s.pattern.as_ref().expect("the pattern was made above");
+            s.real.factor(p, |r, c| g * e[(r, c)] - j[(r, c)])?;
+            return s.complex.factor(p, |r, c| {
+                let (e, j) = (e[(r, c)], j[(r, c)]);
+                Complex::new(a * e - j, b * e)
+            });
+        }
         // E and J are column-major N × N, like the factors.
         let (e, j) = (e.as_slice(), j.as_slice());
         let len = e.len();
@@ -268,11 +404,29 @@ impl StageSystems for SquareStages {
     }
     #[inline]
     fn solve_real(&mut self, x: &mut [f64]) {
-        self.real.solve(x)
+        match &mut self.sparse {
+            None => self.real.solve(x),
+            Some(s) => {
+                let p = s.pattern.as_ref().expect("solve follows a factorisation");
+                s.real.solve(p, x)
+            }
+        }
     }
     #[inline]
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]) {
-        self.complex.solve(re, im);
+        match &mut self.sparse {
+            None => self.complex.solve(re, im),
+            Some(s) => {
+                let p = s.pattern.as_ref().expect("solve follows a factorisation");
+                for (z, (&r, &i)) in s.buf.iter_mut().zip(re.iter().zip(im.iter())) {
+                    *z = Complex::new(r, i);
+                }
+                s.complex.solve(p, &mut s.buf);
+                for (z, (r, i)) in s.buf.iter().zip(re.iter_mut().zip(im.iter_mut())) {
+                    (*r, *i) = (z.re, z.im);
+                }
+            }
+        }
     }
 }
 

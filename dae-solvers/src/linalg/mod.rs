@@ -75,6 +75,7 @@ pub(crate) use with_size;
 pub(crate) mod lstsq;
 pub(crate) mod lu;
 pub(crate) mod small;
+pub(crate) mod sparse;
 
 pub(crate) use lstsq::ConstrainedLstsq;
 pub(crate) use lu::{ComplexLu, DenseLu, Pivoting, Singular};
