@@ -69,7 +69,11 @@ use nalgebra::{Complex, DMatrix};
 /// sparse LU ([`crate::linalg::sparse`]) rather than the dense one, unless
 /// it is denser than [`SPARSE_DENSITY`]. Chosen by measurement
 /// (BENCHMARKS.md §14).
-pub(crate) const SPARSE_FROM: usize = 60;
+pub(crate) const SPARSE_FROM: usize = if cfg!(feature = "sparse") {
+    60
+} else {
+    usize::MAX
+};
 
 /// Largest share of structural non-zeros of the first iteration matrix for
 /// which a large system stays on the sparse path; a denser one is

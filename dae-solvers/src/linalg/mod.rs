@@ -75,6 +75,10 @@ pub(crate) use with_size;
 pub(crate) mod lstsq;
 pub(crate) mod lu;
 pub(crate) mod small;
+#[cfg(feature = "sparse")]
+pub(crate) mod sparse;
+#[cfg(not(feature = "sparse"))]
+#[path = "sparse_off.rs"]
 pub(crate) mod sparse;
 
 pub(crate) use lstsq::ConstrainedLstsq;
