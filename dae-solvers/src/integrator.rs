@@ -283,7 +283,11 @@ impl<'a> Integrator<'a> {
     /// Run to `t_end` and return the [`Solution`]: the output times of
     /// [`Options::output_times`], the step points and dense output when
     /// asked, and the work counters — what
-    /// [`Solver::solve`](crate::Solver::solve) returns.
+    /// [`Solver::solve`](crate::Solver::solve) returns, unless a reset
+    /// event ([`EventAction::Reset`](crate::EventAction::Reset)) fires: one
+    /// stepper integrates up to the reset and stops there, while
+    /// `Solver::solve` starts a new stepper from the reset values and goes
+    /// on to `t_end`.
     pub fn finish(self) -> Result<Solution, SolveError> {
         self.run().map_err(|stopped| stopped.error)
     }
