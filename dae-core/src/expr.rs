@@ -677,6 +677,21 @@ impl Expr {
     /// Call `f` on the symbols below, each distinct node visited once (a
     /// symbol may be reported more than once); stop when `f` returns
     /// `false`.
+    /// Push the children onto an explicit walk's stack, last first, so
+    /// that they come off it in order.
+    fn push_children<'a>(&'a self, stack: &mut Vec<&'a Expr>) {
+        match self {
+            Expr::Sum(sum) => stack.extend(sum.terms.iter().rev().map(|(t, _)| t)),
+            Expr::Prod(p) => stack.extend(p.factors.iter().rev().map(|(b, _)| b)),
+            Expr::Pow(p) => {
+                stack.push(&p.exponent);
+                stack.push(&p.base);
+            }
+            Expr::Func(c) => stack.push(&c.arg),
+            Expr::Num(_) | Expr::Sym(_) => {}
+        }
+    }
+
     fn visit_syms(&self, f: &mut dyn FnMut(Sym) -> bool) {
         // Below this size a walk of the tree is cheaper than remembering
         // the shared nodes.
@@ -701,16 +716,7 @@ impl Expr {
             if remember && e.size() > 16 && !seen.insert(ptr) {
                 continue;
             }
-            match e {
-                Expr::Sum(sum) => stack.extend(sum.terms.iter().rev().map(|(t, _)| t)),
-                Expr::Prod(p) => stack.extend(p.factors.iter().rev().map(|(b, _)| b)),
-                Expr::Pow(p) => {
-                    stack.push(&p.exponent);
-                    stack.push(&p.base);
-                }
-                Expr::Func(c) => stack.push(&c.arg),
-                Expr::Num(_) | Expr::Sym(_) => {}
-            }
+            e.push_children(&mut stack);
         }
     }
 
@@ -743,16 +749,7 @@ impl Expr {
                 }
                 continue;
             }
-            match e {
-                Expr::Sum(sum) => stack.extend(sum.terms.iter().rev().map(|(t, _)| t)),
-                Expr::Prod(p) => stack.extend(p.factors.iter().rev().map(|(b, _)| b)),
-                Expr::Pow(p) => {
-                    stack.push(&p.exponent);
-                    stack.push(&p.base);
-                }
-                Expr::Func(c) => stack.push(&c.arg),
-                Expr::Num(_) | Expr::Sym(_) => {}
-            }
+            e.push_children(&mut stack);
         }
         None
     }

@@ -486,9 +486,7 @@ impl DaeSystem for InterpretedSystem {
 fn gather_dense(pattern: &Pattern, values: &mut [f64], eval: impl FnOnce(&mut DMatrix<f64>)) {
     let mut m = DMatrix::zeros(pattern.rows, pattern.cols);
     eval(&mut m);
-    for (v, (r, c)) in values.iter_mut().zip(pattern.entries()) {
-        *v = m[(r, c)];
-    }
+    crate::system::gather(&m, pattern, values);
 }
 
 impl InterpretedSystem {

@@ -477,7 +477,7 @@ pub trait DaeSystem {
 }
 
 /// The entries of `m` at `pattern`, in its order.
-fn gather(m: &DMatrix<f64>, pattern: &Pattern, values: &mut [f64]) {
+pub(crate) fn gather(m: &DMatrix<f64>, pattern: &Pattern, values: &mut [f64]) {
     for (v, (r, c)) in values.iter_mut().zip(pattern.entries()) {
         *v = m[(r, c)];
     }
