@@ -5,6 +5,7 @@
 use crate::compile::{compile_all, compile_selected, Compiled, Sparse};
 use crate::derive::Derived;
 use crate::expr::Expr;
+use crate::system::gather_dense;
 use crate::system::{
     check_parameter, BoxedSystem, DaeSystem, FormulationError, FormulationInfo, Model, ModelInfo,
     ParameterError, Pattern, Sparsity,
@@ -480,13 +481,6 @@ impl DaeSystem for InterpretedSystem {
             values,
         )
     }
-}
-
-/// A pattern not the system's own: the dense matrix, then its entries.
-fn gather_dense(pattern: &Pattern, values: &mut [f64], eval: impl FnOnce(&mut DMatrix<f64>)) {
-    let mut m = DMatrix::zeros(pattern.rows, pattern.cols);
-    eval(&mut m);
-    crate::system::gather(&m, pattern, values);
 }
 
 impl InterpretedSystem {

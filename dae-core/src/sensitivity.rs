@@ -247,16 +247,13 @@ pub struct SensitivitySystem {
     param_cols: Vec<usize>,
     /// The state's rows' rows in the augmented formulation.
     row_of: Vec<usize>,
-    /// The sensitivity parameters' positions in the state's
-    /// `parameter_values`.
-    param_values: Vec<usize>,
     /// `E` of the state (constant).
     e: DMatrix<f64>,
     scratch: RefCell<Scratch>,
 }
 
 struct Scratch {
-    /// The augmented point `[y, p]`.
+    /// The augmented point `[y, p]` (the parameters' columns set once).
     point: Vec<f64>,
     /// The augmented formulation's Jacobian (rows × unknowns).
     jac: DMatrix<f64>,
@@ -308,11 +305,9 @@ fn match_numerically(
     state: &dyn DaeSystem,
     augmented: &dyn DaeSystem,
     var_cols: &[usize],
-    param_cols: &[usize],
-    params: &[String],
+    parameters_point: &[f64],
 ) -> Result<(Vec<usize>, bool), String> {
     let (si, ai) = (state.info(), augmented.info());
-    let values = state.parameter_values();
     let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
     let mut random = move || {
         seed = seed
@@ -327,18 +322,10 @@ fn match_numerically(
         let t = random();
         let y: Vec<f64> = (0..si.unknowns()).map(|_| random()).collect();
         let yp: Vec<f64> = (0..si.unknowns()).map(|_| random()).collect();
-        let (mut ya, mut ypa) = (vec![0.0; ai.unknowns()], vec![0.0; ai.unknowns()]);
+        let (mut ya, mut ypa) = (parameters_point.to_vec(), vec![0.0; ai.unknowns()]);
         for (j, &c) in var_cols.iter().enumerate() {
             ya[c] = y[j];
             ypa[c] = yp[j];
-        }
-        for (p, &c) in params.iter().zip(param_cols) {
-            let k = si
-                .parameters
-                .iter()
-                .position(|q| q == p)
-                .ok_or(format!("parameter `{p}`"))?;
-            ya[c] = values[k];
         }
         let (mut rs, mut ra) = (vec![0.0; si.equations()], vec![0.0; ai.equations()]);
         state.residual(t, &y, &yp, &mut rs);
@@ -408,9 +395,22 @@ impl SensitivitySystem {
                     .ok_or_else(|| rows_error(format!("parameter `{p}`")))
             })
             .collect::<Result<Vec<_>, _>>()?;
+        // The augmented point with the state's parameter values in the
+        // sensitivity parameters' columns: they never change (a system's
+        // parameters are fixed), so the scratch point keeps them and each
+        // evaluation writes only the state's columns.
+        let values = state.parameter_values();
+        let mut point = vec![0.0; ai.unknowns()];
+        for (p, &c) in params.iter().zip(&param_cols) {
+            let k = si
+                .parameters
+                .iter()
+                .position(|q| q == p)
+                .ok_or_else(|| rows_error(format!("parameter `{p}` of the state")))?;
+            point[c] = values[k];
+        }
         let (row_of, same_chain) =
-            match_numerically(&*state, &*augmented, &var_cols, &param_cols, params)
-                .map_err(rows_error)?;
+            match_numerically(&*state, &*augmented, &var_cols, &point).map_err(rows_error)?;
         if !same_chain {
             return Err(rows_error("the constraint chains differ".into()));
         }
@@ -447,22 +447,13 @@ impl SensitivitySystem {
         let mut e = DMatrix::zeros(m, n);
         state.leading(0.0, &vec![0.0; n], &mut e);
         let scratch = RefCell::new(Scratch {
-            point: vec![0.0; ai.unknowns()],
+            point,
             jac: DMatrix::zeros(ai.equations(), ai.unknowns()),
             cjac: DMatrix::zeros(k, ai.unknowns()),
             block: DMatrix::zeros(m, n),
             cblock: DMatrix::zeros(k, n),
             f: vec![0.0; m * (1 + np)],
         });
-        let param_values = params
-            .iter()
-            .map(|p| {
-                si.parameters
-                    .iter()
-                    .position(|q| q == p)
-                    .ok_or_else(|| rows_error(format!("parameter `{p}` of the state")))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
         Ok(SensitivitySystem {
             state,
             augmented,
@@ -470,7 +461,6 @@ impl SensitivitySystem {
             var_cols,
             param_cols,
             row_of,
-            param_values,
             e,
             scratch,
         })
@@ -518,14 +508,11 @@ impl SensitivitySystem {
         self.param_cols.len()
     }
 
-    /// The augmented point `[y, p]` of the state's `y` into the scratch.
+    /// The augmented point `[y, p]` of the state's `y` into the scratch
+    /// (the parameters' columns hold their values from the start).
     fn lift(&self, s: &mut Scratch, y: &[f64]) {
         for (j, &c) in self.var_cols.iter().enumerate() {
             s.point[c] = y[j];
-        }
-        let values = self.state.parameter_values();
-        for (&c, &k) in self.param_cols.iter().zip(&self.param_values) {
-            s.point[c] = values[k];
         }
     }
 

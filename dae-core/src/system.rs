@@ -447,17 +447,13 @@ pub trait DaeSystem {
     /// order, into `values` (length `pattern.nnz()`). The default
     /// evaluates the dense matrix and picks the entries (allocates).
     fn rhs_jacobian_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
-        let mut j = DMatrix::zeros(pattern.rows, pattern.cols);
-        self.rhs_jacobian(t, y, &mut j);
-        gather(&j, pattern, values);
+        gather_dense(pattern, values, |j| self.rhs_jacobian(t, y, j));
     }
 
     /// `E` at the entries of `pattern` (see
     /// [`DaeSystem::rhs_jacobian_values`]).
     fn leading_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
-        let mut e = DMatrix::zeros(pattern.rows, pattern.cols);
-        self.leading(t, y, &mut e);
-        gather(&e, pattern, values);
+        gather_dense(pattern, values, |e| self.leading(t, y, e));
     }
 
     /// `∂(E z)/∂y` at the entries of `pattern` (see
@@ -470,14 +466,20 @@ pub trait DaeSystem {
         pattern: &Pattern,
         values: &mut [f64],
     ) {
-        let mut j = DMatrix::zeros(pattern.rows, pattern.cols);
-        self.leading_jacobian(t, y, z, &mut j);
-        gather(&j, pattern, values);
+        gather_dense(pattern, values, |j| self.leading_jacobian(t, y, z, j));
     }
 }
 
-/// The entries of `m` at `pattern`, in its order.
-pub(crate) fn gather(m: &DMatrix<f64>, pattern: &Pattern, values: &mut [f64]) {
+/// The entries at `pattern` of the matrix `eval` writes (into a dense
+/// matrix of the pattern's shape), in the pattern's order: the `*_values`
+/// of a system without sparse evaluation, or of a pattern not its own.
+pub(crate) fn gather_dense(
+    pattern: &Pattern,
+    values: &mut [f64],
+    eval: impl FnOnce(&mut DMatrix<f64>),
+) {
+    let mut m = DMatrix::zeros(pattern.rows, pattern.cols);
+    eval(&mut m);
     for (v, (r, c)) in values.iter_mut().zip(pattern.entries()) {
         *v = m[(r, c)];
     }
