@@ -46,8 +46,9 @@
 //! It is a method for oscillatory, non-stiff mechanical systems over long
 //! horizons, not for stiff ones: `|R(∞)| = 1` damps nothing, and the held
 //! step cannot follow a fast transient. On Andrews' squeezer it reaches the
-//! end at some tolerances only (rcd0 at 1e-4 and 1e-6; Newton failure at
-//! 1e-8). In natural form (a state-dependent mass matrix, whose rcd0 the
+//! end at 1e-4 … 1e-9 on `rcd0` and 1e-4 … 1e-8 on `mex0`, and fails
+//! (`newton_failure`) at 1e-10 and at 1e-9 respectively (BENCHMARKS §11).
+//! In natural form (a state-dependent mass matrix, whose rcd0 the
 //! solvers make semi-explicit at run time, `core/eliminate.rs`) it reaches
 //! the end at 1e-4 … 1e-10 with 135–1 480 steps (radau5: 346–5 711).
 
@@ -110,6 +111,27 @@
 //! linearised with the iteration's Jacobian on the algebraic rows (the
 //! constraint rows whose row of `E` is zero). For `rcd0` this recomputes
 //! `λ` alone.
+//!
+//! # Dense output: projected the same way
+//!
+//! Between the step points the collocation polynomial meets the algebraic
+//! rows at the nodes only and misses them elsewhere by its interpolation
+//! error, `O(h⁴)` against the step points' `O(h⁷)`: with the long steps an
+//! order-6 method takes, that was 100 times the tolerance on Andrews'
+//! squeezer (`mex0` at tol 1e-7: position residual 1.7e-5 between steps).
+//! The values reported at output times ([`crate::Options::output_times`],
+//! [`crate::Integrator::advance_to`]) are therefore projected as the end point is
+//! (the same factorised matrix, up to three simplified Newton steps with
+//! `f` re-evaluated, each counted in `residual_evals`): the position
+//! residual of that run at `dae run`'s verification samples falls to
+//! 3.2e-9. On the pendulum's `psi0` the outputs lie on the circle to
+//! round-off; `rcd0`'s `λ` at the output times is the consistent one. The
+//! stored dense output ([`crate::DenseOutput`], [`crate::Solution::at`])
+//! and event location keep the collocation polynomial: a polynomial
+//! through projected values would miss the constraints between them by the
+//! same `O(h⁴)`, and the projection needs the system, which a
+//! [`crate::Solution`] does not hold. Ask for the times you need as
+//! output times.
 
 //! # Example
 //!

@@ -266,14 +266,14 @@ impl<'a> Integrator<'a> {
         if t == self.t0 {
             self.out.copy_from_slice(&self.y0);
         } else if t > self.t_prev {
-            self.method.dense(t, &mut self.out);
+            self.method.output(t, &mut self.out);
         } else if let Some(dense) = self.record.dense() {
             dense
                 .at_into(t, &mut self.out)
                 .map_err(|_| reach(self.t0))?;
         } else if t == self.t_prev {
             // The start of the last step.
-            self.method.dense(t, &mut self.out);
+            self.method.output(t, &mut self.out);
         } else {
             return Err(reach(self.t_prev));
         }

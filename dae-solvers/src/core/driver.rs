@@ -53,6 +53,13 @@ pub(crate) trait Method {
     /// Dense output of the last accepted step at `tau` (inside it) into
     /// `out`.
     fn dense(&self, tau: f64, out: &mut [f64]);
+    /// The value reported at an output time `tau` inside the last accepted
+    /// step: the dense output, unless the method corrects it (`gauss`
+    /// projects it onto its algebraic rows as it projects its end points;
+    /// the stored [`DenseOutput`] and event location keep the polynomial).
+    fn output(&self, tau: f64, out: &mut [f64]) {
+        self.dense(tau, out);
+    }
     /// An upper bound of the degree of the dense output polynomial of
     /// every step of this run (what [`DenseOutput`] samples).
     fn dense_degree(&self) -> usize;
@@ -114,7 +121,7 @@ impl Record {
     /// step's dense output if asked.
     pub(crate) fn after_step<M: Method + ?Sized>(&mut self, method: &M) {
         self.grid
-            .emit(method.t(), |tau, out| method.dense(tau, out));
+            .emit(method.t(), |tau, out| method.output(tau, out));
         if self.record_steps {
             let steps = &mut self.steps;
             method.step_points(&mut |t, y| steps.push((t, y.to_vec())));
@@ -128,7 +135,7 @@ impl Record {
     /// the step) with the dense-output value `y` there: what
     /// [`Record::after_step`] does, for the step up to `t`.
     pub(crate) fn after_step_until<M: Method + ?Sized>(&mut self, method: &M, t: f64, y: &[f64]) {
-        self.grid.emit(t, |tau, out| method.dense(tau, out));
+        self.grid.emit(t, |tau, out| method.output(tau, out));
         if self.record_steps {
             self.steps.push((t, y.to_vec()));
         }
@@ -241,6 +248,9 @@ impl<A: Method, B: Method, F: FnOnce(&A, &[Vec<f64>]) -> Option<B>> Method for S
     }
     fn dense(&self, tau: f64, out: &mut [f64]) {
         self.current().dense(tau, out)
+    }
+    fn output(&self, tau: f64, out: &mut [f64]) {
+        self.current().output(tau, out)
     }
     fn dense_degree(&self) -> usize {
         self.degree

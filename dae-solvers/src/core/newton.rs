@@ -86,7 +86,7 @@ const STAGNANT: f64 = 0.9;
 /// 9.57 significant digits, the arithmetic's limit on this problem. Elsewhere
 /// only `rcd0` at tol ≤ 1e-10 moved (S01 3 of 248 runs, S02 4 of 68 at
 /// 1e-9…1e-12: fewer rejected steps, errors within ±13 %; BENCHMARKS §2d).
-const ROUND_OFF_FLOOR: f64 = 0.3;
+pub(crate) const ROUND_OFF_FLOOR: f64 = 0.3;
 
 /// State of one Newton iteration (see the [module documentation](self)).
 pub(crate) struct Contraction {
@@ -113,7 +113,27 @@ pub(crate) struct Contraction {
     /// round-off: [`ROUND_OFF_FLOOR`] for the RADAU5 rule, 0 (never, DASSL's
     /// own rule) for the DASSL rule, unless a method sets its own.
     pub(crate) floor: f64,
+    /// A second, higher floor for a method whose `floor` is a few hundred
+    /// units of round-off (`gauss`, iterating towards round-off): increments
+    /// that stagnate at or below it count as converged too, but only when
+    /// the iteration contracted strongly at first (`θ_first` ≤
+    /// [`FIRST_CONTRACTION`]), so the matrix is good and the stagnation is
+    /// the round-off of a badly scaled problem, not slow convergence. 0:
+    /// none.
+    pub(crate) noise_floor: f64,
 }
+
+/// The first contraction `q₂` at or below which an iteration's later
+/// stagnation under [`Contraction::noise_floor`] is taken for round-off.
+///
+/// Measured on Andrews' squeezer, `gauss(rcd0)` at tol 1e-8 (every
+/// increment printed): `q₂` is 2·10⁻⁴ … 5·10⁻³ at steps of 10⁻⁵ … 6·10⁻⁸,
+/// and the increments then stagnate at 3–7·10⁻⁷ (weighted), some 10⁶ units
+/// of round-off, where the drift bound asks for 10⁻¹¹: every attempt was
+/// declared divergent until the step collapsed (`newton_failure` at
+/// t = 0.0227). A stale or poor iteration matrix contracts at 0.1 or worse
+/// from the start; 0.01 keeps those out.
+const FIRST_CONTRACTION: f64 = 0.01;
 
 impl Contraction {
     /// A monitor for `rule` converging at `η ‖Δ‖ ≤ kappa`; `eta` is the
@@ -134,6 +154,7 @@ impl Contraction {
                 Rule::Radau5 { .. } => ROUND_OFF_FLOOR,
                 Rule::Dassl => 0.0,
             },
+            noise_floor: 0.0,
         }
     }
 
@@ -174,7 +195,10 @@ impl Contraction {
                         (q * self.q_prev).sqrt()
                     };
                     self.q_prev = q;
-                    if q.max(self.theta) >= STAGNANT && norm <= self.floor {
+                    if q.max(self.theta) >= STAGNANT
+                        && (norm <= self.floor
+                            || (norm <= self.noise_floor && self.theta_first <= FIRST_CONTRACTION))
+                    {
                         return Verdict::Converged;
                     }
                     if self.theta >= 0.99 {
@@ -299,5 +323,44 @@ mod tests {
         let mut c = Contraction::new(Rule::Radau5 { slow_exit: true }, 7, 1e-5, 1.0);
         assert_eq!(c.observe(0.6, 0.0), Verdict::Continue);
         assert_eq!(c.observe(0.62, 0.0), Verdict::Diverged);
+    }
+
+    #[test]
+    fn noise_floor_accepts_round_off_stagnation_after_a_strong_contraction_only() {
+        // gauss: a floor of a few hundred units of round-off, and the noise
+        // floor at 0.3. The squeezer's rcd0 at 1e-8 (h = 9.4e-7): 0.89,
+        // 2e-4, 8.5e-7, 4.2e-7, 3.6e-7, 7.3e-7 — stagnation at round-off.
+        let gauss = || {
+            let mut c = Contraction::new(Rule::Radau5 { slow_exit: false }, 20, 1e-11, 1.0);
+            c.floor = 1e-13;
+            c.noise_floor = ROUND_OFF_FLOOR;
+            c.restart(20, 1.0, 0.001);
+            c
+        };
+        let mut c = gauss();
+        for norm in [0.89, 2e-4, 8.5e-7, 4.2e-7, 3.6e-7] {
+            assert_eq!(c.observe(norm, 0.0), Verdict::Continue);
+        }
+        assert_eq!(c.observe(7.3e-7, 0.0), Verdict::Converged);
+        // Without the noise floor (before): divergence.
+        let mut c = gauss();
+        c.noise_floor = 0.0;
+        for norm in [0.89, 2e-4, 8.5e-7, 4.2e-7, 3.6e-7] {
+            assert_eq!(c.observe(norm, 0.0), Verdict::Continue);
+        }
+        assert_eq!(c.observe(7.3e-7, 0.0), Verdict::Diverged);
+        // A weak first contraction (a poor matrix): the same stagnation is
+        // not taken for round-off.
+        let mut c = gauss();
+        for norm in [1e-3, 2e-4] {
+            assert_eq!(c.observe(norm, 0.0), Verdict::Continue);
+        }
+        assert_eq!(c.observe(2.1e-4, 0.0), Verdict::Continue);
+        // With a strong first contraction it would have been converged.
+        let mut c = gauss();
+        for norm in [1e-3, 5e-6] {
+            assert_eq!(c.observe(norm, 0.0), Verdict::Continue);
+        }
+        assert_eq!(c.observe(5.2e-6, 0.0), Verdict::Converged);
     }
 }

@@ -16,6 +16,15 @@ use crate::options::Options;
 use crate::SolveError;
 use dae_core::system::{FormulationInfo, RowKind};
 use nalgebra::DMatrix;
+use std::cell::RefCell;
+
+/// Most simplified Newton steps of the projected dense output
+/// ([`Integrator::project_output`]).
+const OUTPUT_PROJECTION_STEPS: usize = 3;
+
+/// The projected dense output stops at a correction of this weighted norm
+/// (a thousandth of the tolerance).
+const OUTPUT_PROJECTION_FLOOR: f64 = 1e-3;
 
 /// Every buffer the step loop touches, allocated once (`N` unknowns, `M`
 /// equations).
@@ -84,6 +93,17 @@ pub(super) struct Work<S> {
     pub(super) projection_small: DenseLu,
     /// Its right-hand side, then the correction.
     pub(super) delta: Vec<f64>,
+    /// Scratch of the projected dense output ([`Integrator::project_output`]),
+    /// which runs through `&self`: `f` at the output point, the correction,
+    /// and the residual evaluations made (added to the statistics).
+    pub(super) output: RefCell<OutputScratch>,
+}
+
+/// Buffers of [`Integrator::project_output`].
+pub(super) struct OutputScratch {
+    f: Vec<f64>,
+    delta: Vec<f64>,
+    pub(super) residual_evals: usize,
 }
 
 impl<S: StageSystems> Work<S> {
@@ -133,6 +153,11 @@ impl<S: StageSystems> Work<S> {
             algebraic_unknowns: Vec::new(),
             projection_small: DenseLu::new(0, Pivoting::Checked),
             delta: v(if K::END.is_some() { n } else { 0 }),
+            output: RefCell::new(OutputScratch {
+                f: v(if K::END.is_some() { m } else { 0 }),
+                delta: v(if K::END.is_some() { n } else { 0 }),
+                residual_evals: 0,
+            }),
         }
     }
 }
@@ -418,6 +443,67 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
             *f += d;
         }
         Ok((false, size))
+    }
+
+    /// Project a value `u` of the dense output at `tau` (inside the step
+    /// just accepted) as the end point was projected
+    /// ([`Integrator::project`]): the differential part kept, the algebraic
+    /// rows `f_a(tau, u) = 0` solved by simplified Newton steps with the
+    /// end-point projection's factorised matrix (rows of `E` and of the
+    /// iteration's `J`), at most [`OUTPUT_PROJECTION_STEPS`], until the
+    /// correction is below the Newton floor. Only for a method that is not
+    /// stiffly accurate and has algebraic rows (`gauss` on `rcd0`, `psi0`,
+    /// `mex0`): its collocation polynomial meets the constraints at the
+    /// nodes only, and between them misses them by its interpolation error,
+    /// `O(h⁴)` — 100 times the tolerance on Andrews' squeezer, where the
+    /// order-6 step points allow long steps.
+    pub(super) fn project_output(&self, tau: f64, u: &mut [f64]) {
+        let w = &self.w;
+        if w.algebraic.is_empty() {
+            return;
+        }
+        let mut scratch = w.output.borrow_mut();
+        let OutputScratch {
+            f,
+            delta,
+            residual_evals,
+        } = &mut *scratch;
+        for _ in 0..OUTPUT_PROJECTION_STEPS {
+            self.sys.rhs(tau, u, f);
+            *residual_evals += 1;
+            let k = w.algebraic.len();
+            if w.algebraic_unknowns.is_empty() {
+                delta.fill(0.0);
+                for &i in &w.algebraic {
+                    delta[i] = -f[i];
+                }
+                w.projection.solve(delta);
+                if !all_finite(delta) {
+                    return;
+                }
+                for (x, d) in u.iter_mut().zip(delta.iter()) {
+                    *x += d;
+                }
+            } else {
+                let mu = &mut delta[..k];
+                for (m, &i) in mu.iter_mut().zip(&w.algebraic) {
+                    *m = -f[i];
+                }
+                w.projection_small.solve(mu);
+                if !all_finite(mu) {
+                    return;
+                }
+                for (&j, d) in w.algebraic_unknowns.iter().zip(mu.iter()) {
+                    u[j] += d;
+                }
+                // Linear in the algebraic unknowns (`rcd0`'s λ): one step
+                // is exact up to the iteration's `J`.
+                return;
+            }
+            if w.weights.norm(&delta[..self.n]) <= OUTPUT_PROJECTION_FLOOR {
+                return;
+            }
+        }
     }
 
     /// [`Integrator::project`] when `E` is constant and its zero columns

@@ -76,6 +76,12 @@ impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
             out,
         )
     }
+    fn output(&self, tau: f64, out: &mut [f64]) {
+        self.dense(tau, out);
+        if K::END.is_some() {
+            self.project_output(tau, out);
+        }
+    }
     fn dense_degree(&self) -> usize {
         // The collocation polynomial of three stages.
         3
@@ -87,7 +93,9 @@ impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
         attempt::step(self)
     }
     fn stats(&self) -> Stats {
-        self.stats
+        let mut stats = self.stats;
+        stats.residual_evals += self.w.output.borrow().residual_evals;
+        stats
     }
 }
 
@@ -171,6 +179,9 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             // Iterating towards round-off: stagnation counts as convergence
             // only at a few hundred units of round-off.
             newton.floor = ROUND_OFF * UROUND / r;
+            // Unless the increments stagnate at the problem's own round-off
+            // after a strong first contraction: see `noise_floor`.
+            newton.noise_floor = crate::core::newton::ROUND_OFF_FLOOR;
         }
         Integrator {
             sys: sys.clone(),
