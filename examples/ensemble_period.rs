@@ -19,6 +19,7 @@ use dae::ensemble::Ensemble;
 use dae::prelude::*;
 use dae::sweep::plot::{self, Figure, Line, Look, Marker, Markers, Panel, Series};
 use plotters::style::RGBColor;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 dae! {
@@ -162,9 +163,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(threads) = args.threads {
         ensemble = ensemble.threads(threads);
     }
+    // Members per worker thread: the evidence of the parallel run that
+    // does not depend on the machine's load (a count, not a time).
+    let workers = args.threads.unwrap_or_else(rayon::current_num_threads);
+    let per_thread: Vec<AtomicUsize> = (0..workers).map(|_| AtomicUsize::new(0)).collect();
     let wall = Instant::now();
     let cpu = cpu_time::ProcessTime::try_now().ok();
-    let results = ensemble.run(&theta, |&t| measured_period(&model, t))?;
+    let results = ensemble.run(&theta, |&t| {
+        if let Some(slot) = rayon::current_thread_index().and_then(|i| per_thread.get(i)) {
+            slot.fetch_add(1, Ordering::Relaxed);
+        }
+        measured_period(&model, t)
+    })?;
     let wall_s = wall.elapsed().as_secs_f64();
     let cpu_s = cpu.map(|c| c.elapsed().as_secs_f64());
 
@@ -196,7 +206,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         |t| t.to_string(),
     );
     println!("members:   {n} release angles, θ₀ = 0.01 … 3.1 rad ({failed} failed)");
-    println!("threads:   {threads}");
+    let shares: Vec<String> = per_thread
+        .iter()
+        .map(|c| c.load(Ordering::Relaxed).to_string())
+        .collect();
+    println!(
+        "threads:   {threads}, members per thread {}",
+        shares.join(" + ")
+    );
     println!(
         "worst relative period error: {:.2e} (at θ₀ = {:.4})",
         worst.0, worst.1
