@@ -9,7 +9,9 @@
 //! cargo run --release --example ensemble_period -- [--members N] [--threads N] [--out DIR]
 //! ```
 //!
-//! Draws `DIR/ensemble_period.svg` and `.png` (default `out/ensemble_period`):
+//! Writes `DIR/ensemble_period.csv` (every member: θ₀, measured and exact
+//! period, relative error) and draws `DIR/ensemble_period.svg` and `.png`
+//! (default `DIR`: `out/ensemble_period`):
 //! T/T₀ against θ₀, the exact curve and the ensemble's points, and the
 //! relative error of each period on a second panel; prints the worst
 //! relative error and the wall and CPU time (BENCHMARKS.md §17).
@@ -184,10 +186,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut errors = Vec::new();
     let mut worst = (0.0f64, f64::NAN);
     let mut steps = 0;
+    // The table: every member, `theta0,period,exact,relative_error`
+    // (empty period and error for a failed member, its error on stderr).
+    let mut table = String::from("theta0,period,exact,relative_error\n");
     for (k, r) in results.iter().enumerate() {
+        let exact = exact_period(&model, theta[k]);
         match r {
             Ok(m) => {
-                let exact = exact_period(&model, theta[k]);
+                table.push_str(&format!(
+                    "{},{},{exact},{:e}\n",
+                    theta[k],
+                    m.period,
+                    (m.period - exact).abs() / exact
+                ));
                 let rel = (m.period - exact).abs() / exact;
                 if rel >= worst.0 {
                     worst = (rel, theta[k]);
@@ -197,7 +208,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 // An exact period on the log axis: drawn at its floor.
                 errors.push((theta[k], rel.max(1e-17)));
             }
-            Err(e) => eprintln!("{e}"),
+            Err(e) => {
+                table.push_str(&format!("{},,{exact},\n", theta[k]));
+                eprintln!("{e}");
+            }
         }
     }
     let failed = n - points.len();
@@ -222,6 +236,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     match cpu_s {
         Some(c) => println!("time:      wall {wall_s:.2} s, CPU {c:.2} s"),
         None => println!("time:      wall {wall_s:.2} s (CPU time unavailable)"),
+    }
+    // The spread, ten rows of the table.
+    println!("     θ₀      T/T₀ measured   T/T₀ exact      rel. error");
+    for (k, r) in results.iter().enumerate().step_by(n.div_ceil(10)) {
+        let exact = exact_period(&model, theta[k]);
+        match r {
+            Ok(m) => println!(
+                "{:>8.4}  {:>14.10}  {:>14.10}  {:>10.2e}",
+                theta[k],
+                m.period / t0,
+                exact / t0,
+                (m.period - exact).abs() / exact
+            ),
+            Err(e) => println!("{:>8.4}  {e}", theta[k]),
+        }
     }
 
     let fine = 2000;
@@ -306,6 +335,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ],
     };
     std::fs::create_dir_all(&args.out)?;
+    let csv = args.out.join("ensemble_period.csv");
+    std::fs::write(&csv, table)?;
+    println!("wrote {}", csv.display());
     for path in plot::render(&figure, &args.out)? {
         println!("wrote {}", path.display());
     }
