@@ -14,6 +14,36 @@
 //! terminal, plain lines otherwise (the sweep's reporter,
 //! [`crate::sweep::progress::Progress`]).
 //!
+//! What every member needs is shared by reference (the function is `Fn +
+//! Sync`): a model read at run time is derived once, and each member
+//! clones it to set its own parameters (a clone shares the compiled
+//! formulations):
+//!
+//! ```
+//! use dae::dae_core::interp::InterpretedModel;
+//! use dae::dae_solvers::{init, radau5::Radau5};
+//! use dae::ensemble::Ensemble;
+//! use dae::prelude::*;
+//!
+//! type Error = Box<dyn std::error::Error + Send + Sync>;
+//! let model = InterpretedModel::from_str(dae::models::PENDULUM_SOURCE)?; // derived once
+//! let lengths = [0.5, 1.0, 2.0];
+//! let energy = Ensemble::new().run(&lengths, |&l| -> Result<f64, Error> {
+//!     let mut m = model.clone();
+//!     m.set_parameter("l", l)?;
+//!     let sys = m.formulation("ggl1")?;
+//!     let start = init::consistent(&*sys, 0.0, &[l, 0.0, 0.0, 0.0, 0.0, 0.0], &Default::default())?;
+//!     let problem = Problem { system: &*sys, t0: 0.0, y0: &start.y, t_end: 1.0 };
+//!     let sol = Radau5.solve(&problem, &Options::with_tol(1e-8))?;
+//!     let (v, w) = (sol.value(1.0, "v")?, sol.value(1.0, "w")?);
+//!     Ok((v * v + w * w) / 2.0 + 13.7503716373294544 * sol.value(1.0, "y")?)
+//! })?;
+//! for e in &energy {
+//!     assert!(e.as_ref().unwrap().abs() < 1e-6); // released at rest at y = 0
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! The module is part of the `cli` feature, which brings rayon and
 //! indicatif (and the sweep's progress reporter this module reuses); the
 //! library without it (`default-features = false`) does not have it.
