@@ -1,19 +1,33 @@
-//! Fitting the pendulum's g and l to noisy observations of its position,
-//! with the forward sensitivities (issue 25, done-when 4).
+//! Fitting the pendulum's g and l to 50 noisy samples of x(t), with the
+//! forward sensitivities and the `levenberg-marquardt` crate (issue 25,
+//! item 4 and done-when 4).
 //!
 //! The data (`data/fit_pendulum.csv`, written by `scripts/fit_data.py`):
 //! the pendulum of `scenes/pendulum.dae` with g = 9.81, l = 1, released at
-//! rest from the horizontal, its position (x, y) at t = 0.1, 0.2, …, 4
-//! from the Jacobi-elliptic closed form (mpmath), plus Gaussian noise of
-//! σ = 0.01 m (seed 25). Nothing here comes from a `dae` run.
+//! rest from the horizontal, its horizontal position x at t = 0.1, 0.2, …,
+//! 5 (about two periods) from the Jacobi-elliptic closed form (mpmath),
+//! plus Gaussian noise of σ = 0.01 m (seed 25). Only x is observed; y is in
+//! the file beside the exact x as a check. Nothing here comes from a `dae`
+//! run.
 //!
-//! The fit: Levenberg–Marquardt on the 80 residuals `obs − model(g, l)`.
+//! **Why x(t) alone determines both g and l.** The release is at rest from
+//! the horizontal, x(0) = l, y(0) = 0, at every trial l: the amplitude of
+//! x is l, and the angle swept, π/2 either side, is fixed by the release,
+//! so the motion is θ(t) = Θ(t √(g/l)) with one dimensionless function Θ.
+//! The amplitude of x(t) = l sin Θ(t √(g/l)) gives l, its period
+//! T = 4 √(l/g) K(1/2) gives g/l; together g and l. (Released from rest at
+//! an angle that scaled with l, or observed through the angle alone, only
+//! g/l would be identifiable and `JᵀJ` singular.) The fit below reports the
+//! correlation of the two estimates: large, as l enters both, but below 1.
+//!
+//! The fit: `levenberg_marquardt::LevenbergMarquardt` (rust-cv, MINPACK's
+//! `lmder` in Rust, on nalgebra) on the 50 residuals `x_obs − x(t; g, l)`.
 //! The model and its Jacobian come from one run of the sensitivity system
-//! (`dae_core::sensitivity`, radau5 on `ggl1`, tol 1e-10): the residual
-//! Jacobian *is* the sensitivities ∂x/∂g, ∂x/∂l, ∂y/∂g, ∂y/∂l at the
-//! observation times, read from the dense output with `Solution::at`. The
-//! release is given as x = 1, y = 0 at every trial l and projected onto the
-//! circle of radius l (the consistent start): x(0) = l, as in the data.
+//! (`dae_core::sensitivity`, radau5 on `ggl1`, tol 1e-10) per trial point:
+//! the residual Jacobian *is* −∂x/∂g, −∂x/∂l at the observation times, read
+//! from the dense output with `Solution::at`. The release is given as
+//! x = 1, y = 0 at every trial l and projected onto the circle of radius l
+//! (the consistent start): x(0) = l, as in the data.
 //!
 //! Standard errors from `σ² (JᵀJ)⁻¹` with the known σ (and, beside them,
 //! from the residual variance `s² = SSR / (m − 2)`), 95 % intervals
@@ -26,8 +40,10 @@
 use dae::dae_core::sensitivity::{Sensitivities, SensitivityError};
 use dae::dae_solvers::{radau5::Radau5, sensitivity::consistent_start, InitOptions};
 use dae::prelude::*;
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use nalgebra::{storage::Owned, DVector, Dyn, OMatrix, Vector2, U2};
 
-/// The observations: `t, x_exact, y_exact, x_obs, y_obs`.
+/// The observations: `t, x_exact, y_exact, x_obs`.
 pub const DATA: &str = include_str!("../data/fit_pendulum.csv");
 /// The model (its own g and l are replaced by the fit's).
 pub const MODEL: &str = include_str!("../scenes/pendulum.dae");
@@ -38,15 +54,13 @@ pub const TRUTH: [f64; 2] = [9.81, 1.0];
 /// The normal quantile of a two-sided 95 % interval.
 pub const Z95: f64 = 1.959_963_984_540_054;
 
-/// One observation.
+/// One observation of x.
 #[derive(Clone, Copy, Debug)]
 pub struct Observation {
     /// Time.
     pub t: f64,
     /// Observed x (with noise).
     pub x: f64,
-    /// Observed y (with noise).
-    pub y: f64,
 }
 
 /// Why the fit failed.
@@ -76,17 +90,27 @@ pub enum FitError {
     /// The solution could not be read at an observation time.
     #[error(transparent)]
     Solution(#[from] SolutionError),
-    /// No step decreased the sum of squares, however damped.
-    #[error("no descent from g = {g}, l = {l} after {iterations} iterations (damping {mu:e})")]
-    NoDescent {
+    /// A trial point left the physical region (g ≤ 0 or l ≤ 0).
+    #[error("trial point g = {g}, l = {l} is not physical")]
+    NotPhysical {
+        /// Gravity tried.
+        g: f64,
+        /// Length tried.
+        l: f64,
+    },
+    /// Levenberg–Marquardt stopped without converging.
+    #[error(
+        "Levenberg–Marquardt stopped at g = {g}, l = {l} after {evaluations} evaluations: {reason}"
+    )]
+    NotConverged {
         /// Gravity reached.
         g: f64,
         /// Length reached.
         l: f64,
-        /// Iterations done.
-        iterations: usize,
-        /// The damping reached.
-        mu: f64,
+        /// Residual evaluations made.
+        evaluations: usize,
+        /// The crate's termination reason.
+        reason: String,
     },
     /// `JᵀJ` is singular: g and l are not identifiable from these data.
     #[error("JᵀJ is singular at g = {g}, l = {l}")]
@@ -111,11 +135,13 @@ pub struct Fit {
     pub correlation: f64,
     /// The sum of squared residuals at the estimate.
     pub ssr: f64,
-    /// Accepted Levenberg–Marquardt iterations.
-    pub iterations: usize,
-    /// Sensitivity runs made (each trial point is one).
+    /// Residual evaluations counted by the crate.
+    pub evaluations: usize,
+    /// The crate's termination reason.
+    pub termination: String,
+    /// Sensitivity runs made (each trial point and each reset is one).
     pub runs: usize,
-    /// `(g, l, SSR)` at the start and after each accepted iteration.
+    /// `(g, l, SSR)` at every point run, in order (the first is the start).
     pub path: Vec<(f64, f64, f64)>,
 }
 
@@ -135,26 +161,28 @@ pub fn observations(src: &str) -> Result<Vec<Observation>, FitError> {
                     .map_err(|e| bad(format!("`{s}`: {e}")))
             })
             .collect::<Result<_, _>>()?;
-        if f.len() != 5 {
-            return Err(bad(format!("{} fields, expected 5", f.len())));
+        if f.len() != 4 {
+            return Err(bad(format!("{} fields, expected 4", f.len())));
         }
-        out.push(Observation {
-            t: f[0],
-            x: f[3],
-            y: f[4],
-        });
+        out.push(Observation { t: f[0], x: f[3] });
     }
     Ok(out)
 }
 
-/// The residuals `obs − model` (x then y at each time) and their Jacobian
-/// with respect to `[g, l]` (`−∂model/∂p`), from one sensitivity run.
+/// The residuals and their Jacobian with respect to `[g, l]`.
+type Linearised = (DVector<f64>, OMatrix<f64, Dyn, U2>);
+
+/// The residuals `obs − x(t; g, l)` and their Jacobian with respect to
+/// `[g, l]` (`−∂x/∂p`), from one sensitivity run.
 fn residuals(
     model: &mut Sensitivities,
     p: [f64; 2],
     obs: &[Observation],
-) -> Result<(Vec<f64>, Vec<[f64; 2]>), FitError> {
+) -> Result<Linearised, FitError> {
     let [g, l] = p;
+    if !(g > 0.0 && l > 0.0) {
+        return Err(FitError::NotPhysical { g, l });
+    }
     model.set_parameter("g", g)?;
     model.set_parameter("l", l)?;
     let sys = model.formulation("ggl1")?;
@@ -174,136 +202,157 @@ fn residuals(
     let sol = Radau5
         .solve(&problem, &Options::with_tol(1e-10))
         .map_err(solve_error)?;
-    let ix = |n: &str| sol.index_of(n);
-    let (x, y) = (ix("x")?, ix("y")?);
-    let (xg, xl, yg, yl) = (ix("dx/dg")?, ix("dx/dl")?, ix("dy/dg")?, ix("dy/dl")?);
-    let mut r = Vec::with_capacity(2 * obs.len());
-    let mut jac = Vec::with_capacity(2 * obs.len());
-    for o in obs {
+    let (x, xg, xl) = (
+        sol.index_of("x")?,
+        sol.index_of("dx/dg")?,
+        sol.index_of("dx/dl")?,
+    );
+    let mut r = DVector::zeros(obs.len());
+    let mut jac = OMatrix::<f64, Dyn, U2>::zeros(obs.len());
+    for (i, o) in obs.iter().enumerate() {
         let u = sol.at(o.t)?;
-        r.push(o.x - u[x]);
-        jac.push([-u[xg], -u[xl]]);
-        r.push(o.y - u[y]);
-        jac.push([-u[yg], -u[yl]]);
+        r[i] = o.x - u[x];
+        jac[(i, 0)] = -u[xg];
+        jac[(i, 1)] = -u[xl];
     }
     Ok((r, jac))
 }
 
-/// `JᵀJ` and `Jᵀr`.
-fn normal_equations(r: &[f64], jac: &[[f64; 2]]) -> ([[f64; 2]; 2], [f64; 2]) {
-    let mut a = [[0.0; 2]; 2];
-    let mut b = [0.0; 2];
-    for (ri, ji) in r.iter().zip(jac) {
-        for i in 0..2 {
-            b[i] += ji[i] * ri;
-            for j in 0..2 {
-                a[i][j] += ji[i] * ji[j];
-            }
-        }
-    }
-    (a, b)
+/// The least-squares problem as the crate sees it: `set_params` runs the
+/// sensitivity system once and keeps the residuals and their Jacobian.
+/// The crate's parameters are `(ln g, ln l)`: every trial point is
+/// physical (a step in g itself from a far start can cross zero), and the
+/// Jacobian is the sensitivities times g and l. The estimate and its
+/// covariance are reported in g and l (at the minimum, `JᵀJ` in g, l is
+/// the one in ln g, ln l scaled by `diag(1/g, 1/l)`: the same linearised
+/// intervals).
+struct PendulumFit<'a> {
+    model: Sensitivities,
+    obs: &'a [Observation],
+    p: Vector2<f64>,
+    /// The last run's residuals and Jacobian, or why it failed.
+    last: Result<Linearised, FitError>,
+    /// The first failure (the crate stops at a `None`), kept for the report.
+    failure: Option<FitError>,
+    runs: usize,
+    path: Vec<(f64, f64, f64)>,
 }
 
-/// The inverse of a symmetric 2×2 matrix, `None` when singular to
-/// round-off.
-fn inverse(a: [[f64; 2]; 2]) -> Option<[[f64; 2]; 2]> {
-    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-    let scale = a[0][0].abs() * a[1][1].abs();
-    if !(det.is_finite() && det.abs() > 1e-14 * scale) {
-        return None;
-    }
-    Some([
-        [a[1][1] / det, -a[0][1] / det],
-        [-a[1][0] / det, a[0][0] / det],
-    ])
-}
-
-fn sum_sq(r: &[f64]) -> f64 {
-    r.iter().map(|v| v * v).sum()
-}
-
-/// Levenberg–Marquardt (Marquardt's scaling, `JᵀJ + μ diag(JᵀJ)`) from
-/// `start = [g, l]`, until a step changes neither parameter by more than
-/// `1e-9` relative; then the standard errors at the estimate.
-pub fn fit(obs: &[Observation], start: [f64; 2], sigma: f64) -> Result<Fit, FitError> {
-    let mut model = Sensitivities::from_str(MODEL, &["g", "l"])?;
-    let mut p = start;
-    let (mut r, mut jac) = residuals(&mut model, p, obs)?;
-    let mut ssr = sum_sq(&r);
-    let mut path = vec![(p[0], p[1], ssr)];
-    let mut mu = 1e-3;
-    let mut runs = 1;
-    let mut iterations = 0;
-    let max_iterations = 100;
-    // `jac` is ∂r/∂p: the Gauss–Newton step is −(JᵀJ)⁻¹Jᵀr, damped by μ.
-    let step_of = |a: [[f64; 2]; 2], b: [f64; 2], mu: f64| {
-        let damped = [
-            [a[0][0] * (1.0 + mu), a[0][1]],
-            [a[1][0], a[1][1] * (1.0 + mu)],
-        ];
-        inverse(damped).map(|inv| {
-            [
-                -(inv[0][0] * b[0] + inv[0][1] * b[1]),
-                -(inv[1][0] * b[0] + inv[1][1] * b[1]),
-            ]
-        })
-    };
-    loop {
-        let (a, b) = normal_equations(&r, &jac);
-        // Converged when the undamped step moves neither parameter by more
-        // than 1e-9 relative.
-        let gn = step_of(a, b, 0.0).ok_or(FitError::Singular { g: p[0], l: p[1] })?;
-        if gn.iter().zip(&p).all(|(s, v)| s.abs() <= 1e-9 * v.abs()) {
-            break;
-        }
-        let no_descent = |p: [f64; 2], mu: f64| FitError::NoDescent {
-            g: p[0],
-            l: p[1],
-            iterations,
-            mu,
+impl PendulumFit<'_> {
+    /// Takes the last run's result out, leaving a placeholder.
+    fn take_last(&mut self) -> Result<Linearised, FitError> {
+        let placeholder = FitError::NotPhysical {
+            g: self.p[0],
+            l: self.p[1],
         };
-        if iterations >= max_iterations {
-            return Err(no_descent(p, mu));
-        }
-        loop {
-            if mu > 1e12 {
-                return Err(no_descent(p, mu));
-            }
-            let Some(step) = step_of(a, b, mu) else {
-                mu *= 10.0;
-                continue;
-            };
-            let trial = [p[0] + step[0], p[1] + step[1]];
-            if trial.iter().all(|v| *v > 0.0) {
-                runs += 1;
-                // A trial that cannot be integrated is a step too long.
-                if let Ok((r_new, jac_new)) = residuals(&mut model, trial, obs) {
-                    let ssr_new = sum_sq(&r_new);
-                    if ssr_new <= ssr {
-                        (p, r, jac, ssr) = (trial, r_new, jac_new, ssr_new);
-                        mu = (mu / 10.0).max(1e-12);
-                        break;
-                    }
+        std::mem::replace(&mut self.last, Err(placeholder))
+    }
+
+    fn run(&mut self) {
+        let p = [self.p[0], self.p[1]];
+        self.runs += 1;
+        self.last = residuals(&mut self.model, p, self.obs);
+        match &self.last {
+            Ok((r, _)) => self.path.push((p[0], p[1], r.norm_squared())),
+            Err(e) => {
+                if self.failure.is_none() {
+                    self.failure = Some(FitError::NotConverged {
+                        g: p[0],
+                        l: p[1],
+                        evaluations: self.runs,
+                        reason: e.to_string(),
+                    });
                 }
             }
-            mu *= 10.0;
         }
-        iterations += 1;
-        path.push((p[0], p[1], ssr));
     }
-    let (a, _) = normal_equations(&r, &jac);
-    let cov = inverse(a).ok_or(FitError::Singular { g: p[0], l: p[1] })?;
+}
+
+impl LeastSquaresProblem<f64, Dyn, U2> for PendulumFit<'_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, U2>;
+    type ParameterStorage = Owned<f64, U2>;
+
+    fn set_params(&mut self, q: &Vector2<f64>) {
+        self.p = q.map(f64::exp);
+        self.run();
+    }
+
+    fn params(&self) -> Vector2<f64> {
+        self.p.map(f64::ln)
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        self.last.as_ref().ok().map(|(r, _)| r.clone())
+    }
+
+    /// `∂r/∂(ln g, ln l) = (g ∂r/∂g, l ∂r/∂l)`.
+    fn jacobian(&self) -> Option<OMatrix<f64, Dyn, U2>> {
+        let p = self.p;
+        self.last.as_ref().ok().map(|(_, j)| {
+            let mut j = j.clone();
+            j.column_mut(0).scale_mut(p[0]);
+            j.column_mut(1).scale_mut(p[1]);
+            j
+        })
+    }
+}
+
+/// Levenberg–Marquardt (the `levenberg-marquardt` crate, Moré's trust-region
+/// form with scaled diagonal) in `(ln g, ln l)` from `start = [g, l]`;
+/// `xtol = 1e-8`, `ftol = 1e-10` (the runs are accurate to about 1e-10;
+/// tighter tolerances only make the crate wander in the integration's
+/// error, about 1e-8 relative in g and l, far inside a standard error of
+/// 2e-3 relative); then the standard errors at the estimate.
+pub fn fit(obs: &[Observation], start: [f64; 2], sigma: f64) -> Result<Fit, FitError> {
+    let model = Sensitivities::from_str(MODEL, &["g", "l"])?;
+    let mut problem = PendulumFit {
+        model,
+        obs,
+        p: Vector2::new(start[0], start[1]),
+        last: Err(FitError::NotPhysical {
+            g: start[0],
+            l: start[1],
+        }),
+        failure: None,
+        runs: 0,
+        path: Vec::new(),
+    };
+    problem.run();
+    // The start itself cannot be run: say why, not the crate's "residuals".
+    let first = problem.take_last()?;
+    problem.last = Ok(first);
+    let (mut problem, report) = LevenbergMarquardt::new()
+        .with_xtol(1e-8)
+        .with_ftol(1e-10)
+        .minimize(problem);
+    let p = [problem.p[0], problem.p[1]];
+    if !report.termination.was_successful() {
+        return Err(problem.failure.take().unwrap_or(FitError::NotConverged {
+            g: p[0],
+            l: p[1],
+            evaluations: report.number_of_evaluations,
+            reason: format!("{:?}", report.termination),
+        }));
+    }
+    // The crate leaves the problem at its best point, last run there.
+    let (r, jac) = problem.take_last()?;
+    let ssr = r.norm_squared();
+    let cov = (jac.transpose() * &jac)
+        .try_inverse()
+        .filter(|c| c.iter().all(|v| v.is_finite()))
+        .ok_or(FitError::Singular { g: p[0], l: p[1] })?;
     let s2 = ssr / (r.len() as f64 - 2.0);
-    let se = [cov[0][0].sqrt() * sigma, cov[1][1].sqrt() * sigma];
     Ok(Fit {
         estimate: p,
-        se,
-        se_residual: [(cov[0][0] * s2).sqrt(), (cov[1][1] * s2).sqrt()],
-        correlation: cov[0][1] / (cov[0][0] * cov[1][1]).sqrt(),
+        se: [cov[(0, 0)].sqrt() * sigma, cov[(1, 1)].sqrt() * sigma],
+        se_residual: [(cov[(0, 0)] * s2).sqrt(), (cov[(1, 1)] * s2).sqrt()],
+        correlation: cov[(0, 1)] / (cov[(0, 0)] * cov[(1, 1)]).sqrt(),
         ssr,
-        iterations,
-        runs,
-        path,
+        evaluations: report.number_of_evaluations,
+        termination: format!("{:?}", report.termination),
+        runs: problem.runs,
+        path: problem.path,
     })
 }
 
@@ -317,7 +366,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let obs = observations(DATA)?;
     println!(
-        "{} observations of (x, y) at t = {} … {} s, σ = {SIGMA} m; start g = {}, l = {}",
+        "{} observations of x at t = {} … {} s, σ = {SIGMA} m; start g = {}, l = {}",
         obs.len(),
         obs[0].t,
         obs[obs.len() - 1].t,
@@ -325,17 +374,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         start[1]
     );
     let fit = fit(&obs, start, SIGMA)?;
-    println!("iteration        g              l          sum of squares");
+    println!("      run        g              l          sum of squares");
     for (k, (g, l, ssr)) in fit.path.iter().enumerate() {
         println!("{k:>9}  {g:>13.9}  {l:>13.10}  {ssr:>14.6e}");
     }
     println!(
-        "{} iterations, {} sensitivity runs (radau5, ggl1, tol 1e-10)",
-        fit.iterations, fit.runs
+        "levenberg-marquardt: {}, {} evaluations; {} sensitivity runs (radau5, ggl1, tol 1e-10)",
+        fit.termination, fit.evaluations, fit.runs
     );
     println!(
         "residual s = {:.5} m (σ = {SIGMA}); correlation of the estimates {:.3}",
-        (fit.ssr / (2.0 * obs.len() as f64 - 2.0)).sqrt(),
+        (fit.ssr / (obs.len() as f64 - 2.0)).sqrt(),
         fit.correlation
     );
     println!(
