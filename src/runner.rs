@@ -1232,3 +1232,202 @@ fn verdict(
         )
     }
 }
+
+/// The forward sensitivities of a run (`dae run --sensitivities g,l`, a
+/// scene's `[sensitivities]`; `docs/design_sensitivities.md`): `∂y/∂p` of
+/// every unknown with respect to each named parameter, at the check times
+/// and at the end, from a second integration of the state and its
+/// sensitivities together ([`dae_core::sensitivity::SensitivitySystem`]),
+/// from the run's consistent start.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SensitivityRecord {
+    /// The check times the values are given at.
+    pub times: Vec<f64>,
+    /// Per parameter, per unknown: the sensitivity at each check time
+    /// (`{"g": {"x": [...], …}, …}`).
+    #[serde(serialize_with = "per_parameter")]
+    pub values: Vec<(String, Series)>,
+    /// Per parameter, per unknown: the sensitivity at the end.
+    #[serde(rename = "final", serialize_with = "per_parameter")]
+    pub final_values: Vec<(String, Named)>,
+    /// Whether the sensitivities were in the error test.
+    pub error_control: bool,
+    /// The work of the combined integration.
+    pub stats: Stats,
+    /// Why the combined integration stopped (`None`: it reached the end).
+    pub error: Option<ErrorInfo>,
+}
+
+/// Why sensitivities cannot be computed (bad input: exit code 2).
+#[derive(Debug, thiserror::Error)]
+pub enum SensitivityRunError {
+    /// The model text could not be read.
+    #[error("sensitivities: {0}")]
+    Model(#[from] crate::models::ModelError),
+    /// A parameter that does not exist, a derived one, a formulation that
+    /// cannot carry sensitivities ([`dae_core::sensitivity::SensitivityError`]).
+    #[error("sensitivities: {0}")]
+    Sensitivity(#[from] dae_core::sensitivity::SensitivityError),
+    /// The solver cannot take the sensitivity system.
+    #[error("sensitivities: solver `{solver}` cannot integrate them: {why}")]
+    NotApplicable {
+        /// Solver.
+        solver: String,
+        /// Reason.
+        why: String,
+    },
+}
+
+/// The sensitivities with respect to `parameters` of the run `spec` that
+/// produced `record` (a run that reached its end), the model read from
+/// its text `source`: the model's parameters as `spec.model` has them, the
+/// state started from the record's consistent start, the sensitivities
+/// from their consistent start (zero given values projected onto the
+/// linearised constraints), the uniform tolerance `record.tol`.
+///
+/// ```
+/// use dae::inputs::inputs;
+/// use dae::runner::{run, sensitivities};
+/// use dae::scene::Scene;
+///
+/// let scene = Scene::builtin("s01").unwrap();
+/// let inputs = inputs(&scene).unwrap();
+/// let spec = inputs.spec(&scene, "radau5", "rcd0", 1e-8);
+/// let record = run(&spec).unwrap();
+/// let s = sensitivities(&spec, &record, dae::models::PENDULUM_SOURCE, &["g".into()], true).unwrap();
+/// let (name, dg) = &s.values[0];
+/// assert_eq!(name, "g");
+/// assert_eq!(dg.0.len(), 5); // x, y, v, w, lambda
+/// assert_eq!(dg.0[0].1.len(), scene.time.checks.len());
+/// assert!(s.error.is_none());
+/// ```
+pub fn sensitivities(
+    spec: &RunSpec<'_>,
+    record: &RunRecord,
+    source: &str,
+    parameters: &[String],
+    error_control: bool,
+) -> Result<SensitivityRecord, SensitivityRunError> {
+    use dae_core::sensitivity::Sensitivities;
+    let names: Vec<&str> = parameters.iter().map(String::as_str).collect();
+    let mut model = Sensitivities::from_str(source, &names)?;
+    for p in &spec.model.model_info().parameters {
+        if p.derived.is_none() {
+            if let Some(v) = spec.model.parameter(&p.name) {
+                model.set_parameter(&p.name, v)?;
+            }
+        }
+    }
+    let mut sys = model.formulation(spec.formulation)?;
+    sys.set_error_control(error_control);
+    let solver = dae_solvers::solver_by_name(spec.solver).ok_or_else(|| {
+        SensitivityRunError::NotApplicable {
+            solver: spec.solver.into(),
+            why: "unknown solver".into(),
+        }
+    })?;
+    let info = sys.info().clone();
+    solver
+        .accepts(&info)
+        .map_err(|why| SensitivityRunError::NotApplicable {
+            solver: spec.solver.into(),
+            why: why.to_string(),
+        })?;
+    let n = sys.state_unknowns();
+    let mut y0 = vec![0.0; info.unknowns()];
+    for (k, v) in record.initialisation.iter().enumerate().take(n) {
+        y0[k] = v.value;
+    }
+    let mut out = SensitivityRecord {
+        times: spec.check.to_vec(),
+        values: Vec::new(),
+        final_values: Vec::new(),
+        error_control,
+        stats: Stats::default(),
+        error: None,
+    };
+    let error = |e: &SolveError| ErrorInfo {
+        kind: e.kind().to_string(),
+        message: e.to_string(),
+        t: e.t(),
+    };
+    let start = match dae_solvers::sensitivity::consistent_start(
+        &sys,
+        spec.t0,
+        &y0,
+        &InitOptions::default(),
+    ) {
+        Ok(s) => s,
+        Err(e) => {
+            out.error = Some(error(&e));
+            return Ok(out);
+        }
+    };
+    let options = Options {
+        tol: Tolerances::uniform(record.tol),
+        output_times: spec.check.to_vec(),
+        max_steps: spec.max_steps.unwrap_or(Options::default().max_steps),
+        dense_output: false,
+        ..Options::default()
+    };
+    let problem = Problem {
+        system: &sys,
+        t0: spec.t0,
+        y0: &start.y,
+        t_end: spec.t_end,
+    };
+    let sol = match solver.run(&problem, &options) {
+        Ok(sol) => sol,
+        Err(stopped) => {
+            out.stats = stopped.stats;
+            out.error = Some(error(&stopped.error));
+            return Ok(out);
+        }
+    };
+    out.stats = sol.stats;
+    let rows: Vec<Option<&Vec<f64>>> = spec
+        .check
+        .iter()
+        .map(|t| sol.t.iter().position(|s| s == t).map(|k| &sol.y[k]))
+        .collect();
+    for (i, p) in parameters.iter().enumerate() {
+        let series = (0..n)
+            .map(|j| {
+                let values = rows
+                    .iter()
+                    .map(|y| y.map_or(f64::NAN, |y| y[n * (i + 1) + j]))
+                    .collect();
+                (info.variables[j].name.clone(), values)
+            })
+            .collect();
+        out.values.push((p.clone(), Series(series)));
+        if let Some(last) = sol.last() {
+            out.final_values
+                .push((p.clone(), named(&info, &last[n * (i + 1)..n * (i + 2)])));
+        }
+    }
+    Ok(out)
+}
+
+/// Values of each unknown by name, one per check time (a JSON object).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Series(pub Vec<(String, Vec<f64>)>);
+
+impl Serialize for Series {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+/// `(parameter, T)` pairs written as a JSON object in their order.
+fn per_parameter<T: Serialize, S: Serializer>(v: &[(String, T)], s: S) -> Result<S::Ok, S::Error> {
+    let mut m = s.serialize_map(Some(v.len()))?;
+    for (k, x) in v {
+        m.serialize_entry(k, x)?;
+    }
+    m.end()
+}

@@ -536,6 +536,27 @@ pub enum ModelSource {
     File(PathBuf),
 }
 
+/// `[sensitivities]`: `parameters = ["g", "l"]` (base parameters of the
+/// model, checked when the sensitivities are built) and `error_control`
+/// (default `true`: the sensitivities in the error test, see
+/// `dae_core::sensitivity::SensitivitySystem::set_error_control`).
+///
+/// ```
+/// let text = "name = \"t\"\nmodel = \"pendulum\"\n[initial]\nx = 1\n[time]\nend = 1\n\
+///             [sensitivities]\nparameters = [\"g\", \"l\"]\n";
+/// let s = dae::scene::Scene::parse(text, "t.toml", None).unwrap();
+/// let sens = s.sensitivities.unwrap();
+/// assert_eq!(sens.parameters, ["g", "l"]);
+/// assert!(sens.error_control);
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SensitivitySpec {
+    /// The parameters, in order.
+    pub parameters: Vec<String>,
+    /// Whether the sensitivities are in the error test.
+    pub error_control: bool,
+}
+
 /// `name = value` from `[parameters]` or `[initial]`, with its place.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NamedValue {
@@ -697,6 +718,10 @@ pub struct Scene {
     /// against the model by [`Scene::check_events`].
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub events: Vec<dae_solvers::EventSpec>,
+    /// Forward sensitivities to compute beside a run (`[sensitivities]`;
+    /// `dae run --sensitivities` replaces them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensitivities: Option<SensitivitySpec>,
     /// Where `model`, `time`, `time.start`, `time.end` and `reference.kind`
     /// are in the text, for problems found after parsing ([`Scene::locate`]).
     /// Entries are `(field, line, column)`; the file is [`Scene::origin`].
@@ -1026,6 +1051,15 @@ struct RawScene {
     sweep: Option<RawSweep>,
     tolerance: Option<RawTolerance>,
     events: Option<RawEvents>,
+    sensitivities: Option<RawSensitivities>,
+}
+
+/// `[sensitivities]`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSensitivities {
+    parameters: Vec<String>,
+    error_control: Option<bool>,
 }
 
 /// `[events.NAME]`: `direction = "both" | "rising" | "falling"`, and
@@ -1452,6 +1486,10 @@ impl Source<'_> {
             sweep,
             tolerance,
             events,
+            sensitivities: raw.sensitivities.map(|s| SensitivitySpec {
+                parameters: s.parameters,
+                error_control: s.error_control.unwrap_or(true),
+            }),
             places,
         })
     }

@@ -33,16 +33,20 @@
 //! # What the solvers see
 //!
 //! The Jacobian the system reports is block lower triangular: `∂f/∂y` of
-//! the state on every diagonal block, and below it `∂(J sᵢ + ∂f/∂pᵢ)/∂y`
-//! (second derivatives of `f`) by forward differences of the symbolic
-//! `J` — `N` evaluations of the augmented Jacobian per Jacobian. Leaving
-//! them out (a block-diagonal matrix, as IDA's simultaneous corrector
-//! does for its ODE-like index-1 systems) was measured: on the pendulum's
-//! `rcd0` the sensitivities' algebraic rows depend on `y` at order one,
-//! not `h`, the simplified Newton iteration then contracts poorly, and
-//! radau5 at tol 1e-10 rejected every second step (60 674 steps, 32 789
-//! rejected, against about 2 000 with the full matrix). The constraint
-//! chain's Jacobian is built the same way.
+//! the state on every diagonal block, and below it `Bᵢ = ∂(J sᵢ +
+//! ∂f/∂pᵢ)/∂y` (second derivatives of `f`), which by the symmetry of second
+//! derivatives is the derivative of the augmented formulation's `J` along
+//! `(sᵢ, e_pᵢ)`: one augmented Jacobian per parameter by a directional
+//! difference. It declares that structure ([`DaeSystem::blocks`]), and
+//! `radau5` and `bdf` then factorise the state's block alone and solve by
+//! block forward substitution. Leaving `Bᵢ` out (a block-diagonal matrix,
+//! as IDA's simultaneous corrector does for its ODE-like index-1 systems)
+//! was measured: on the pendulum's `rcd0` the sensitivities' algebraic
+//! rows depend on `y` at order one, not `h`, and the simplified Newton
+//! iteration then contracts poorly: radau5 at tol 1e-10 rejected every
+//! second step with the dense solve, and bdf's sensitivities missed the
+//! closed form by 6.7e-6 with the block solve. The constraint chain's
+//! Jacobian is built by forward differences (it serves the start only).
 //! Refused: formulations whose leading matrix depends on the unknowns or
 //! on a sensitivity parameter (`psi1`, `psi0`, a mass `m` in `m·der(v)` as
 //! sensitivity parameter: the term `∂(E y')/∂(y, p)` is not built yet), and
@@ -75,7 +79,7 @@ use crate::dsl::{Ast, Equation, ModelAst, Name};
 use crate::expr::Q;
 use crate::interp::InterpretedModel;
 use crate::system::{
-    BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo, Model,
+    Blocks, BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo, Model,
     ParameterError, RowInfo, VarInfo,
 };
 use nalgebra::DMatrix;
@@ -93,6 +97,16 @@ pub enum SensitivityError {
         name: String,
         /// The model's base parameters.
         known: String,
+    },
+    /// A derived parameter (`derived { k = m * l^2; }`): a function of the
+    /// base parameters, differentiated through them.
+    #[error(
+        "`{name}` is a derived parameter: ask for the sensitivities with respect to the base \
+         parameters it is computed from"
+    )]
+    DerivedParameter {
+        /// The name asked for.
+        name: String,
     },
     /// A name asked for twice.
     #[error("parameter `{name}` is named twice")]
@@ -148,6 +162,11 @@ pub fn parameters_as_unknowns(
             });
         }
         let Some(k) = out.parameters.iter().position(|p| p.name.name == name) else {
+            if let Some(d) = ast.derived.iter().find(|d| d.name.name == name) {
+                return Err(SensitivityError::DerivedParameter {
+                    name: d.name.name.clone(),
+                });
+            }
             return Err(SensitivityError::UnknownParameter {
                 name: name.to_string(),
                 known: ast
@@ -249,6 +268,8 @@ pub struct SensitivitySystem {
     row_of: Vec<usize>,
     /// `E` of the state (constant).
     e: DMatrix<f64>,
+    /// Whether the sensitivities are in the methods' error test.
+    error_control: bool,
     scratch: RefCell<Scratch>,
 }
 
@@ -462,8 +483,30 @@ impl SensitivitySystem {
             param_cols,
             row_of,
             e,
+            error_control: true,
             scratch,
         })
+    }
+
+    /// Take the sensitivities out of the methods' error test (`false`) or
+    /// put them back in (`true`, the default, as IDA's `IDASetSensErrCon`):
+    /// declared to the solvers by [`DaeSystem::blocks`]. Out of it, the
+    /// step sizes are the state's alone and the sensitivities are as
+    /// accurate as the state's steps make them (BENCHMARKS.md §13).
+    ///
+    /// ```
+    /// use dae_core::sensitivity::Sensitivities;
+    /// use dae_core::system::DaeSystem;
+    ///
+    /// let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/pendulum.dae")).unwrap();
+    /// let mut sys = Sensitivities::from_str(&src, &["g"]).unwrap().formulation("rcd0").unwrap();
+    /// assert!(sys.blocks().unwrap().error_control);
+    /// sys.set_error_control(false);
+    /// assert_eq!(sys.blocks().unwrap().count, 2);
+    /// assert!(!sys.blocks().unwrap().error_control);
+    /// ```
+    pub fn set_error_control(&mut self, on: bool) {
+        self.error_control = on;
     }
 
     /// The state's formulation.
@@ -581,27 +624,43 @@ impl DaeSystem for SensitivitySystem {
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
         let (n, m) = (self.state_unknowns(), self.state.info().equations());
         let s = &mut *self.scratch.borrow_mut();
-        self.state.rhs_jacobian(t, &y[..n], &mut s.block);
         j.fill(0.0);
+        // The diagonal blocks: the augmented Jacobian's state rows and
+        // columns (the one the sensitivity rows are formed with).
+        self.lift(s, &y[..n]);
+        self.augmented.rhs_jacobian(t, &s.point, &mut s.jac);
+        for (r, &ar) in self.row_of.iter().enumerate() {
+            for (c, &ac) in self.var_cols.iter().enumerate() {
+                s.block[(r, c)] = s.jac[(ar, ac)];
+            }
+        }
         for b in 0..=self.parameters() {
             j.view_mut((m * b, n * b), (m, n)).copy_from(&s.block);
         }
-        // Below the diagonal: d(J sᵢ + ∂f/∂pᵢ)/dy by forward differences.
-        let mut base = vec![0.0; m * self.parameters()];
-        let mut moved = base.clone();
-        self.sensitivity_rhs(s, t, y, &mut base);
-        let mut yd = y.to_vec();
-        for c in 0..n {
-            let h = f64::EPSILON.sqrt() * y[c].abs().max(1.0);
-            yd[c] = y[c] + h;
-            self.sensitivity_rhs(s, t, &yd, &mut moved);
-            yd[c] = y[c];
-            for i in 0..self.parameters() {
-                for r in 0..m {
-                    j[(m * (i + 1) + r, c)] = (moved[m * i + r] - base[m * i + r]) / h;
+        // Below the diagonal: Bᵢ = ∂(J sᵢ + ∂f/∂pᵢ)/∂y, which by the
+        // symmetry of second derivatives is the derivative of J along
+        // dᵢ = (sᵢ, e_pᵢ) in the augmented unknowns: one augmented Jacobian
+        // per parameter by a directional difference.
+        let base = std::mem::replace(&mut s.jac, DMatrix::zeros(0, 0));
+        let scale = s.point.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+        let mut moved = DMatrix::zeros(base.nrows(), base.ncols());
+        for (i, &pc) in self.param_cols.iter().enumerate() {
+            let si = &y[n * (i + 1)..n * (i + 2)];
+            let size = si.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+            let eps = f64::EPSILON.sqrt() * scale / size;
+            let mut dir = s.point.clone();
+            for (k, &c) in self.var_cols.iter().enumerate() {
+                dir[c] += eps * si[k];
+            }
+            dir[pc] += eps;
+            self.augmented.rhs_jacobian(t, &dir, &mut moved);
+            for (r, &ar) in self.row_of.iter().enumerate() {
+                for (c, &ac) in self.var_cols.iter().enumerate() {
+                    j[(m * (i + 1) + r, c)] = (moved[(ar, ac)] - base[(ar, ac)]) / eps;
                 }
             }
         }
+        s.jac = base;
     }
 
     fn leading_jacobian(&self, _t: f64, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {
@@ -657,6 +716,16 @@ impl DaeSystem for SensitivitySystem {
 
     fn invariants(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.state.invariants(t, &y[..self.state_unknowns()], out);
+    }
+
+    /// `1 + P` blocks of the state's size, for a square state.
+    fn blocks(&self) -> Option<Blocks> {
+        let si = self.state.info();
+        (si.equations() == si.unknowns()).then_some(Blocks {
+            size: si.unknowns(),
+            count: 1 + self.parameters(),
+            error_control: self.error_control,
+        })
     }
 
     fn event_names(&self) -> &[String] {

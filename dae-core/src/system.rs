@@ -301,6 +301,46 @@ impl Pattern {
     }
 }
 
+/// A system of `count` blocks of `size` unknowns and `size` rows each
+/// ([`DaeSystem::blocks`]): `E` is block diagonal with `count` equal
+/// blocks, and `∂f/∂y − ∂(E z)/∂y` is block lower triangular with `count`
+/// equal diagonal blocks and non-zeros below them in the first block
+/// column only:
+///
+/// ```text
+///     [ J    0   …  0 ]
+///     [ B₁   J   …  0 ]        the iteration matrix c E − J has the
+///     [ ⋮         ⋱   ]        diagonal blocks A = c E₀ − J and
+///     [ B_P  0   …  J ]        below them −Bᵢ
+/// ```
+///
+/// so that it is solved by factorising `A` alone: `x₀ = A⁻¹ r₀`,
+/// `xᵢ = A⁻¹ (rᵢ + Bᵢ x₀)`.
+///
+/// ```
+/// use dae_core::system::Blocks;
+///
+/// let b = Blocks { size: 5, count: 3, error_control: true };
+/// assert_eq!(b.unknowns(), 15);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Blocks {
+    /// Unknowns (and rows) of one block: the state's.
+    pub size: usize,
+    /// Blocks: the state's and one per sensitivity parameter.
+    pub count: usize,
+    /// Whether the blocks after the first are in the error test (and the
+    /// Newton norm) of the methods; the first always is.
+    pub error_control: bool,
+}
+
+impl Blocks {
+    /// All unknowns, `size · count`.
+    pub fn unknowns(&self) -> usize {
+        self.size * self.count
+    }
+}
+
 /// The structural non-zeros of a formulation's matrices, from its
 /// symbolic rows: a Newton iteration matrix `c E − ∂f/∂y + ∂(E z)/∂y` has
 /// at most the union of the three ([`Sparsity::iteration`]).
@@ -442,6 +482,15 @@ pub trait DaeSystem {
         Sparsity::dense(self.info())
     }
 
+    /// The block structure of a system that is a state and its forward
+    /// sensitivities side by side ([`crate::sensitivity::SensitivitySystem`]),
+    /// `None` (the default) for any other: a solver then solves its
+    /// iteration matrix by block forward substitution with one
+    /// factorisation of the state's block (see [`Blocks`]).
+    fn blocks(&self) -> Option<Blocks> {
+        None
+    }
+
     /// `∂f/∂y` at the entries of `pattern` (this system's
     /// `sparsity().rhs_jacobian`, or any pattern of its shape), in its
     /// order, into `values` (length `pattern.nnz()`). The default
@@ -527,6 +576,9 @@ macro_rules! forward_dae_system {
             }
             fn sparsity(&self) -> Sparsity {
                 (**self).sparsity()
+            }
+            fn blocks(&self) -> Option<Blocks> {
+                (**self).blocks()
             }
             fn rhs_jacobian_values(&self, t: f64, y: &[f64], p: &Pattern, v: &mut [f64]) {
                 (**self).rhs_jacobian_values(t, y, p, v)

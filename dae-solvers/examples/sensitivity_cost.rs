@@ -1,7 +1,9 @@
 //! What forward sensitivities cost on the pendulum (issue 25, done-when 3):
 //! the plain run against the same run with the sensitivities of 1 and 2
 //! parameters (`dae_core::sensitivity`), S01 (t ∈ [0, 20]), each solver and
-//! formulation, counts and the least time of 5 runs.
+//! formulation, the sensitivities in the error test and out of it
+//! (`SensitivitySystem::set_error_control`), counts and the least time of 5
+//! runs.
 //!
 //! ```sh
 //! cargo run --release -p dae-solvers --example sensitivity_cost [tol]
@@ -55,8 +57,8 @@ fn main() {
     let one = Sensitivities::from_str(&src, &["g"]).unwrap();
     let two = Sensitivities::from_str(&src, &["g", "l"]).unwrap();
     println!("tol {tol:e}; time: least of 5 runs (wall, s); ratio: against the plain run");
-    println!("| solver(formulation) | P | steps | residual evals | Jacobians | LUs | time | time ratio | (1 + 0.6 P) |");
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| solver(formulation) | P | error control | steps | residual evals | Jacobians | LUs | time | time ratio | (1 + 0.6 P) |");
+    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|");
     for solver in ["radau5", "bdf"] {
         for f in ["rcd0", "ggl1"] {
             let base = plain.system(f).unwrap();
@@ -68,9 +70,9 @@ fn main() {
                 }),
                 tol,
             );
-            let row = |p: usize, s: &Stats, t: f64| {
+            let row = |p: usize, control: &str, s: &Stats, t: f64| {
                 println!(
-                    "| {solver}({f}) | {p} | {} | {} | {} | {} | {t:.4} | {:.2} | {:.1} |",
+                    "| {solver}({f}) | {p} | {control} | {} | {} | {} | {} | {t:.4} | {:.2} | {:.1} |",
                     s.steps,
                     s.residual_evals,
                     s.jacobian_evals,
@@ -79,14 +81,17 @@ fn main() {
                     1.0 + 0.6 * p as f64
                 )
             };
-            row(0, &s0, t0);
-            for (p, model) in [(1, &one), (2, &two)] {
-                let sys = model.formulation(f).unwrap();
-                let y0 = released(&sys, |y| {
-                    consistent_start(&sys, 0.0, y, &InitOptions::default())
-                });
-                let (s, t) = run(solver, &sys, &y0, tol);
-                row(p, &s, t);
+            row(0, "", &s0, t0);
+            for control in [true, false] {
+                for (p, model) in [(1, &one), (2, &two)] {
+                    let mut sys = model.formulation(f).unwrap();
+                    sys.set_error_control(control);
+                    let y0 = released(&sys, |y| {
+                        consistent_start(&sys, 0.0, y, &InitOptions::default())
+                    });
+                    let (s, t) = run(solver, &sys, &y0, tol);
+                    row(p, if control { "on" } else { "off" }, &s, t);
+                }
             }
         }
     }

@@ -63,14 +63,31 @@ fn initial_sensitivities_are_the_horizontal_release_at_every_length() {
     }
 }
 
+/// Both with the sensitivities in the error test (the default) and out of
+/// it. Out of it, bdf's steps are chosen for the state alone and its
+/// sensitivities are 2.5e-6 (rcd0) and 4.5e-6 (ggl1) off at t = 20 (as
+/// measured at `sens5`; in the test: 7.1e-7 and 2.5e-8): the 1e-6
+/// holds with error control only, which is why it is the default, and the
+/// bound without it is 1e-5. radau5 is within 3e-11 either way.
 #[test]
 fn sensitivities_match_the_closed_form() {
     let model = Sensitivities::from_str(&repo("scenes/pendulum.dae"), &["g", "l"]).unwrap();
     let reference = exact();
     let tol = 1e-10;
-    for solver in ["radau5", "bdf"] {
-        for f in ["ggl1", "rcd0"] {
-            let sys = model.formulation(f).unwrap();
+    for (solver, f, control) in ["radau5", "bdf"]
+        .into_iter()
+        .flat_map(|s| ["ggl1", "rcd0"].map(|f| (s, f)))
+        .flat_map(|(s, f)| [true, false].map(|c| (s, f, c)))
+    {
+        let mut worst = 0.0_f64;
+        let bound = if control || solver == "radau5" {
+            1e-6
+        } else {
+            1e-5
+        };
+        {
+            let mut sys = model.formulation(f).unwrap();
+            sys.set_error_control(control);
             let y0 = start(&sys);
             let options = Options {
                 output_times: vec![2.0, 4.0, 20.0],
@@ -103,9 +120,10 @@ fn sensitivities_match_the_closed_form() {
                     for r in rows {
                         let got = sol.y[k][index(&format!("d{}/d{p}", r.2))];
                         let err = (got - r.3).abs() / scale;
+                        worst = worst.max(err);
                         assert!(
-                            err < 1e-6,
-                            "{solver}({f}) at t = {t}: d{}/d{p} = {got}, exact {} (rel. {err:.1e})",
+                            err < bound,
+                            "{solver}({f}, error control {control}) at t = {t}: d{}/d{p} = {got}, exact {} (rel. {err:.1e})",
                             r.2,
                             r.3
                         );
@@ -113,6 +131,7 @@ fn sensitivities_match_the_closed_form() {
                 }
             }
         }
+        eprintln!("{solver}({f}), error control {control}: worst {worst:.1e}");
     }
 }
 

@@ -10,8 +10,8 @@
 
 use super::Failure;
 use crate::inputs::{choose_formulation, inputs, run_tolerances, FormulationChoice};
-use crate::runner::{self, RunRecord, RunSpec, RunTolerances};
-use crate::scene::{did_you_mean, Scene, KNOWN_FORMULATIONS, KNOWN_SOLVERS};
+use crate::runner::{self, RunRecord, RunSpec, RunTolerances, SensitivityRecord};
+use crate::scene::{did_you_mean, ModelSource, Scene, KNOWN_FORMULATIONS, KNOWN_SOLVERS};
 use dae_solvers::init::{InitMode, InitValue};
 use serde::Serialize;
 use std::fmt::Write;
@@ -66,6 +66,16 @@ pub struct RunArgs {
     /// directory, renamed into place); not written when the solver fails.
     #[arg(long, value_name = "FILE.csv")]
     pub trajectory: Option<PathBuf>,
+    /// Forward sensitivities with respect to these base parameters
+    /// (comma-separated, e.g. `g,l`; replaces a scene's `[sensitivities]`):
+    /// `∂y/∂p` of every unknown at the check times and at the end, from a
+    /// second integration of the state and its sensitivities together.
+    #[arg(long, value_delimiter = ',', value_name = "P,…")]
+    pub sensitivities: Option<Vec<String>>,
+    /// With sensitivities: leave them out of the error test (the step sizes
+    /// are then the state's; in the error test by default).
+    #[arg(long)]
+    pub no_sensitivity_error_control: bool,
 }
 
 /// Check a tolerance given on the command line: the rule of the library
@@ -104,6 +114,9 @@ struct Output<'a> {
     /// The `--trajectory` file written.
     #[serde(skip_serializing_if = "Option::is_none")]
     trajectory_file: Option<TrajectoryFile>,
+    /// The forward sensitivities asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sensitivities: Option<SensitivityRecord>,
 }
 
 /// The `--trajectory` file: where, and how many rows.
@@ -192,6 +205,19 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
             )));
         }
     }
+    let sensitivities = match sensitivity_request(args, &scene) {
+        Some((parameters, control)) => {
+            let source = match &scene.model {
+                ModelSource::Builtin(name) => crate::models::source(name),
+                ModelSource::File(path) => crate::models::source(&path.display().to_string()),
+            }
+            .map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?;
+            let s = runner::sensitivities(&spec, &record, &source.text, &parameters, control)
+                .map_err(|e| Failure::input(format!("{}: {e}", scene.origin)))?;
+            Some(s)
+        }
+        None => None,
+    };
     let code = if record.status == "ok" { 0 } else { 3 };
     let trajectory_file = match (&args.trajectory, code) {
         (Some(path), 0) => {
@@ -208,6 +234,7 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         formulation_choice: &choice,
         tolerances: (!uniform).then_some(&tolerances),
         trajectory_file,
+        sensitivities,
     };
     let out = match args.format {
         Format::Json => {
@@ -218,6 +245,19 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         Format::Text => text_output(&output),
     };
     Ok((out, code))
+}
+
+/// The sensitivities asked for: `--sensitivities` (with
+/// `--no-sensitivity-error-control`), else the scene's `[sensitivities]`.
+fn sensitivity_request(args: &RunArgs, scene: &Scene) -> Option<(Vec<String>, bool)> {
+    match (&args.sensitivities, &scene.sensitivities) {
+        (Some(p), _) => Some((p.clone(), !args.no_sensitivity_error_control)),
+        (None, Some(s)) => Some((
+            s.parameters.clone(),
+            s.error_control && !args.no_sensitivity_error_control,
+        )),
+        (None, None) => None,
+    }
 }
 
 /// Write the accepted steps of `record` to `path` as CSV, atomically;
@@ -442,6 +482,25 @@ fn text_output(o: &Output<'_>) -> String {
     }
     if let Some(f) = &o.trajectory_file {
         let _ = writeln!(extra, "  trajectory: {} ({} rows)", f.path, f.rows);
+    }
+    if let Some(sens) = &o.sensitivities {
+        let control = if sens.error_control { "in" } else { "out of" };
+        let _ = writeln!(
+            extra,
+            "  sensitivities ({control} the error test; steps {}, jacobians {}, factorizations {}):",
+            sens.stats.steps, sens.stats.jacobian_evals, sens.stats.factorizations
+        );
+        if let Some(e) = &sens.error {
+            let _ = writeln!(extra, "    error: {} ({})", e.message, e.kind);
+        }
+        for (p, finals) in &sens.final_values {
+            let v: Vec<String> = finals
+                .0
+                .iter()
+                .map(|(k, v)| format!("d{k}/d{p} = {v:.6e}"))
+                .collect();
+            let _ = writeln!(extra, "    final: {}", v.join(", "));
+        }
     }
     // After the first line (and the error/accuracy lines that belong to it).
     let at = s

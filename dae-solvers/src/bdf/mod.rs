@@ -164,6 +164,7 @@ mod order;
 mod run;
 mod step;
 
+use crate::core::block::Block;
 use crate::core::matrix::{Corrector, SquareLu};
 use crate::core::policy;
 use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
@@ -209,7 +210,7 @@ impl Solver for Bdf {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        integrator::<SquareLu>(problem, options)
+        integrator::<Block<SquareLu>>(problem, options)
     }
 }
 
@@ -234,7 +235,8 @@ pub(crate) fn integrator<'a, L: Corrector + 'a>(
     let t0 = problem.t0;
 
     // Components in the error test and the Newton norm.
-    let in_test = policy::bdf_error_test(info, options);
+    let mut in_test = policy::bdf_error_test(info, options);
+    crate::core::block::restrict_error_test(&mut in_test, sys.blocks());
 
     let mut spent = Stats::default();
     let yp0 = initial_derivative_with(&*sys, t0, problem.y0, &DerivativeRule::SOLVER)?;

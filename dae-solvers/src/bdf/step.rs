@@ -191,7 +191,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             yp: vec![0.0; n],
             delta: vec![0.0; m],
             e: vec![0.0; n],
-            lu: L::new(m, n),
+            lu: L::with_blocks(m, n, sys.blocks()),
             rows: Rows::new(info),
             lead: DMatrix::zeros(m, n),
             lead_jac: DMatrix::zeros(m, n),

@@ -62,7 +62,7 @@
 use crate::linalg::lstsq::{null_space, split_rows};
 use crate::linalg::sparse::{Pattern, SparseFactor};
 use crate::linalg::{ComplexLu, ConstrainedLstsq, DenseLu, Pivoting, Singular};
-use dae_core::system::{FormulationInfo, RowKind};
+use dae_core::system::{Blocks, FormulationInfo, RowKind};
 use nalgebra::{Complex, DMatrix};
 
 /// Unknowns from which a square iteration matrix is factorised by the
@@ -178,6 +178,15 @@ pub(crate) trait Corrector {
     const LEAST_SQUARES: bool;
     /// Storage for an `m × n` system.
     fn new(m: usize, n: usize) -> Self;
+    /// Storage for an `m × n` system of these blocks
+    /// ([`crate::core::block`]); the plain storage unless overridden.
+    fn with_blocks(m: usize, n: usize, blocks: Option<Blocks>) -> Self
+    where
+        Self: Sized,
+    {
+        let _ = blocks;
+        Self::new(m, n)
+    }
     /// The matrix to write before [`Corrector::factor`].
     fn matrix_mut(&mut self) -> &mut DMatrix<f64>;
     /// Factorise the matrix (least squares: with these row classes).
@@ -289,6 +298,15 @@ pub(crate) trait StageSystems {
     const LEAST_SQUARES: bool;
     /// Storage for `m × n` systems.
     fn new(m: usize, n: usize) -> Self;
+    /// Storage for `m × n` systems of these blocks
+    /// ([`crate::core::block`]); the plain storage unless overridden.
+    fn with_blocks(m: usize, n: usize, blocks: Option<Blocks>) -> Self
+    where
+        Self: Sized,
+    {
+        let _ = blocks;
+        Self::new(m, n)
+    }
     /// Factorise `g E − J` and `(a + ib) E − J` (`g = γ/h`, `a = α/h`,
     /// `b = β/h`).
     fn factor(

@@ -36,6 +36,7 @@
 //! modules, one file to each of these parts.
 
 pub(crate) mod attempt;
+pub(crate) mod block;
 pub(crate) mod control;
 pub(crate) mod driver;
 pub(crate) mod eliminate;

@@ -150,6 +150,7 @@ mod stages;
 mod step;
 pub(crate) mod tableau;
 
+use crate::core::block::Block;
 use crate::core::matrix::{SquareStages, StageSystems};
 use crate::core::policy;
 use crate::options::Options;
@@ -197,7 +198,7 @@ impl Solver for Radau5 {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        integrator::<SquareStages>(problem, options)
+        integrator::<Block<SquareStages>>(problem, options)
     }
 }
 

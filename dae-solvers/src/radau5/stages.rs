@@ -8,13 +8,14 @@ use super::kernels;
 use super::step::Integrator;
 use super::tableau::Collocation;
 use super::{NIT_FIXED, UROUND};
+use crate::core::block;
 use crate::core::matrix::{Rows, StageSystems};
 use crate::core::newton::Verdict;
 use crate::core::weights::Weights;
 use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
 use crate::options::Options;
 use crate::SolveError;
-use dae_core::system::{FormulationInfo, RowKind};
+use dae_core::system::{Blocks, FormulationInfo, RowKind};
 use nalgebra::DMatrix;
 use std::cell::RefCell;
 
@@ -109,7 +110,11 @@ pub(super) struct OutputScratch {
 impl<S: StageSystems> Work<S> {
     /// The buffers for `info`, with the error weights of `options` (the
     /// tolerance map, and the index of each unknown for the scaling).
-    pub(super) fn new<K: Collocation>(info: &FormulationInfo, options: &Options) -> Self {
+    pub(super) fn new<K: Collocation>(
+        info: &FormulationInfo,
+        blocks: Option<Blocks>,
+        options: &Options,
+    ) -> Self {
         let (m, n) = (info.equations(), info.unknowns());
         let v = |len: usize| vec![0.0; len];
         let mat = || DMatrix::zeros(m, n);
@@ -126,7 +131,7 @@ impl<S: StageSystems> Work<S> {
             weights: Weights::new(
                 &options.tol,
                 |i| K::tolerance_factor(options.tol.rtol(i), options.tol.atol(i)),
-                vec![true; n],
+                block::in_error_test(n, blocks),
                 info.variables
                     .iter()
                     .map(|var| i32::from(var.index.max(1)) - 1)
@@ -147,7 +152,7 @@ impl<S: StageSystems> Work<S> {
             } else {
                 DMatrix::zeros(0, 0)
             },
-            stages: S::new(m, n),
+            stages: S::with_blocks(m, n, blocks),
             algebraic: Vec::new(),
             projection: DenseLu::new(if K::END.is_some() { n } else { 0 }, Pivoting::Checked),
             algebraic_unknowns: Vec::new(),

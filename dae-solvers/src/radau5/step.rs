@@ -133,7 +133,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
     pub(super) fn new(sys: Formulation<'a>, problem: &Problem<'_>, options: &'a Options) -> Self {
         let info = sys.info();
         let (m, n) = (info.equations(), info.unknowns());
-        let mut w = Work::<S>::new::<K>(info, options);
+        let mut w = Work::<S>::new::<K>(info, sys.blocks(), options);
         w.y.copy_from_slice(problem.y0);
         // RADAU5: fnewt = max(10 u / rtol, min(0.03, rtol^(1/2))), here
         // with the smallest relative tolerance (an absolute one where all

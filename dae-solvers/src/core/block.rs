@@ -1,0 +1,361 @@
+//! The block corrector of forward sensitivities: one factorisation of the
+//! state's matrix for the whole block lower-triangular system.
+//!
+//! A system that is a state and its sensitivities side by side declares
+//! [`Blocks`] ([`DaeSystem::blocks`](dae_core::system::DaeSystem::blocks)):
+//! its `E` is block diagonal with `1 + P` equal blocks `E₀`, and its
+//! Jacobian block lower triangular with `1 + P` equal diagonal blocks `J₀`
+//! and the blocks `Bᵢ = ∂(J sᵢ + ∂f/∂pᵢ)/∂y` below them in the first block
+//! column. Every iteration matrix a method forms, `c E − J` (BDF's real
+//! one, Radau IIA's real `γ/h` and complex `(α + iβ)/h` ones), is then
+//!
+//! ```text
+//!     [ A              ]
+//!     [ −B₁   A        ]        A = c E₀ − J₀,
+//!     [  ⋮        ⋱    ]
+//!     [ −B_P        A  ]
+//! ```
+//!
+//! and [`Block`] solves it by factorising `A` alone (of the size of the
+//! state: the dense or the sparse LU the plain run would use) and block
+//! forward substitution,
+//!
+//! ```text
+//!     x₀ = A⁻¹ r₀,    xᵢ = A⁻¹ (rᵢ + Bᵢ x₀),
+//! ```
+//!
+//! the exact solution of the same linear system: the Newton iteration is
+//! the one of the dense `N (1 + P)` factorisation, at the cost of one `N × N`
+//! factorisation and `1 + P` solves. A system without blocks (every other)
+//! goes to the plain solver unchanged.
+//!
+//! The sensitivities may leave the error test ([`Blocks::error_control`]
+//! false, [`in_error_test`]): they are then also out of the Newton norm,
+//! which is safe because their rows are linear in them — the iteration
+//! converges them with the state's contraction.
+
+use super::matrix::{Corrector, Rows, StageSystems};
+use crate::linalg::Singular;
+use dae_core::system::Blocks;
+use nalgebra::DMatrix;
+
+/// A square solver `S` (a [`Corrector`] or a [`StageSystems`]) of the whole
+/// system, or of the state's block only with block forward substitution.
+pub(crate) enum Block<S> {
+    /// No block structure: `S` of the whole system.
+    Plain(S),
+    /// The block solve.
+    Lower(Box<Lower<S>>),
+}
+
+/// [`Block::Lower`]: the state block's solver and the sub-diagonal blocks.
+pub(crate) struct Lower<S> {
+    /// Unknowns of a block, `N`.
+    size: usize,
+    /// Blocks, `1 + P`.
+    count: usize,
+    /// The solver of `A` (`N × N`).
+    inner: S,
+    /// [`Corrector`]: the whole matrix as the method writes it.
+    full: DMatrix<f64>,
+    /// [`StageSystems`]: `E₀` and `J₀`, the diagonal blocks.
+    e0: DMatrix<f64>,
+    j0: DMatrix<f64>,
+    /// `Bᵢ` for `i = 1…P`, stacked (`P N × N`): the negated sub-diagonal
+    /// blocks of the iteration matrix.
+    below: DMatrix<f64>,
+    /// Scratch for `Bᵢ x₀` (real; and the imaginary part).
+    re: Vec<f64>,
+    im: Vec<f64>,
+}
+
+/// Whether `blocks` describes an `m × n` system a block solve can take.
+fn usable(m: usize, n: usize, blocks: Option<Blocks>) -> Option<Blocks> {
+    blocks.filter(|b| b.size > 0 && b.count > 1 && m == n && b.unknowns() == n)
+}
+
+impl<S> Lower<S> {
+    fn new(b: Blocks, inner: S, full: bool) -> Self {
+        let (n, p) = (b.size, b.count - 1);
+        let whole = if full { b.unknowns() } else { 0 };
+        Lower {
+            size: n,
+            count: b.count,
+            inner,
+            full: DMatrix::zeros(whole, whole),
+            e0: DMatrix::zeros(if full { 0 } else { n }, if full { 0 } else { n }),
+            j0: DMatrix::zeros(if full { 0 } else { n }, if full { 0 } else { n }),
+            below: DMatrix::zeros(p * n, n),
+            re: vec![0.0; n],
+            im: vec![0.0; n],
+        }
+    }
+
+    /// `x[n i..n (i+1)] += Bᵢ x[..n]` for every `i ≥ 1`, each block then
+    /// solved by `solve` (the first one solved before).
+    fn substitute(&mut self, x: &mut [f64], mut solve: impl FnMut(&mut S, &mut [f64])) {
+        let n = self.size;
+        let (first, rest) = x.split_at_mut(n);
+        solve(&mut self.inner, first);
+        for (i, xi) in rest[..n * (self.count - 1)].chunks_exact_mut(n).enumerate() {
+            let b = self.below.rows(n * i, n);
+            for (c, &x0) in first.iter().enumerate() {
+                if x0 != 0.0 {
+                    for (v, &bv) in xi.iter_mut().zip(b.column(c).iter()) {
+                        *v += bv * x0;
+                    }
+                }
+            }
+            solve(&mut self.inner, xi);
+        }
+    }
+}
+
+impl<L: Corrector> Corrector for Block<L> {
+    const LEAST_SQUARES: bool = L::LEAST_SQUARES;
+    fn new(m: usize, n: usize) -> Self {
+        Block::Plain(L::new(m, n))
+    }
+    fn with_blocks(m: usize, n: usize, blocks: Option<Blocks>) -> Self {
+        match usable(m, n, blocks).filter(|_| !L::LEAST_SQUARES) {
+            Some(b) => Block::Lower(Box::new(Lower::new(b, L::new(b.size, b.size), true))),
+            None => Block::Plain(L::new(m, n)),
+        }
+    }
+    #[inline]
+    fn matrix_mut(&mut self) -> &mut DMatrix<f64> {
+        match self {
+            Block::Plain(l) => l.matrix_mut(),
+            Block::Lower(b) => &mut b.full,
+        }
+    }
+    fn factor(&mut self, rows: &Rows) -> Result<(), Singular> {
+        let b = match self {
+            Block::Plain(l) => return l.factor(rows),
+            Block::Lower(b) => b,
+        };
+        let n = b.size;
+        b.inner.matrix_mut().copy_from(&b.full.view((0, 0), (n, n)));
+        // The iteration matrix holds −Bᵢ below the diagonal.
+        for i in 1..b.count {
+            let mut dst = b.below.rows_mut(n * (i - 1), n);
+            for (d, s) in dst.iter_mut().zip(b.full.view((n * i, 0), (n, n)).iter()) {
+                *d = -s;
+            }
+        }
+        b.inner.factor(rows)
+    }
+    #[inline]
+    fn solve(&mut self, x: &mut [f64]) {
+        match self {
+            Block::Plain(l) => l.solve(x),
+            Block::Lower(b) => b.substitute(x, |l, xi| l.solve(xi)),
+        }
+    }
+}
+
+impl<S: StageSystems> StageSystems for Block<S> {
+    const LEAST_SQUARES: bool = S::LEAST_SQUARES;
+    fn new(m: usize, n: usize) -> Self {
+        Block::Plain(S::new(m, n))
+    }
+    fn with_blocks(m: usize, n: usize, blocks: Option<Blocks>) -> Self {
+        match usable(m, n, blocks).filter(|_| !S::LEAST_SQUARES) {
+            Some(b) => Block::Lower(Box::new(Lower::new(b, S::new(b.size, b.size), false))),
+            None => Block::Plain(S::new(m, n)),
+        }
+    }
+    fn factor(
+        &mut self,
+        e: &DMatrix<f64>,
+        j: &DMatrix<f64>,
+        g: f64,
+        a: f64,
+        bi: f64,
+        rows: &Rows,
+    ) -> Result<(), Singular> {
+        let b = match self {
+            Block::Plain(s) => return s.factor(e, j, g, a, bi, rows),
+            Block::Lower(b) => b,
+        };
+        let n = b.size;
+        b.e0.copy_from(&e.view((0, 0), (n, n)));
+        b.j0.copy_from(&j.view((0, 0), (n, n)));
+        // E is block diagonal: below the diagonal the real and the
+        // complex matrices both hold −J's blocks, −Bᵢ.
+        b.below.copy_from(&j.view((n, 0), (n * (b.count - 1), n)));
+        b.inner.factor(&b.e0, &b.j0, g, a, bi, rows)
+    }
+    #[inline]
+    fn solve_real(&mut self, x: &mut [f64]) {
+        match self {
+            Block::Plain(s) => s.solve_real(x),
+            Block::Lower(b) => b.substitute(x, |s, xi| s.solve_real(xi)),
+        }
+    }
+    fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]) {
+        let b = match self {
+            Block::Plain(s) => return s.solve_complex(re, im),
+            Block::Lower(b) => b,
+        };
+        let n = b.size;
+        b.inner.solve_complex(&mut re[..n], &mut im[..n]);
+        for i in 1..b.count {
+            let below = b.below.rows(n * (i - 1), n);
+            b.re.copy_from_slice(&re[n * i..n * (i + 1)]);
+            b.im.copy_from_slice(&im[n * i..n * (i + 1)]);
+            for c in 0..n {
+                let (xr, xi) = (re[c], im[c]);
+                for (r, &bv) in below.column(c).iter().enumerate() {
+                    b.re[r] += bv * xr;
+                    b.im[r] += bv * xi;
+                }
+            }
+            b.inner.solve_complex(&mut b.re, &mut b.im);
+            re[n * i..n * (i + 1)].copy_from_slice(&b.re);
+            im[n * i..n * (i + 1)].copy_from_slice(&b.im);
+        }
+    }
+}
+
+/// The components of an `n`-unknown system in its error test: all, or
+/// with [`Blocks::error_control`] off the first block's only.
+pub(crate) fn in_error_test(n: usize, blocks: Option<Blocks>) -> Vec<bool> {
+    let mut mask = vec![true; n];
+    restrict_error_test(&mut mask, blocks);
+    mask
+}
+
+/// Take the blocks after the first out of `mask` when
+/// [`Blocks::error_control`] is off.
+pub(crate) fn restrict_error_test(mask: &mut [bool], blocks: Option<Blocks>) {
+    if let Some(b) = blocks.filter(|b| !b.error_control && b.unknowns() == mask.len()) {
+        mask[b.size..].fill(false);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::matrix::{SquareLu, SquareStages};
+
+    fn rng(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+
+    /// A block system (`n` per block, `count` blocks): `E` block diagonal
+    /// with equal blocks, `J` with equal diagonal blocks and random blocks
+    /// in the first block column.
+    fn system(n: usize, count: usize, next: &mut impl FnMut() -> f64) -> [DMatrix<f64>; 2] {
+        let e0 = DMatrix::from_fn(n, n, |r, c| {
+            if r == c && r + 1 < n {
+                1.0 + 0.5 * next().abs()
+            } else {
+                0.0
+            }
+        });
+        let j0 = DMatrix::from_fn(n, n, |r, c| next() + if r == c { 3.0 } else { 0.0 });
+        let w = n * count;
+        let mut e = DMatrix::zeros(w, w);
+        let mut j = DMatrix::zeros(w, w);
+        for b in 0..count {
+            e.view_mut((n * b, n * b), (n, n)).copy_from(&e0);
+            j.view_mut((n * b, n * b), (n, n)).copy_from(&j0);
+            if b > 0 {
+                j.view_mut((n * b, 0), (n, n))
+                    .copy_from(&DMatrix::from_fn(n, n, |_, _| next()));
+            }
+        }
+        [e, j]
+    }
+
+    fn close(u: &[f64], v: &[f64]) {
+        for (a, b) in u.iter().zip(v) {
+            assert!((a - b).abs() <= 1e-11 * (1.0 + b.abs()), "{u:?} vs {v:?}");
+        }
+    }
+
+    /// The block solves are the dense solves of the whole matrix: real,
+    /// complex, and BDF's corrector.
+    #[test]
+    fn block_solves_are_the_dense_solves() {
+        let mut next = rng(3);
+        let (n, count) = (4, 3);
+        let w = n * count;
+        let [e, j] = system(n, count, &mut next);
+        let blocks = Some(Blocks {
+            size: n,
+            count,
+            error_control: true,
+        });
+        let rows = Rows::square();
+        let (g, a, b) = (3.7, 2.5, 1.5);
+        let mut dense = SquareStages::new(w, w);
+        dense.factor(&e, &j, g, a, b, &rows).expect("nonsingular");
+        let mut block = Block::<SquareStages>::with_blocks(w, w, blocks);
+        assert!(matches!(block, Block::Lower(_)));
+        block.factor(&e, &j, g, a, b, &rows).expect("nonsingular");
+        let rhs: Vec<f64> = (0..2 * w).map(|_| next()).collect();
+        let (mut x1, mut x2) = (rhs[..w].to_vec(), rhs[..w].to_vec());
+        dense.solve_real(&mut x1);
+        block.solve_real(&mut x2);
+        close(&x2, &x1);
+        let (mut re1, mut im1) = (rhs[..w].to_vec(), rhs[w..].to_vec());
+        let (mut re2, mut im2) = (re1.clone(), im1.clone());
+        dense.solve_complex(&mut re1, &mut im1);
+        block.solve_complex(&mut re2, &mut im2);
+        close(&re2, &re1);
+        close(&im2, &im1);
+
+        let cj = 2.0;
+        let matrix = DMatrix::from_fn(w, w, |r, c| cj * e[(r, c)] - j[(r, c)]);
+        let mut dense = SquareLu::new(w, w);
+        dense.matrix_mut().copy_from(&matrix);
+        dense.factor(&rows).expect("nonsingular");
+        let mut block = Block::<SquareLu>::with_blocks(w, w, blocks);
+        block.matrix_mut().copy_from(&matrix);
+        block.factor(&rows).expect("nonsingular");
+        let (mut x1, mut x2) = (rhs[..w].to_vec(), rhs[..w].to_vec());
+        dense.solve(&mut x1);
+        block.solve(&mut x2);
+        close(&x2, &x1);
+    }
+
+    /// Without blocks, or with blocks that do not fit, the plain solver.
+    #[test]
+    fn plain_without_fitting_blocks() {
+        let fit = |m, n, size, count| {
+            let b = Blocks {
+                size,
+                count,
+                error_control: true,
+            };
+            matches!(
+                Block::<SquareLu>::with_blocks(m, n, Some(b)),
+                Block::Lower(_)
+            )
+        };
+        assert!(fit(6, 6, 2, 3));
+        assert!(!fit(6, 6, 3, 3));
+        assert!(!fit(6, 6, 6, 1));
+        assert!(matches!(
+            Block::<SquareLu>::with_blocks(6, 6, None),
+            Block::Plain(_)
+        ));
+        let off = Blocks {
+            size: 2,
+            count: 3,
+            error_control: false,
+        };
+        assert_eq!(
+            in_error_test(6, Some(off)),
+            [true, true, false, false, false, false]
+        );
+        assert_eq!(in_error_test(6, None), [true; 6]);
+    }
+}
