@@ -130,6 +130,24 @@
 //! system `E(y0) y' = f(t0, y0)`, whose free directions (`ker E`: the
 //! algebraic unknowns) are fixed by the differentiated chain
 //! `G y' + ∂g/∂t = 0`, and otherwise chosen of minimum norm.
+//!
+//! # Large systems
+//!
+//! From [`crate::core::matrix::SPARSE_FROM`] unknowns (with the `sparse`
+//! feature) neither computation factorises an N×N matrix densely where
+//! the structure allows ([`crate::linalg::sparse_lstsq`]): a least-change
+//! step on a block of at least that many rows or columns whose non-zero
+//! rows have full rank is one sparse LU (of the block, or of
+//! `[I Jᵀ; J 0]` for a wide one), and the initial derivative of a system
+//! whose `E(y0)`, without its zero rows and columns, is a square
+//! nonsingular block (index-1 and GGL forms: `E` selects the differential
+//! unknowns' derivatives) is one sparse LU of that block, with `ker E` the
+//! zero columns, plus one of `G` restricted to them. The results are the
+//! dense path's to round-off. Everything else — a singular or tall block
+//! (the rank and the dependent rows are then named by the SVD), an `E`
+//! of another form, the curvature-corrected step of a projection — keeps
+//! the dense SVD, whose cost grows like N³; the constraint chain's
+//! Jacobian `G` (K×N) is evaluated dense in either case.
 
 use crate::core::matrix::SPARSE_FROM;
 use crate::error::{InitError, SolveError};
