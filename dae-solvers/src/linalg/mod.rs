@@ -80,6 +80,7 @@ pub(crate) mod sparse;
 #[cfg(not(feature = "sparse"))]
 #[path = "sparse_off.rs"]
 pub(crate) mod sparse;
+pub(crate) mod sparse_lstsq;
 
 pub(crate) use lstsq::ConstrainedLstsq;
 pub(crate) use lu::{ComplexLu, DenseLu, Pivoting, Singular};
