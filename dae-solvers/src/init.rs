@@ -131,6 +131,7 @@
 //! algebraic unknowns) are fixed by the differentiated chain
 //! `G y' + ∂g/∂t = 0`, and otherwise chosen of minimum norm.
 
+use crate::core::matrix::SPARSE_FROM;
 use crate::error::{InitError, SolveError};
 use crate::options::Tolerances;
 use crate::stats::Stats;
@@ -1584,6 +1585,11 @@ pub(crate) fn initial_derivative_with(
             what: rule.non_finite[1],
         });
     }
+    if m == n && n >= SPARSE_FROM {
+        if let Some(cols) = scaled_permutation(&e) {
+            return derivative_of_permutation(sys, t0, y0, &e, &f, &cols, rule);
+        }
+    }
     // Zero rows padded below so that V is N×N and carries ker E.
     let rows = m.max(n);
     let mut a = DMatrix::zeros(rows, n);
@@ -1609,8 +1615,11 @@ pub(crate) fn initial_derivative_with(
 
     let nz = n - rank;
     if nz > 0 && !info.constraints.is_empty() {
-        let z = vt.rows(rank, nz).transpose();
+        let z = Kernel::Basis(vt.rows(rank, nz).transpose());
         if let Some(zeta) = kernel_from_chain(sys, t0, y0, &yp, &z, rule)? {
+            let Kernel::Basis(z) = z else {
+                unreachable!("made above")
+            };
             for (k, zeta_k) in zeta.iter().enumerate() {
                 for (c, ypc) in yp.iter_mut().enumerate() {
                     *ypc += zeta_k * z[(c, k)];
@@ -1618,6 +1627,11 @@ pub(crate) fn initial_derivative_with(
             }
         }
     }
+    finite_derivative(yp, t0, rule)
+}
+
+/// `yp`, or the typed error of a non-finite one where `rule` refuses it.
+fn finite_derivative(yp: Vec<f64>, t0: f64, rule: &DerivativeRule) -> Result<Vec<f64>, SolveError> {
     if !rule.lenient && !yp.iter().all(|v| v.is_finite()) {
         return Err(SolveError::NonFinite {
             t: t0,
@@ -1625,6 +1639,99 @@ pub(crate) fn initial_derivative_with(
         });
     }
     Ok(yp)
+}
+
+/// For a square `E` with at most one non-zero in every row and every
+/// column (a scaled partial permutation, the `E` of every semi-explicit
+/// formulation), the column of each row's non-zero (`None` for a zero
+/// row); `None` otherwise.
+fn scaled_permutation(e: &DMatrix<f64>) -> Option<Vec<Option<usize>>> {
+    let n = e.ncols();
+    let mut col_of_row = vec![None; e.nrows()];
+    for c in 0..n {
+        let mut rows = (0..e.nrows()).filter(|&r| e[(r, c)] != 0.0);
+        if let Some(r) = rows.next() {
+            if rows.next().is_some() || col_of_row[r].is_some() {
+                return None;
+            }
+            col_of_row[r] = Some(c);
+        }
+    }
+    Some(col_of_row)
+}
+
+/// [`initial_derivative_with`] for a scaled partial permutation `E`
+/// ([`scaled_permutation`]: `cols[r]` the column of row `r`'s non-zero):
+/// its singular values are the `|E_rc|`, `E⁺f` is `f_r / E_rc` in column
+/// `c` and `ker E` is spanned by the unit vectors of the other columns —
+/// what the SVD of the general case finds, without an `O(N³)`
+/// factorisation (BENCHMARKS.md §14: bdf's start on the 400-link chain).
+fn derivative_of_permutation(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    y0: &[f64],
+    e: &DMatrix<f64>,
+    f: &[f64],
+    cols: &[Option<usize>],
+    rule: &DerivativeRule,
+) -> Result<Vec<f64>, SolveError> {
+    let n = e.ncols();
+    let mut s: Vec<f64> = cols
+        .iter()
+        .enumerate()
+        .filter_map(|(r, c)| c.map(|c| e[(r, c)].abs()))
+        .collect();
+    s.resize(n, 0.0);
+    let rank = rule.rank.of(&s, n, n);
+    // The `rank` largest are kept (`Rank::of` counts those above its
+    // cut-off, so the `rank`-th largest is above the next one).
+    let cutoff = if rank == 0 {
+        f64::INFINITY
+    } else {
+        let mut sorted = s.clone();
+        sorted.sort_by(|a, b| b.total_cmp(a));
+        sorted[rank - 1]
+    };
+    let mut yp = vec![0.0; n];
+    let mut kept = vec![false; n];
+    for (r, c) in cols.iter().enumerate() {
+        if let Some(c) = *c {
+            if e[(r, c)].abs() >= cutoff {
+                yp[c] = f[r] / e[(r, c)];
+                kept[c] = true;
+            }
+        }
+    }
+    let kernel: Vec<usize> = (0..n).filter(|&c| !kept[c]).collect();
+    if !kernel.is_empty() && !sys.info().constraints.is_empty() {
+        let z = Kernel::Columns(kernel);
+        if let Some(zeta) = kernel_from_chain(sys, t0, y0, &yp, &z, rule)? {
+            let Kernel::Columns(kernel) = z else {
+                unreachable!("made above")
+            };
+            for (&c, zeta_k) in kernel.iter().zip(&zeta) {
+                yp[c] += zeta_k;
+            }
+        }
+    }
+    finite_derivative(yp, t0, rule)
+}
+
+/// A basis of `ker E` as columns: orthonormal and dense, or unit vectors
+/// (the columns they select).
+enum Kernel {
+    Basis(DMatrix<f64>),
+    Columns(Vec<usize>),
+}
+
+impl Kernel {
+    /// `(N, dimension)`.
+    fn shape(&self, n: usize) -> (usize, usize) {
+        match self {
+            Kernel::Basis(z) => z.shape(),
+            Kernel::Columns(c) => (n, c.len()),
+        }
+    }
 }
 
 /// `ζ = −(G Z)⁺ (G y'_E + g_t)`: the kernel part of `y' = y'_E + Z ζ` (`Z`
@@ -1636,11 +1743,11 @@ fn kernel_from_chain(
     t0: f64,
     y0: &[f64],
     yp: &[f64],
-    z: &DMatrix<f64>,
+    z: &Kernel,
     rule: &DerivativeRule,
 ) -> Result<Option<Vec<f64>>, SolveError> {
     let give_up = |err: SolveError| if rule.lenient { Ok(None) } else { Err(err) };
-    let (n, nz) = z.shape();
+    let (n, nz) = z.shape(yp.len());
     let mut chain = Chain::new(sys, t0);
     // Only G enters: a lenient caller does without a finite g(t0, y0).
     let finite = chain.eval(y0);
@@ -1671,9 +1778,20 @@ fn kernel_from_chain(
         });
     }
     let mut gz: DMatrix<f64> = DMatrix::zeros(k, nz);
-    for r in 0..k {
-        for c in 0..nz {
-            gz[(r, c)] = (0..n).map(|j| chain.jac[(r, j)] * z[(j, c)]).sum();
+    match z {
+        Kernel::Basis(z) => {
+            for r in 0..k {
+                for c in 0..nz {
+                    gz[(r, c)] = (0..n).map(|j| chain.jac[(r, j)] * z[(j, c)]).sum();
+                }
+            }
+        }
+        Kernel::Columns(cols) => {
+            for (c, &j) in cols.iter().enumerate() {
+                for r in 0..k {
+                    gz[(r, c)] = chain.jac[(r, j)];
+                }
+            }
         }
     }
     if !gz.iter().all(|v| v.is_finite()) {
