@@ -99,23 +99,18 @@ impl<L: Corrector> Integrator<'_, L> {
     /// factor it in place.
     fn form_iteration_matrix(&mut self) -> Result<(), Fail> {
         let sys = &*self.sys;
-        sys.rhs_jacobian(self.t, &self.y, self.lu.matrix_mut());
-        sys.leading(self.t, &self.y, &mut self.lead);
-        if !self.constant_leading {
-            sys.leading_jacobian(self.t, &self.y, &self.yp, &mut self.lead_jac);
-        }
+        self.rhs_jac.rhs_jacobian(sys, self.t, &self.y);
+        self.lead.leading(sys, self.t, &self.y);
+        let lead_jac = if self.constant_leading {
+            None
+        } else {
+            self.lead_jac
+                .leading_jacobian(sys, self.t, &self.y, &self.yp);
+            Some(&self.lead_jac)
+        };
         self.stats.jacobian_evals += 1;
         let cj = self.cj;
-        let a = self.lu.matrix_mut().as_mut_slice();
-        for (g, e) in a.iter_mut().zip(self.lead.as_slice()) {
-            *g = cj * e - *g;
-        }
-        if !self.constant_leading {
-            for (g, l) in a.iter_mut().zip(self.lead_jac.as_slice()) {
-                *g += l;
-            }
-        }
-        if !all_finite(a) {
+        if !self.lu.assemble(cj, &self.lead, &self.rhs_jac, lead_jac) {
             return Err(Fail::NonFinite("iteration matrix"));
         }
         self.cjold = cj;
@@ -123,7 +118,7 @@ impl<L: Corrector> Integrator<'_, L> {
         self.jac = JacState::Fresh;
         self.stats.factorizations += 1;
         if L::LEAST_SQUARES {
-            self.rows.update(&self.lead, self.weights.get());
+            self.rows.update(self.lead.dense(), self.weights.get());
         }
         self.lu.factor(&self.rows).map_err(|_| Fail::Singular)
     }

@@ -7,11 +7,10 @@ use super::NCOL;
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
-use crate::core::matrix::{Corrector, Rows};
+use crate::core::matrix::{Corrector, Matrix, Rows, Structure};
 use crate::core::weights::Weights;
 use crate::options::Tolerances;
 use crate::{SolveError, Stats};
-use nalgebra::DMatrix;
 
 /// Settings of one integrator (the order in this method's count).
 pub(super) use crate::core::control::StepConfig as Config;
@@ -85,10 +84,14 @@ pub(super) struct Integrator<'a, L> {
     pub(super) lu: L,
     /// Row classes of a least-squares corrector.
     pub(super) rows: Rows,
-    /// `E(y)`.
-    pub(super) lead: DMatrix<f64>,
+    /// `E(y)`. Like `rhs_jac` and `lead_jac`, compressed on the run's
+    /// iteration pattern for a large sparse square system
+    /// ([`Structure::of`]), dense otherwise.
+    pub(super) lead: Matrix,
+    /// `∂f/∂y`.
+    pub(super) rhs_jac: Matrix,
     /// `∂(E(y) y')/∂y`.
-    pub(super) lead_jac: DMatrix<f64>,
+    pub(super) lead_jac: Matrix,
 
     /// Work counters (of this run, and of the work before it that it was
     /// started with).
@@ -160,6 +163,12 @@ impl<'a, L: Corrector> Integrator<'a, L> {
     ) -> Self {
         let info = sys.info();
         let (m, n) = (info.equations(), info.unknowns());
+        let structure = if L::LEAST_SQUARES {
+            None
+        } else {
+            Structure::of(&*sys)
+        };
+        let matrix = || Matrix::new(m, n, structure.as_ref());
         Integrator {
             sys: sys.clone(),
             cfg,
@@ -193,8 +202,9 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             e: vec![0.0; n],
             lu: L::with_blocks(m, n, sys.blocks()),
             rows: Rows::new(info),
-            lead: DMatrix::zeros(m, n),
-            lead_jac: DMatrix::zeros(m, n),
+            lead: matrix(),
+            rhs_jac: matrix(),
+            lead_jac: matrix(),
             stats: Stats::default(),
             steps: Steps::new(
                 Policy::DASSL,

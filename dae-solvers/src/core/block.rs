@@ -34,7 +34,7 @@
 //! which is safe because their rows are linear in them — the iteration
 //! converges them with the state's contraction.
 
-use super::matrix::{Corrector, Rows, StageSystems};
+use super::matrix::{write_dense, Corrector, Matrix, Rows, StageSystems};
 use crate::linalg::Singular;
 use dae_core::system::Blocks;
 use nalgebra::DMatrix;
@@ -59,8 +59,8 @@ pub(crate) struct Lower<S> {
     /// [`Corrector`]: the whole matrix as the method writes it.
     full: DMatrix<f64>,
     /// [`StageSystems`]: `E₀` and `J₀`, the diagonal blocks.
-    e0: DMatrix<f64>,
-    j0: DMatrix<f64>,
+    e0: Matrix,
+    j0: Matrix,
     /// `Bᵢ` for `i = 1…P`, stacked (`P N × N`): the negated sub-diagonal
     /// blocks of the iteration matrix.
     below: DMatrix<f64>,
@@ -83,8 +83,14 @@ impl<S> Lower<S> {
             count: b.count,
             inner,
             full: DMatrix::zeros(whole, whole),
-            e0: DMatrix::zeros(if full { 0 } else { n }, if full { 0 } else { n }),
-            j0: DMatrix::zeros(if full { 0 } else { n }, if full { 0 } else { n }),
+            e0: Matrix::Dense(DMatrix::zeros(
+                if full { 0 } else { n },
+                if full { 0 } else { n },
+            )),
+            j0: Matrix::Dense(DMatrix::zeros(
+                if full { 0 } else { n },
+                if full { 0 } else { n },
+            )),
             below: DMatrix::zeros(p * n, n),
             re: vec![0.0; n],
             im: vec![0.0; n],
@@ -129,6 +135,14 @@ impl<L: Corrector> Corrector for Block<L> {
             Block::Lower(b) => &mut b.full,
         }
     }
+    fn assemble(&mut self, c: f64, e: &Matrix, j: &Matrix, l: Option<&Matrix>) -> bool {
+        match self {
+            // The wrapped corrector's own (compressed where it is).
+            Block::Plain(inner) => inner.assemble(c, e, j, l),
+            // A system declaring blocks reports no sparse structure.
+            Block::Lower(b) => write_dense(&mut b.full, c, e, j, l),
+        }
+    }
     fn factor(&mut self, rows: &Rows) -> Result<(), Singular> {
         let b = match self {
             Block::Plain(l) => return l.factor(rows),
@@ -167,8 +181,8 @@ impl<S: StageSystems> StageSystems for Block<S> {
     }
     fn factor(
         &mut self,
-        e: &DMatrix<f64>,
-        j: &DMatrix<f64>,
+        e: &Matrix,
+        j: &Matrix,
         g: f64,
         a: f64,
         bi: f64,
@@ -179,8 +193,13 @@ impl<S: StageSystems> StageSystems for Block<S> {
             Block::Lower(b) => b,
         };
         let n = b.size;
-        b.e0.copy_from(&e.view((0, 0), (n, n)));
-        b.j0.copy_from(&j.view((0, 0), (n, n)));
+        // A system declaring blocks reports no sparse structure: its
+        // matrices are dense (`Matrix::dense` says so where not).
+        let (e, j) = (e.dense(), j.dense());
+        if let (Matrix::Dense(e0), Matrix::Dense(j0)) = (&mut b.e0, &mut b.j0) {
+            e0.copy_from(&e.view((0, 0), (n, n)));
+            j0.copy_from(&j.view((0, 0), (n, n)));
+        }
         // E is block diagonal: below the diagonal the real and the
         // complex matrices both hold −J's blocks, −Bᵢ.
         b.below.copy_from(&j.view((n, 0), (n * (b.count - 1), n)));
@@ -296,10 +315,11 @@ mod tests {
         let rows = Rows::square();
         let (g, a, b) = (3.7, 2.5, 1.5);
         let mut dense = SquareStages::new(w, w);
-        dense.factor(&e, &j, g, a, b, &rows).expect("nonsingular");
+        let (em, jm) = (Matrix::Dense(e.clone()), Matrix::Dense(j.clone()));
+        dense.factor(&em, &jm, g, a, b, &rows).expect("nonsingular");
         let mut block = Block::<SquareStages>::with_blocks(w, w, blocks);
         assert!(matches!(block, Block::Lower(_)));
-        block.factor(&e, &j, g, a, b, &rows).expect("nonsingular");
+        block.factor(&em, &jm, g, a, b, &rows).expect("nonsingular");
         let rhs: Vec<f64> = (0..2 * w).map(|_| next()).collect();
         let (mut x1, mut x2) = (rhs[..w].to_vec(), rhs[..w].to_vec());
         dense.solve_real(&mut x1);

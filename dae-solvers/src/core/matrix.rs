@@ -61,9 +61,14 @@
 
 use crate::linalg::lstsq::{null_space, split_rows};
 use crate::linalg::sparse::{Pattern, SparseFactor};
-use crate::linalg::{ComplexLu, ConstrainedLstsq, DenseLu, Pivoting, Singular};
-use dae_core::system::{Blocks, FormulationInfo, RowKind};
+use crate::linalg::{
+    all_finite, mat_vec, ComplexLu, ConstrainedLstsq, DenseLu, Pivoting, Singular,
+};
+use dae_core::system::{
+    Blocks, DaeSystem, FormulationInfo, Pattern as SystemPattern, RowKind, Sparsity,
+};
 use nalgebra::{Complex, DMatrix};
+use std::rc::Rc;
 
 /// Unknowns from which a square iteration matrix is factorised by the
 /// sparse LU ([`crate::linalg::sparse`]) rather than the dense one, unless
@@ -84,6 +89,222 @@ pub(crate) const SPARSE_DENSITY: f64 = 0.2;
 /// included) is factorised sparse.
 fn sparse_enough(n: usize, nnz: usize) -> bool {
     (nnz as f64) <= SPARSE_DENSITY * (n as f64) * (n as f64)
+}
+
+/// The structural non-zeros of one run's matrices on the compressed path:
+/// the iteration pattern `U` (`E ∪ ∂f/∂y ∪ ∂(E z)/∂y ∪` the diagonal,
+/// `N × N`), on which every [`Matrix::Compressed`] of the run holds its
+/// values, and where each entry of the three patterns of
+/// [`DaeSystem::sparsity`] sits in `U`. Made once per run, shared by the
+/// matrices and read by the factorisations for their one analysis.
+pub(crate) struct Structure {
+    /// The iteration pattern `U`.
+    iteration: SystemPattern,
+    /// The system's own patterns (what its `*_values` methods fill).
+    sparsity: Sparsity,
+    /// Position in `U` of each entry of `E`, `∂f/∂y`, `∂(E z)/∂y`.
+    leading_at: Vec<usize>,
+    rhs_jacobian_at: Vec<usize>,
+    leading_jacobian_at: Vec<usize>,
+}
+
+impl Structure {
+    /// The structure of `sys` when its matrices are to be held compressed:
+    /// square, at least [`SPARSE_FROM`] unknowns, and its iteration
+    /// pattern (from the derivation, [`DaeSystem::sparsity`]) at most
+    /// [`SPARSE_DENSITY`] full. `None` otherwise (the dense path; a system
+    /// that reports no structure reports a full one).
+    pub(crate) fn of(sys: &dyn DaeSystem) -> Option<Rc<Structure>> {
+        let info = sys.info();
+        let (m, n) = (info.equations(), info.unknowns());
+        if m != n || n < SPARSE_FROM {
+            return None;
+        }
+        let sparsity = sys.sparsity();
+        let parts = [
+            &sparsity.leading,
+            &sparsity.rhs_jacobian,
+            &sparsity.leading_jacobian,
+        ];
+        // A full part makes a full union: refused before it is formed.
+        if parts
+            .iter()
+            .any(|p| (p.rows, p.cols) != (n, n) || !sparse_enough(n, p.nnz()))
+        {
+            return None;
+        }
+        let iteration = SystemPattern::from_entries(
+            n,
+            n,
+            parts
+                .iter()
+                .flat_map(|p| p.entries())
+                .chain((0..n).map(|i| (i, i))),
+        );
+        if !sparse_enough(n, iteration.nnz()) {
+            return None;
+        }
+        let at = |p: &SystemPattern| -> Vec<usize> {
+            p.entries()
+                .map(|(r, c)| iteration.position(r, c).expect("U holds every part"))
+                .collect()
+        };
+        Some(Rc::new(Structure {
+            leading_at: at(&sparsity.leading),
+            rhs_jacobian_at: at(&sparsity.rhs_jacobian),
+            leading_jacobian_at: at(&sparsity.leading_jacobian),
+            iteration,
+            sparsity,
+        }))
+    }
+
+    /// The pattern and analysis of the sparse LU for matrices on `U`.
+    fn lu_pattern(&self) -> Result<Pattern, Singular> {
+        let u = &self.iteration;
+        Pattern::from_compressed(u.cols, u.col_ptr.clone(), u.row_idx.clone())
+    }
+}
+
+/// An `M × N` matrix of a step loop (`E`, `J`, `∂(E z)/∂y`): dense, or its
+/// values on the run's iteration pattern ([`Structure`]) — no `N × N`
+/// buffer on the compressed path. Both forms are read as one slice of
+/// values ([`Matrix::values`]), so that the entrywise work of a step loop
+/// (`J −= ∂(E z)/∂y`, copies, finiteness) is written once; the
+/// factorisations ([`StageSystems::factor`], [`Corrector::assemble`])
+/// take either.
+pub(crate) enum Matrix {
+    /// Column-major `M × N`.
+    Dense(DMatrix<f64>),
+    /// Values on the iteration pattern, in its order.
+    Compressed {
+        structure: Rc<Structure>,
+        values: Vec<f64>,
+        /// The system's own values of one part, before they are placed.
+        own: Vec<f64>,
+    },
+}
+
+impl Matrix {
+    /// Zeros: compressed on `structure` when given, else dense `m × n`.
+    pub(crate) fn new(m: usize, n: usize, structure: Option<&Rc<Structure>>) -> Self {
+        match structure {
+            None => Matrix::Dense(DMatrix::zeros(m, n)),
+            Some(s) => Matrix::Compressed {
+                structure: Rc::clone(s),
+                values: vec![0.0; s.iteration.nnz()],
+                own: Vec::new(),
+            },
+        }
+    }
+
+    /// The dense matrix (a path that only runs dense: least squares, the
+    /// end-point projection).
+    pub(crate) fn dense(&self) -> &DMatrix<f64> {
+        match self {
+            Matrix::Dense(d) => d,
+            Matrix::Compressed { .. } => unreachable!("a compressed matrix read as dense"),
+        }
+    }
+
+    /// Every value: the dense matrix column-major, or the values on the
+    /// iteration pattern.
+    pub(crate) fn values(&self) -> &[f64] {
+        match self {
+            Matrix::Dense(d) => d.as_slice(),
+            Matrix::Compressed { values, .. } => values,
+        }
+    }
+
+    /// Every value, to write (see [`Matrix::values`]).
+    pub(crate) fn values_mut(&mut self) -> &mut [f64] {
+        match self {
+            Matrix::Dense(d) => d.as_mut_slice(),
+            Matrix::Compressed { values, .. } => values,
+        }
+    }
+
+    /// `self ← other` (same form and shape).
+    pub(crate) fn copy_from(&mut self, other: &Matrix) {
+        self.values_mut().copy_from_slice(other.values());
+    }
+
+    /// `E(t, y)`.
+    pub(crate) fn leading(&mut self, sys: &dyn DaeSystem, t: f64, y: &[f64]) {
+        match self {
+            Matrix::Dense(d) => sys.leading(t, y, d),
+            Matrix::Compressed {
+                structure: s,
+                values,
+                own,
+            } => {
+                own.resize(s.sparsity.leading.nnz(), 0.0);
+                sys.leading_values(t, y, &s.sparsity.leading, own);
+                place(values, own, &s.leading_at);
+            }
+        }
+    }
+
+    /// `∂f/∂y` at `(t, y)`.
+    pub(crate) fn rhs_jacobian(&mut self, sys: &dyn DaeSystem, t: f64, y: &[f64]) {
+        match self {
+            Matrix::Dense(d) => sys.rhs_jacobian(t, y, d),
+            Matrix::Compressed {
+                structure: s,
+                values,
+                own,
+            } => {
+                own.resize(s.sparsity.rhs_jacobian.nnz(), 0.0);
+                sys.rhs_jacobian_values(t, y, &s.sparsity.rhs_jacobian, own);
+                place(values, own, &s.rhs_jacobian_at);
+            }
+        }
+    }
+
+    /// `∂(E z)/∂y` at `(t, y)`.
+    pub(crate) fn leading_jacobian(&mut self, sys: &dyn DaeSystem, t: f64, y: &[f64], z: &[f64]) {
+        match self {
+            Matrix::Dense(d) => sys.leading_jacobian(t, y, z, d),
+            Matrix::Compressed {
+                structure: s,
+                values,
+                own,
+            } => {
+                own.resize(s.sparsity.leading_jacobian.nnz(), 0.0);
+                sys.leading_jacobian_values(t, y, z, &s.sparsity.leading_jacobian, own);
+                place(values, own, &s.leading_jacobian_at);
+            }
+        }
+    }
+
+    /// `out ← A x` (`x` length `N`, `out` length `M`).
+    pub(crate) fn mat_vec(&self, x: &[f64], out: &mut [f64]) {
+        match self {
+            Matrix::Dense(d) => mat_vec(d, x, out),
+            Matrix::Compressed {
+                structure: s,
+                values,
+                ..
+            } => {
+                // Column by column, like the dense product: the same sums
+                // (the dense one adds exact zeros besides).
+                out.fill(0.0);
+                let u = &s.iteration;
+                for (c, &xc) in x.iter().enumerate() {
+                    for k in u.col_ptr[c]..u.col_ptr[c + 1] {
+                        out[u.row_idx[k]] += values[k] * xc;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `values ← 0`, then `values[at[k]] = own[k]`.
+fn place(values: &mut [f64], own: &[f64], at: &[usize]) {
+    values.fill(0.0);
+    for (&v, &k) in own.iter().zip(at) {
+        values[k] = v;
+    }
 }
 
 /// Whether a multistep method's Jacobian (and the iteration matrix formed
@@ -172,6 +393,28 @@ impl Rows {
     }
 }
 
+/// Write `c E − J (+ L)` into the dense `a` (all three dense, of `a`'s
+/// shape); whether every entry is finite. [`Corrector::assemble`]'s dense
+/// form, shared by the correctors that wrap or fall back to it.
+pub(crate) fn write_dense(
+    a: &mut DMatrix<f64>,
+    c: f64,
+    e: &Matrix,
+    j: &Matrix,
+    l: Option<&Matrix>,
+) -> bool {
+    let a = a.as_mut_slice();
+    for (g, (e, j)) in a.iter_mut().zip(e.values().iter().zip(j.values())) {
+        *g = c * e - j;
+    }
+    if let Some(l) = l {
+        for (g, l) in a.iter_mut().zip(l.values()) {
+            *g += l;
+        }
+    }
+    all_finite(a)
+}
+
 /// One real iteration matrix `A` (M×N) and its solver (BDF's corrector).
 pub(crate) trait Corrector {
     /// Whether [`Corrector::factor`] reads [`Rows`] (least squares).
@@ -189,6 +432,12 @@ pub(crate) trait Corrector {
     }
     /// The matrix to write before [`Corrector::factor`].
     fn matrix_mut(&mut self) -> &mut DMatrix<f64>;
+    /// Write `c E − J (+ L)` as the matrix to factor (`L = ∂(E z)/∂y`
+    /// when given; all three of one form); whether every entry is finite.
+    /// The default writes the dense matrix.
+    fn assemble(&mut self, c: f64, e: &Matrix, j: &Matrix, l: Option<&Matrix>) -> bool {
+        write_dense(self.matrix_mut(), c, e, j, l)
+    }
     /// Factorise the matrix (least squares: with these row classes).
     fn factor(&mut self, rows: &Rows) -> Result<(), Singular>;
     /// `b[..M]` in, the step `δ` in `b[..N]` out.
@@ -200,15 +449,25 @@ pub(crate) trait Corrector {
 /// unless the first matrix is denser than [`SPARSE_DENSITY`].
 pub(crate) struct SquareLu {
     lu: DenseLu,
-    /// The sparse path: the matrix is written into `a`, then gathered.
+    /// The sparse path: the matrix is assembled compressed
+    /// ([`Corrector::assemble`] from [`Matrix::Compressed`]), or written
+    /// into `a` and gathered.
     sparse: Option<SparseLu>,
 }
 
 /// The sparse path of [`SquareLu`].
 struct SparseLu {
+    n: usize,
+    /// The dense matrix of a system without structure (allocated when
+    /// first written).
     a: DMatrix<f64>,
     pattern: Option<Pattern>,
     factor: SparseFactor<f64>,
+    /// The matrix assembled compressed, on the run's iteration pattern;
+    /// empty on the gathered path.
+    values: Vec<f64>,
+    /// The run's structure, once a compressed matrix was assembled.
+    structure: Option<Rc<Structure>>,
 }
 
 impl Corrector for SquareLu {
@@ -219,9 +478,12 @@ impl Corrector for SquareLu {
             SquareLu {
                 lu: DenseLu::new(0, Pivoting::Linpack),
                 sparse: Some(SparseLu {
-                    a: DMatrix::zeros(n, n),
+                    n,
+                    a: DMatrix::zeros(0, 0),
                     pattern: None,
                     factor: SparseFactor::new(),
+                    values: Vec::new(),
+                    structure: None,
                 }),
             }
         } else {
@@ -235,13 +497,44 @@ impl Corrector for SquareLu {
     fn matrix_mut(&mut self) -> &mut DMatrix<f64> {
         match &mut self.sparse {
             None => self.lu.matrix_mut(),
-            Some(s) => &mut s.a,
+            Some(s) => {
+                if s.a.nrows() != s.n {
+                    s.a = DMatrix::zeros(s.n, s.n);
+                }
+                &mut s.a
+            }
         }
+    }
+    fn assemble(&mut self, c: f64, e: &Matrix, j: &Matrix, l: Option<&Matrix>) -> bool {
+        let (Some(s), Matrix::Compressed { structure, .. }) = (&mut self.sparse, e) else {
+            return write_dense(self.matrix_mut(), c, e, j, l);
+        };
+        if s.structure.is_none() {
+            s.structure = Some(Rc::clone(structure));
+        }
+        s.values.clear();
+        s.values
+            .extend(e.values().iter().zip(j.values()).map(|(&e, &j)| c * e - j));
+        if let Some(l) = l {
+            for (g, l) in s.values.iter_mut().zip(l.values()) {
+                *g += l;
+            }
+        }
+        all_finite(&s.values)
     }
     fn factor(&mut self, _rows: &Rows) -> Result<(), Singular> {
         let Some(s) = &mut self.sparse else {
             return self.lu.factor();
         };
+        if let Some(structure) = &s.structure {
+            // Compressed: the pattern is the run's, analysed once.
+            if s.pattern.is_none() {
+                s.pattern = Some(structure.lu_pattern()?);
+            }
+            let p = s.pattern.as_ref().expect("the pattern was made above");
+            let values = &s.values;
+            return s.factor.factor_indexed(p, |k, _, _| values[k]);
+        }
         let a = &s.a;
         let nonzero = |r: usize, c: usize| a[(r, c)] != 0.0;
         match &mut s.pattern {
@@ -311,8 +604,8 @@ pub(crate) trait StageSystems {
     /// `b = β/h`).
     fn factor(
         &mut self,
-        e: &DMatrix<f64>,
-        j: &DMatrix<f64>,
+        e: &Matrix,
+        j: &Matrix,
         g: f64,
         a: f64,
         b: f64,
@@ -377,13 +670,26 @@ impl StageSystems for SquareStages {
     }
     fn factor(
         &mut self,
-        e: &DMatrix<f64>,
-        j: &DMatrix<f64>,
+        e: &Matrix,
+        j: &Matrix,
         g: f64,
         a: f64,
         b: f64,
         _rows: &Rows,
     ) -> Result<(), Singular> {
+        if let (Some(s), Matrix::Compressed { structure, .. }) = (&mut self.sparse, e) {
+            // Compressed: both matrices on the run's pattern, analysed once.
+            if s.pattern.is_none() {
+                s.pattern = Some(structure.lu_pattern()?);
+            }
+            let p = s.pattern.as_ref().expect("the pattern was made above");
+            let (e, j) = (e.values(), j.values());
+            s.real.factor_indexed(p, |k, _, _| g * e[k] - j[k])?;
+            return s
+                .complex
+                .factor_indexed(p, |k, _, _| Complex::new(a * e[k] - j[k], b * e[k]));
+        }
+        let (e, j) = (e.dense(), j.dense());
         if let Some(s) = &mut self.sparse {
             let nonzero = |r: usize, c: usize| e[(r, c)] != 0.0 || j[(r, c)] != 0.0;
             match &mut s.pattern {
@@ -539,13 +845,14 @@ impl StageSystems for ProjectedStages {
     }
     fn factor(
         &mut self,
-        e: &DMatrix<f64>,
-        j: &DMatrix<f64>,
+        e: &Matrix,
+        j: &Matrix,
         g: f64,
         a: f64,
         b: f64,
         rows: &Rows,
     ) -> Result<(), Singular> {
+        let (e, j) = (e.dense(), j.dense());
         let (m, n) = (self.m, self.n);
         let (p, q) = split_rows(
             &rows.exact,
@@ -665,6 +972,8 @@ impl StageSystems for ProjectedStages {
 mod tests {
     use super::*;
     use crate::linalg::lstsq::lstsq;
+    #[cfg(feature = "sparse")]
+    use dae_core::interp::InterpretedModel;
 
     fn rng(mut seed: u64) -> impl FnMut() -> f64 {
         move || {
@@ -696,6 +1005,163 @@ mod tests {
         (e, j)
     }
 
+    /// The model text of the planar chain of `scripts/chain.py` with `n`
+    /// links (`5n` unknowns).
+    #[cfg(feature = "sparse")]
+    fn chain(n: usize) -> String {
+        let mut s = format!("pub Chain{n} {{\n parameters {{ m = 1.0, l = 1.0, g = 9.81 }}\n");
+        let names = |c: &str| (1..=n).map(|i| format!("{c}{i}")).collect::<Vec<_>>();
+        let diff: Vec<String> = ["x", "y", "u", "v"].iter().flat_map(|c| names(c)).collect();
+        s += &format!(" differential {{ {} }}\n", diff.join(", "));
+        s += &format!(
+            " algebraic {{ {} }}\n equations {{\n",
+            names("la").join(", ")
+        );
+        for i in 1..=n {
+            s += &format!("  der(x{i}) = u{i};\n  der(y{i}) = v{i};\n");
+        }
+        for i in 1..=n {
+            let (dx, dy) = if i == 1 {
+                ("x1".to_string(), "y1".to_string())
+            } else {
+                (
+                    format!("(x{i} - x{})", i - 1),
+                    format!("(y{i} - y{})", i - 1),
+                )
+            };
+            let (mut fx, mut fy) = (format!("-2*la{i}*{dx}"), format!("-2*la{i}*{dy}"));
+            if i < n {
+                fx += &format!(" + 2*la{}*(x{} - x{i})", i + 1, i + 1);
+                fy += &format!(" + 2*la{}*(y{} - y{i})", i + 1, i + 1);
+            }
+            s += &format!("  m*der(u{i}) = {fx};\n  m*der(v{i}) = {fy} - m*g;\n");
+        }
+        for i in 1..=n {
+            if i == 1 {
+                s += "  0 = x1^2 + y1^2 - l^2;\n";
+            } else {
+                s += &format!(
+                    "  0 = (x{i} - x{})^2 + (y{i} - y{})^2 - l^2;\n",
+                    i - 1,
+                    i - 1
+                );
+            }
+        }
+        s + " }\n}\n"
+    }
+
+    /// Each step-loop matrix of the chain, compressed, holds exactly the
+    /// non-zeros of the dense one (none outside the iteration pattern),
+    /// and its product is the dense product.
+    #[test]
+    #[cfg(feature = "sparse")]
+    fn compressed_matrices_hold_the_dense_entries() {
+        let model = InterpretedModel::from_str(&chain(13)).expect("the chain derives");
+        for form in ["rcd0", "ggl1"] {
+            let sys = model.system(form).expect("formulation");
+            let n = sys.info().unknowns();
+            assert!(n >= SPARSE_FROM, "{form}: {n} unknowns");
+            let s = Structure::of(&sys).expect("sparse enough");
+            let y: Vec<f64> = (0..n).map(|i| 0.3 + 0.01 * i as f64).collect();
+            let z: Vec<f64> = (0..n).map(|i| 1.0 - 0.02 * i as f64).collect();
+            for part in 0..3 {
+                let (mut dense, mut comp) = (Matrix::new(n, n, None), Matrix::new(n, n, Some(&s)));
+                for m in [&mut dense, &mut comp] {
+                    match part {
+                        0 => m.leading(&sys, 0.5, &y),
+                        1 => m.rhs_jacobian(&sys, 0.5, &y),
+                        _ => m.leading_jacobian(&sys, 0.5, &y, &z),
+                    }
+                }
+                let d = dense.dense();
+                for (k, (r, c)) in s.iteration.entries().enumerate() {
+                    assert_eq!(comp.values()[k], d[(r, c)], "{form} part {part} ({r}, {c})");
+                }
+                let nonzero = |v: &[f64]| v.iter().filter(|v| **v != 0.0).count();
+                assert_eq!(
+                    nonzero(comp.values()),
+                    nonzero(d.as_slice()),
+                    "{form} part {part}"
+                );
+                let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+                dense.mat_vec(&z, &mut a);
+                comp.mat_vec(&z, &mut b);
+                assert_eq!(a, b, "{form} part {part}");
+            }
+        }
+    }
+
+    /// The compressed factorisations solve the systems the dense matrices
+    /// make: Radau's real and complex ones, BDF's `c E − J + L`.
+    #[test]
+    #[cfg(feature = "sparse")]
+    #[allow(clippy::needless_range_loop)] // r indexes the rows of a product
+    fn compressed_factorisations_solve_the_dense_systems() {
+        let model = InterpretedModel::from_str(&chain(13)).expect("the chain derives");
+        let sys = model.system("ggl1").expect("formulation");
+        let n = sys.info().unknowns();
+        let s = Structure::of(&sys).expect("sparse enough");
+        let y: Vec<f64> = (0..n).map(|i| 0.3 + 0.01 * i as f64).collect();
+        let z: Vec<f64> = (0..n).map(|i| 1.0 - 0.02 * i as f64).collect();
+        let eval = |st: Option<&Rc<Structure>>| {
+            let (mut e, mut j, mut l) = (
+                Matrix::new(n, n, st),
+                Matrix::new(n, n, st),
+                Matrix::new(n, n, st),
+            );
+            e.leading(&sys, 0.5, &y);
+            j.rhs_jacobian(&sys, 0.5, &y);
+            l.leading_jacobian(&sys, 0.5, &y, &z);
+            (e, j, l)
+        };
+        let (e, j, l) = eval(Some(&s));
+        let (ed, jd, ld) = eval(None);
+        let (ed, jd, ld) = (ed.dense(), jd.dense(), ld.dense());
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin()).collect();
+        let check = |x: &[f64], a: &dyn Fn(usize, usize) -> f64, what: &str| {
+            for r in 0..n {
+                let ax: f64 = (0..n).map(|c| a(r, c) * x[c]).sum();
+                assert!(
+                    (ax - b[r]).abs() < 1e-9,
+                    "{what}, row {r}: {ax} vs {}",
+                    b[r]
+                );
+            }
+        };
+
+        let (g, al, be) = (30.0, 25.0, 12.0);
+        let mut stages = SquareStages::new(n, n);
+        stages
+            .factor(&e, &j, g, al, be, &Rows::square())
+            .expect("nonsingular");
+        let mut x = b.clone();
+        stages.solve_real(&mut x);
+        check(&x, &|r, c| g * ed[(r, c)] - jd[(r, c)], "real");
+        let (mut re, mut im) = (b.clone(), vec![0.0; n]);
+        stages.solve_complex(&mut re, &mut im);
+        // (a + ib) E − J applied to re + i·im: the real part is b, the
+        // imaginary part zero.
+        for r in 0..n {
+            let (mut pr, mut pi) = (0.0, 0.0);
+            for c in 0..n {
+                let (ar, ai) = (al * ed[(r, c)] - jd[(r, c)], be * ed[(r, c)]);
+                pr += ar * re[c] - ai * im[c];
+                pi += ar * im[c] + ai * re[c];
+            }
+            assert!(
+                (pr - b[r]).abs() < 1e-9 && pi.abs() < 1e-9,
+                "complex, row {r}"
+            );
+        }
+
+        let mut lu = SquareLu::new(n, n);
+        assert!(lu.assemble(g, &e, &j, Some(&l)));
+        lu.factor(&Rows::square()).expect("nonsingular");
+        let mut x = b.clone();
+        lu.solve(&mut x);
+        check(&x, &|r, c| g * ed[(r, c)] - jd[(r, c)] + ld[(r, c)], "bdf");
+    }
+
     #[test]
     fn projected_real_system_is_the_least_squares_solve() {
         let mut next = rng(7);
@@ -708,7 +1174,15 @@ mod tests {
             let rows = rows(&exact, &mut next);
             let g = 3.7;
             let mut ps = ProjectedStages::new(m, n);
-            ps.factor(&e, &j, g, 2.0, 3.0, &rows).expect("nonsingular");
+            ps.factor(
+                &Matrix::Dense(e.clone()),
+                &Matrix::Dense(j.clone()),
+                g,
+                2.0,
+                3.0,
+                &rows,
+            )
+            .expect("nonsingular");
             let a = DMatrix::from_fn(m, n, |r, c| g * e[(r, c)] - j[(r, c)]);
             let b: Vec<f64> = (0..m).map(|_| next()).collect();
             let want = lstsq(&a, &rows.exact, &rows.weight, &b).expect("lstsq");
@@ -731,6 +1205,7 @@ mod tests {
         let (e, j) = matrices(m, n, &exact, &mut next);
         let rows = rows(&exact, &mut next);
         let (g, a, b) = (3.7, 2.5, 1.5);
+        let (e, j) = (Matrix::Dense(e), Matrix::Dense(j));
         let mut ps = ProjectedStages::new(m, n);
         ps.factor(&e, &j, g, a, b, &rows).expect("nonsingular");
         let mut sq = SquareStages::new(m, n);

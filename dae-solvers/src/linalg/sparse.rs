@@ -6,12 +6,15 @@
 //! factorises a matrix of that pattern numerically (once per Jacobian) and
 //! solves with it. Radau's real and complex systems share one pattern.
 //!
-//! The matrices come as entry functions `(row, column) → value`: the step
-//! loops assemble their iteration matrices from dense `E` and `J` today,
-//! and a pattern grows (and its analysis is made again) when an entry
-//! outside it becomes non-zero, so that no accidental zero of the first
-//! Jacobian is taken for a structural one. See
-//! [`crate::core::matrix::SPARSE_FROM`] for when this path is taken.
+//! A pattern comes either from the derivation (a system that reports its
+//! structural non-zeros, [`Pattern::from_compressed`]: the step loops
+//! then evaluate `E` and `J` in compressed form and the matrix comes as
+//! its values in the pattern's order), or from a first dense matrix
+//! ([`Pattern::new`]: a system that reports no structure), in which case
+//! it grows (and its analysis is made again) when an entry outside it
+//! becomes non-zero, so that no accidental zero of the first Jacobian is
+//! taken for a structural one. See [`crate::core::matrix::SPARSE_FROM`]
+//! for when this path is taken.
 
 use super::Singular;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -39,6 +42,24 @@ impl Pattern {
     /// memory).
     pub(crate) fn new(n: usize, nonzero: impl Fn(usize, usize) -> bool) -> Result<Self, Singular> {
         let (col_ptr, row_idx) = scan(n, |r, c| r == c || nonzero(r, c));
+        let symbolic = analyse(n, &col_ptr, &row_idx)?;
+        Ok(Pattern {
+            n,
+            col_ptr,
+            row_idx,
+            symbolic,
+            analyses: 1,
+        })
+    }
+
+    /// The pattern given in compressed-column form (`col_ptr` of length
+    /// `n + 1`, the rows of each column ascending, the diagonal included
+    /// by the caller) and its analysis. `Singular` when the analysis fails.
+    pub(crate) fn from_compressed(
+        n: usize,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+    ) -> Result<Self, Singular> {
         let symbolic = analyse(n, &col_ptr, &row_idx)?;
         Ok(Pattern {
             n,
@@ -128,6 +149,17 @@ impl<T: ComplexField + Copy> SparseFactor<T> {
         p: &Pattern,
         value: impl Fn(usize, usize) -> T,
     ) -> Result<(), Singular> {
+        self.factor_indexed(p, |_, r, c| value(r, c))
+    }
+
+    /// [`SparseFactor::factor`] with the entries given as `value(k, r, c)`,
+    /// `k` the entry's position in the pattern's order (a matrix held as
+    /// values on the pattern reads `values[k]`).
+    pub(crate) fn factor_indexed(
+        &mut self,
+        p: &Pattern,
+        value: impl Fn(usize, usize, usize) -> T,
+    ) -> Result<(), Singular> {
         if self.sized_for != p.analyses || self.values.len() != p.nnz() {
             let params = Spec::<PartialPivLuParams, T>::default();
             let req = p
@@ -140,7 +172,7 @@ impl<T: ComplexField + Copy> SparseFactor<T> {
         }
         for c in 0..p.n {
             for k in p.col_ptr[c]..p.col_ptr[c + 1] {
-                self.values[k] = value(p.row_idx[k], c);
+                self.values[k] = value(k, p.row_idx[k], c);
             }
         }
         let a = SparseColMatRef::new(p.structure(), &self.values);

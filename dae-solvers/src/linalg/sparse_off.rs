@@ -21,6 +21,15 @@ impl Pattern {
         Err(Singular)
     }
 
+    /// Refused: no sparse factorisation is built in.
+    pub(crate) fn from_compressed(
+        _n: usize,
+        _col_ptr: Vec<usize>,
+        _row_idx: Vec<usize>,
+    ) -> Result<Self, Singular> {
+        Err(Singular)
+    }
+
     /// Number of stored entries (none).
     pub(crate) fn nnz(&self) -> usize {
         self.analyses
@@ -49,6 +58,15 @@ impl<T> SparseFactor<T> {
         &mut self,
         _p: &Pattern,
         _value: impl Fn(usize, usize) -> T,
+    ) -> Result<(), Singular> {
+        Err(Singular)
+    }
+
+    /// Refused: no sparse factorisation is built in.
+    pub(crate) fn factor_indexed(
+        &mut self,
+        _p: &Pattern,
+        _value: impl Fn(usize, usize, usize) -> T,
     ) -> Result<(), Singular> {
         Err(Singular)
     }

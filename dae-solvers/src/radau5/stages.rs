@@ -9,13 +9,13 @@ use super::step::Integrator;
 use super::tableau::Collocation;
 use super::{NIT_FIXED, UROUND};
 use crate::core::block;
-use crate::core::matrix::{Rows, StageSystems};
+use crate::core::matrix::{Matrix, Rows, StageSystems, Structure};
 use crate::core::newton::Verdict;
 use crate::core::weights::Weights;
 use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
 use crate::options::Options;
 use crate::SolveError;
-use dae_core::system::{Blocks, FormulationInfo, RowKind};
+use dae_core::system::{DaeSystem, FormulationInfo, RowKind};
 use nalgebra::DMatrix;
 use std::cell::RefCell;
 
@@ -64,15 +64,18 @@ pub(super) struct Work<S> {
     pub(super) fm: Vec<f64>,
     /// `E(y_n) (1/h) Σ d_i Z_i` (`M`).
     pub(super) ez: Vec<f64>,
-    /// `J = ∂f/∂y − ∂(E z)/∂y` at the Jacobian point.
-    pub(super) jac: DMatrix<f64>,
+    /// `J = ∂f/∂y − ∂(E z)/∂y` at the Jacobian point. Like `ljac`,
+    /// `e_jac` and `e_n`, compressed on the run's iteration pattern for a
+    /// large sparse square system of a stiffly accurate method
+    /// ([`Structure::of`]), dense otherwise.
+    pub(super) jac: Matrix,
     /// `∂(E z)/∂y`.
-    pub(super) ljac: DMatrix<f64>,
+    pub(super) ljac: Matrix,
     /// `E` at the Jacobian point (`E₀` of the iteration matrices); unused
     /// when `E` is constant (then `E₀ = E(y_n)`).
-    pub(super) e_jac: DMatrix<f64>,
+    pub(super) e_jac: Matrix,
     /// `E(y_n)`.
-    pub(super) e_n: DMatrix<f64>,
+    pub(super) e_n: Matrix,
     /// `E(t_n, y_n)` of the step just taken (a method that is not stiffly
     /// accurate, whose end-point projection keeps that step's differential
     /// part; unused with a constant `E`).
@@ -108,16 +111,23 @@ pub(super) struct OutputScratch {
 }
 
 impl<S: StageSystems> Work<S> {
-    /// The buffers for `info`, with the error weights of `options` (the
+    /// The buffers for `sys`, with the error weights of `options` (the
     /// tolerance map, and the index of each unknown for the scaling).
-    pub(super) fn new<K: Collocation>(
-        info: &FormulationInfo,
-        blocks: Option<Blocks>,
-        options: &Options,
-    ) -> Self {
+    pub(super) fn new<K: Collocation>(sys: &dyn DaeSystem, options: &Options) -> Self {
+        let info = sys.info();
+        let blocks = sys.blocks();
         let (m, n) = (info.equations(), info.unknowns());
         let v = |len: usize| vec![0.0; len];
         let mat = || DMatrix::zeros(m, n);
+        // Compressed `J` and `E` for square stage systems of a stiffly
+        // accurate method (the end-point projection of the others, and
+        // the least-squares systems, read them dense).
+        let structure = if S::LEAST_SQUARES || K::END.is_some() {
+            None
+        } else {
+            Structure::of(sys)
+        };
+        let matrix = || Matrix::new(m, n, structure.as_ref());
         Work {
             y: v(n),
             y_lo: v(n),
@@ -143,10 +153,10 @@ impl<S: StageSystems> Work<S> {
             tmp: v(n),
             fm: v(m),
             ez: v(m),
-            jac: mat(),
-            ljac: mat(),
-            e_jac: mat(),
-            e_n: mat(),
+            jac: matrix(),
+            ljac: matrix(),
+            e_jac: matrix(),
+            e_n: matrix(),
             e_step: if K::END.is_some() {
                 mat()
             } else {
@@ -209,18 +219,18 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// from the step point's evaluation).
     pub(super) fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
         let w = &mut self.w;
-        self.sys.rhs_jacobian(t, &w.y, &mut w.jac);
+        w.jac.rhs_jacobian(&*self.sys, t, &w.y);
         if !self.constant_leading {
-            self.sys.leading_jacobian(t, &w.y, &w.yp, &mut w.ljac);
-            for (j, l) in w.jac.as_mut_slice().iter_mut().zip(w.ljac.as_slice()) {
+            w.ljac.leading_jacobian(&*self.sys, t, &w.y, &w.yp);
+            for (j, l) in w.jac.values_mut().iter_mut().zip(w.ljac.values()) {
                 *j -= l;
             }
         }
         if !self.constant_leading {
-            w.e_jac.as_mut_slice().copy_from_slice(w.e_n.as_slice());
+            w.e_jac.copy_from(&w.e_n);
         }
         self.stats.jacobian_evals += 1;
-        if !all_finite(w.jac.as_slice()) {
+        if !all_finite(w.jac.values()) {
             return Err(SolveError::NonFinite {
                 t,
                 what: "jacobian",
@@ -240,7 +250,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         };
         if S::LEAST_SQUARES {
             w.weights.update_scaled(&w.y, h);
-            w.rows.update(e0, w.weights.get());
+            w.rows.update(e0.dense(), w.weights.get());
         }
         w.stages
             .factor(e0, &w.jac, K::GAMMA / h, K::ALPHA / h, K::BETA / h, &w.rows)
@@ -331,7 +341,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         let w = &mut self.w;
         // tmp = (1/h) Σ d_i Z_i,  ez = E(y_n) tmp.
         kernels::error_combination::<K>(&w.z, h, &mut w.tmp, n);
-        mat_vec(&w.e_n, &w.tmp, &mut w.ez);
+        w.e_n.mat_vec(&w.tmp, &mut w.ez);
         for k in 0..m {
             w.err[k] = w.f0[k] + w.ez[k];
         }
@@ -363,7 +373,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         if K::END.is_none() || S::LEAST_SQUARES {
             return;
         }
-        let e = &self.w.e_n;
+        let e = self.w.e_n.dense();
         self.w.algebraic = (0..self.m)
             .filter(|&i| {
                 matches!(info.rows[i].kind, RowKind::Constraint { .. })
@@ -413,15 +423,19 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         let chose_other_rows = !self.constant_leading
             && w.e_step
                 .iter()
-                .zip(w.e_n.iter())
+                .zip(w.e_n.values())
                 .any(|(a, b)| (*a == 0.0) != (*b == 0.0));
-        let e = if chose_other_rows { &w.e_step } else { &w.e_n };
+        let e = if chose_other_rows {
+            &w.e_step
+        } else {
+            w.e_n.dense()
+        };
         w.projection
             .matrix_mut()
             .as_mut_slice()
             .copy_from_slice(e.as_slice());
         let p = w.projection.matrix_mut().as_mut_slice();
-        let jac = w.jac.as_slice();
+        let jac = w.jac.values();
         for &i in &w.algebraic {
             for j in 0..n {
                 p[i + j * n] = jac[i + j * n];
@@ -443,7 +457,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         if !self.constant_leading {
             return Ok((true, size));
         }
-        mat_vec(&w.jac, &w.delta, &mut w.fm);
+        mat_vec(w.jac.dense(), &w.delta, &mut w.fm);
         for (f, d) in w.f0.iter_mut().zip(&w.fm) {
             *f += d;
         }
@@ -517,7 +531,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// system `J_ra δ_a = −f_r`; then `f += J_·a δ_a`.
     fn project_algebraic_unknowns(&mut self, t: f64, h: f64) -> Result<(), SolveError> {
         let w = &mut self.w;
-        let (rows, cols, jac) = (&w.algebraic, &w.algebraic_unknowns, &w.jac);
+        let (rows, cols, jac) = (&w.algebraic, &w.algebraic_unknowns, w.jac.dense());
         w.projection_small
             .factor_from(|a, b| jac[(rows[a], cols[b])])
             .map_err(|_| SolveError::SingularMatrix { t, h })?;
@@ -531,7 +545,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         for a in 0..k {
             let (d, j) = (w.delta[a], w.algebraic_unknowns[a]);
             w.correct(j, d, self.compensated);
-            let col = &w.jac.as_slice()[j * self.m..(j + 1) * self.m];
+            let col = &w.jac.values()[j * self.m..(j + 1) * self.m];
             for (f, &jij) in w.f0.iter_mut().zip(col) {
                 *f += jij * d;
             }

@@ -133,7 +133,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
     pub(super) fn new(sys: Formulation<'a>, problem: &Problem<'_>, options: &'a Options) -> Self {
         let info = sys.info();
         let (m, n) = (info.equations(), info.unknowns());
-        let mut w = Work::<S>::new::<K>(info, sys.blocks(), options);
+        let mut w = Work::<S>::new::<K>(&*sys, options);
         w.y.copy_from_slice(problem.y0);
         // RADAU5: fnewt = max(10 u / rtol, min(0.03, rtol^(1/2))), here
         // with the smallest relative tolerance (an absolute one where all
@@ -233,8 +233,8 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
     /// `f` must be those rows'.
     fn evaluate_at_step_point(&mut self, t: f64, first: bool) -> Result<(), SolveError> {
         if first || !self.constant_leading {
-            self.sys.leading(t, &self.w.y, &mut self.w.e_n);
-            if !all_finite(self.w.e_n.as_slice()) {
+            self.w.e_n.leading(&*self.sys, t, &self.w.y);
+            if !all_finite(self.w.e_n.values()) {
                 return Err(SolveError::NonFinite {
                     t,
                     what: "leading matrix",
@@ -406,7 +406,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             // `E(y_n)`, not `E(y_{n+1})`, where the rows a formulation
             // chooses may change (`mex0`).
             if !self.constant_leading {
-                self.w.e_step.copy_from(&self.w.e_n);
+                self.w.e_step.copy_from(self.w.e_n.dense());
             }
             self.evaluate_at_step_point(t, false)?;
             // One simplified Newton step makes a linear algebraic part
