@@ -91,7 +91,10 @@ fn max_diff(a: &[f64], b: &[f64]) -> f64 {
 /// where the solve evaluated that polynomial itself, `at` agrees to
 /// rounding (the barycentric interpolant on `d + 1` nodes of a polynomial
 /// of degree `≤ d` is that polynomial; the bound is a few hundred units of
-/// round-off of values of size ≤ 30, λ the largest).
+/// round-off of values of size ≤ 30, λ the largest). `gauss` projects its
+/// output-time values onto the algebraic rows (`rcd0`: λ, the last
+/// unknown, recomputed) and `at` keeps the polynomial: there the
+/// differential unknowns agree.
 #[test]
 fn at_reproduces_every_methods_dense_output() {
     for case in cases() {
@@ -99,9 +102,11 @@ fn at_reproduces_every_methods_dense_output() {
             let sol = solver.solve(problem, options).unwrap();
             let dense = sol.dense.as_ref().expect("dense output is on by default");
             assert!(dense.step_ends().len() > 10, "{case:?}");
+            let compared = if case.0 == "gauss" { 4 } else { 5 };
             let mut worst = 0.0f64;
             for (t, y) in sol.t.iter().zip(&sol.y) {
-                worst = worst.max(max_diff(&sol.at(*t).unwrap(), y));
+                let at = sol.at(*t).unwrap();
+                worst = worst.max(max_diff(&at[..compared], &y[..compared]));
             }
             assert!(
                 worst < 1e-11,
