@@ -1925,58 +1925,9 @@ mod tests {
     use dae_core::interp::InterpretedModel;
     use dae_core::system::Model;
 
-    /// The planar chain of `n` links of `scripts/chain.py` (the same text),
-    /// 5n unknowns.
+    /// The planar chain of `n` links of `scripts/chain.py`, 5n unknowns.
     fn chain_model(n: usize) -> String {
-        let names = |c: char| {
-            (1..=n)
-                .map(|i| format!("{c}{i}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let mut s = format!(
-            "pub Chain{n} {{\n    parameters {{ m = 1.0, l = 1.0, g = 9.81 }}\n    \
-             differential {{ {}, {}, {}, {} }}\n    algebraic {{ {} }}\n    equations {{\n",
-            names('x'),
-            names('y'),
-            names('u'),
-            names('v'),
-            (1..=n)
-                .map(|i| format!("la{i}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        for i in 1..=n {
-            s += &format!("        der(x{i}) = u{i};\n        der(y{i}) = v{i};\n");
-        }
-        for i in 1..=n {
-            let (dx, dy) = if i == 1 {
-                ("x1".to_string(), "y1".to_string())
-            } else {
-                (
-                    format!("(x{i} - x{})", i - 1),
-                    format!("(y{i} - y{})", i - 1),
-                )
-            };
-            let (mut fx, mut fy) = (format!("-2*la{i}*{dx}"), format!("-2*la{i}*{dy}"));
-            if i < n {
-                fx += &format!(" + 2*la{}*(x{} - x{i})", i + 1, i + 1);
-                fy += &format!(" + 2*la{}*(y{} - y{i})", i + 1, i + 1);
-            }
-            s += &format!("        m*der(u{i}) = {fx};\n        m*der(v{i}) = {fy} - m*g;\n");
-        }
-        for i in 1..=n {
-            if i == 1 {
-                s += "        0 = x1^2 + y1^2 - l^2;\n";
-            } else {
-                s += &format!(
-                    "        0 = (x{i} - x{})^2 + (y{i} - y{})^2 - l^2;\n",
-                    i - 1,
-                    i - 1
-                );
-            }
-        }
-        s + "    }\n}\n"
+        crate::test_models::chain(n)
     }
 
     /// The chain bent into a zig-zag, moving: no accidental zeros.

@@ -53,6 +53,8 @@ pub mod radau5;
 pub mod sensitivity;
 pub mod solution;
 pub mod stats;
+#[cfg(test)]
+pub(crate) mod test_models;
 
 pub use core::events::{Crossing, Direction, Event, EventAction, EventSpec, Reset, ResetReport};
 pub use error::{InitError, NotApplicable, SolutionError, SolveError, Stopped};

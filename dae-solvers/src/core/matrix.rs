@@ -1005,58 +1005,14 @@ mod tests {
         (e, j)
     }
 
-    /// The model text of the planar chain of `scripts/chain.py` with `n`
-    /// links (`5n` unknowns).
-    #[cfg(feature = "sparse")]
-    fn chain(n: usize) -> String {
-        let mut s = format!("pub Chain{n} {{\n parameters {{ m = 1.0, l = 1.0, g = 9.81 }}\n");
-        let names = |c: &str| (1..=n).map(|i| format!("{c}{i}")).collect::<Vec<_>>();
-        let diff: Vec<String> = ["x", "y", "u", "v"].iter().flat_map(|c| names(c)).collect();
-        s += &format!(" differential {{ {} }}\n", diff.join(", "));
-        s += &format!(
-            " algebraic {{ {} }}\n equations {{\n",
-            names("la").join(", ")
-        );
-        for i in 1..=n {
-            s += &format!("  der(x{i}) = u{i};\n  der(y{i}) = v{i};\n");
-        }
-        for i in 1..=n {
-            let (dx, dy) = if i == 1 {
-                ("x1".to_string(), "y1".to_string())
-            } else {
-                (
-                    format!("(x{i} - x{})", i - 1),
-                    format!("(y{i} - y{})", i - 1),
-                )
-            };
-            let (mut fx, mut fy) = (format!("-2*la{i}*{dx}"), format!("-2*la{i}*{dy}"));
-            if i < n {
-                fx += &format!(" + 2*la{}*(x{} - x{i})", i + 1, i + 1);
-                fy += &format!(" + 2*la{}*(y{} - y{i})", i + 1, i + 1);
-            }
-            s += &format!("  m*der(u{i}) = {fx};\n  m*der(v{i}) = {fy} - m*g;\n");
-        }
-        for i in 1..=n {
-            if i == 1 {
-                s += "  0 = x1^2 + y1^2 - l^2;\n";
-            } else {
-                s += &format!(
-                    "  0 = (x{i} - x{})^2 + (y{i} - y{})^2 - l^2;\n",
-                    i - 1,
-                    i - 1
-                );
-            }
-        }
-        s + " }\n}\n"
-    }
-
     /// Each step-loop matrix of the chain, compressed, holds exactly the
     /// non-zeros of the dense one (none outside the iteration pattern),
     /// and its product is the dense product.
     #[test]
     #[cfg(feature = "sparse")]
     fn compressed_matrices_hold_the_dense_entries() {
-        let model = InterpretedModel::from_str(&chain(13)).expect("the chain derives");
+        let model =
+            InterpretedModel::from_str(&crate::test_models::chain(13)).expect("the chain derives");
         for form in ["rcd0", "ggl1"] {
             let sys = model.system(form).expect("formulation");
             let n = sys.info().unknowns();
@@ -1097,7 +1053,8 @@ mod tests {
     #[cfg(feature = "sparse")]
     #[allow(clippy::needless_range_loop)] // r indexes the rows of a product
     fn compressed_factorisations_solve_the_dense_systems() {
-        let model = InterpretedModel::from_str(&chain(13)).expect("the chain derives");
+        let model =
+            InterpretedModel::from_str(&crate::test_models::chain(13)).expect("the chain derives");
         let sys = model.system("ggl1").expect("formulation");
         let n = sys.info().unknowns();
         let s = Structure::of(&sys).expect("sparse enough");
