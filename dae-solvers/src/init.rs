@@ -1591,6 +1591,19 @@ impl DerivativeRule {
     };
 }
 
+impl DerivativeRule {
+    /// The typed error naming `E` (its values) or `f` at `t0` when either
+    /// holds a non-finite entry.
+    fn check_finite(&self, e: &[f64], f: &[f64], t0: f64) -> Result<(), SolveError> {
+        for (values, what) in [(e, self.non_finite[0]), (f, self.non_finite[1])] {
+            if !values.iter().all(|v| v.is_finite()) {
+                return Err(SolveError::NonFinite { t: t0, what });
+            }
+        }
+        Ok(())
+    }
+}
+
 /// [`initial_derivative`] by `rule`, for `y0` of the system's length and
 /// finite (not checked here).
 pub(crate) fn initial_derivative_with(
@@ -1626,18 +1639,7 @@ fn initial_derivative_dense(
     sys.leading(t0, y0, &mut e);
     let mut f = vec![0.0; m];
     sys.rhs(t0, y0, &mut f);
-    if !e.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            t: t0,
-            what: rule.non_finite[0],
-        });
-    }
-    if !f.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            t: t0,
-            what: rule.non_finite[1],
-        });
-    }
+    rule.check_finite(e.as_slice(), &f, t0)?;
     // Zero rows padded below so that V is N×N and carries ker E.
     let rows = m.max(n);
     let mut a = DMatrix::zeros(rows, n);
@@ -1708,18 +1710,7 @@ fn initial_derivative_sparse(
     sys.leading_values(t0, y0, &pattern, &mut values);
     let mut f = vec![0.0; m];
     sys.rhs(t0, y0, &mut f);
-    if !values.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            t: t0,
-            what: rule.non_finite[0],
-        });
-    }
-    if !f.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite {
-            t: t0,
-            what: rule.non_finite[1],
-        });
-    }
+    rule.check_finite(&values, &f, t0)?;
     let e = Entries::from_pattern(&pattern, &values);
     let neg_f: Vec<f64> = f.iter().map(|v| -v).collect();
     // Δ = −E⁺(−f) = E⁺f; only a square non-zero block makes the zero
