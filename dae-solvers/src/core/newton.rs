@@ -107,6 +107,9 @@ pub(crate) struct Contraction {
     /// rule; the initial `θ` until there is one): the contraction of the
     /// iteration matrix, before round-off can mask it.
     pub(crate) theta_first: f64,
+    /// The smallest ratio `q_k` of this iteration (RADAU5 rule): the
+    /// strongest contraction seen, the evidence that the matrix is good.
+    q_min: f64,
     /// `η = θ/(1 − θ)`, carried between iterations.
     pub(crate) eta: f64,
     /// Increments of at most this norm that no longer contract are
@@ -116,24 +119,30 @@ pub(crate) struct Contraction {
     /// A second, higher floor for a method whose `floor` is a few hundred
     /// units of round-off (`gauss`, iterating towards round-off): increments
     /// that stagnate at or below it count as converged too, but only when
-    /// the iteration contracted strongly at first (`θ_first` ≤
-    /// [`FIRST_CONTRACTION`]), so the matrix is good and the stagnation is
+    /// the iteration has contracted strongly at some increment (`q_min` ≤
+    /// [`STRONG_CONTRACTION`]), so the matrix is good and the stagnation is
     /// the round-off of a badly scaled problem, not slow convergence. 0:
     /// none.
     pub(crate) noise_floor: f64,
 }
 
-/// The first contraction `q₂` at or below which an iteration's later
-/// stagnation under [`Contraction::noise_floor`] is taken for round-off.
+/// The contraction `q_k` at or below which, seen once in an iteration, that
+/// iteration's later stagnation under [`Contraction::noise_floor`] is taken
+/// for round-off.
 ///
 /// Measured on Andrews' squeezer, `gauss(rcd0)` at tol 1e-8 (every
 /// increment printed): `q₂` is 2·10⁻⁴ … 5·10⁻³ at steps of 10⁻⁵ … 6·10⁻⁸,
 /// and the increments then stagnate at 3–7·10⁻⁷ (weighted), some 10⁶ units
 /// of round-off, where the drift bound asks for 10⁻¹¹: every attempt was
 /// declared divergent until the step collapsed (`newton_failure` at
-/// t = 0.0227). A stale or poor iteration matrix contracts at 0.1 or worse
-/// from the start; 0.01 keeps those out.
-const FIRST_CONTRACTION: f64 = 0.01;
+/// t = 0.0227). On `mex0` at tol 1e-9 the first ratio is weaker — 0.01 …
+/// 0.1, the predictor's error is corrected nonlinearly — and the next
+/// ones 2·10⁻³ … 10⁻², before the same stagnation at 10⁻⁶: the strongest
+/// ratio, not the first, tells a good matrix (until 2026-11-27 the first
+/// was tested, and `mex0` failed at t = 0.0204 at 1e-9 and 1e-10). A
+/// stale or poor iteration matrix contracts at 0.1 or worse throughout;
+/// 0.01 keeps those out.
+const STRONG_CONTRACTION: f64 = 0.01;
 
 impl Contraction {
     /// A monitor for `rule` converging at `η ‖Δ‖ ≤ kappa`; `eta` is the
@@ -149,6 +158,7 @@ impl Contraction {
             q_prev: 0.0,
             theta: 0.0,
             theta_first: 0.0,
+            q_min: f64::INFINITY,
             eta,
             floor: match rule {
                 Rule::Radau5 { .. } => ROUND_OFF_FLOOR,
@@ -167,6 +177,7 @@ impl Contraction {
         self.eta = eta;
         self.theta = theta;
         self.theta_first = theta;
+        self.q_min = f64::INFINITY;
     }
 
     /// Increments observed in this iteration.
@@ -195,9 +206,10 @@ impl Contraction {
                         (q * self.q_prev).sqrt()
                     };
                     self.q_prev = q;
+                    self.q_min = self.q_min.min(q);
                     if q.max(self.theta) >= STAGNANT
                         && (norm <= self.floor
-                            || (norm <= self.noise_floor && self.theta_first <= FIRST_CONTRACTION))
+                            || (norm <= self.noise_floor && self.q_min <= STRONG_CONTRACTION))
                     {
                         return Verdict::Converged;
                     }
@@ -362,5 +374,12 @@ mod tests {
             assert_eq!(c.observe(norm, 0.0), Verdict::Continue);
         }
         assert_eq!(c.observe(5.2e-6, 0.0), Verdict::Converged);
+        // A weak first ratio and strong later ones (the predictor's error
+        // corrected nonlinearly): the squeezer's mex0 at 1e-9, h = 1.08e-4.
+        let mut c = gauss();
+        for norm in [490.3, 46.96, 0.5054, 1.049e-3, 6.095e-5, 1.442e-6, 6.761e-7] {
+            assert_eq!(c.observe(norm, 0.0), Verdict::Continue);
+        }
+        assert_eq!(c.observe(1.270e-6, 0.0), Verdict::Converged);
     }
 }

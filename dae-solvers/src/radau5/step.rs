@@ -180,7 +180,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             // only at a few hundred units of round-off.
             newton.floor = ROUND_OFF * UROUND / r;
             // Unless the increments stagnate at the problem's own round-off
-            // after a strong first contraction: see `noise_floor`.
+            // after a strong contraction: see `noise_floor`.
             newton.noise_floor = crate::core::newton::ROUND_OFF_FLOOR;
         }
         Integrator {
