@@ -16,7 +16,12 @@
 //! ```text
 //! cargo run --release -p dae-macros --example expansion
 //! cargo run --release -p dae-macros --example expansion -- --dump pendulum|N|FILE.dae
+//! cargo run --release -p dae-macros --example expansion -- --chain 100 "rcd0, ggl1"
 //! ```
+//!
+//! `--chain N LIST` measures one chain of `N` links with the formulations of
+//! `LIST` (the large models of issue 24; `--dump-chain N LIST` prints its
+//! model text, to paste into a crate's `dae!` and time `cargo build`).
 
 #[path = "../src/codegen.rs"]
 mod codegen;
@@ -180,6 +185,20 @@ fn main() {
         }
     }
 
+    if let [flag, n, list] = args.as_slice() {
+        let n: usize = n.parse().expect("--chain N \"f1, f2\"");
+        let text = chain(n, Some(list));
+        match flag.as_str() {
+            "--chain" => {
+                print_header();
+                print_row(&measure(&format!("chain N={n}, {list}"), &text));
+            }
+            "--dump-chain" => println!("{text}"),
+            _ => panic!("unknown option {flag}"),
+        }
+        return;
+    }
+
     let mut cases: Vec<(String, String)> = vec![
         ("pendulum, rcd1".into(), PENDULUM.replace(ALL, "rcd1")),
         ("pendulum, all 8".into(), PENDULUM.to_string()),
@@ -188,10 +207,7 @@ fn main() {
         cases.push((format!("chain N={n}, rcd1"), chain(n, Some("rcd1"))));
         cases.push((format!("chain N={n}, all that apply"), chain(n, None)));
     }
-    println!(
-        "| case | formulations | derive ms | compile ms | expand ms | emit ms | tokens | bytes | rustfmt bytes | rustfmt lines |"
-    );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    print_header();
     for (case, text) in &cases {
         print_row(&measure(case, text));
     }
@@ -199,10 +215,7 @@ fn main() {
     println!();
     println!("Per formulation (one listed at a time):");
     println!();
-    println!(
-        "| case | formulations | derive ms | compile ms | expand ms | emit ms | tokens | bytes | rustfmt bytes | rustfmt lines |"
-    );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    print_header();
     for n in [1, 4, 8] {
         for f in ALL.split(", ") {
             let text = chain(n, Some(f));
@@ -213,6 +226,13 @@ fn main() {
             }
         }
     }
+}
+
+fn print_header() {
+    println!(
+        "| case | formulations | derive ms | compile ms | expand ms | emit ms | tokens | bytes | rustfmt bytes | rustfmt lines |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
 }
 
 fn print_row(r: &Row) {
