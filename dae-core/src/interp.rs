@@ -110,7 +110,9 @@ impl InterpretedModel {
     /// ([`Model::prepare`], with the gradients of the rows they share
     /// computed once). A run that uses one formulation of a model with
     /// six lowers one: the set-up of a large model is mostly lowering
-    /// (BENCHMARKS.md §10). Lowering later derives the text again.
+    /// (BENCHMARKS.md §10). Lowering on the thread that made the model
+    /// uses the derivation kept then; on another thread it derives the
+    /// text again.
     ///
     /// ```
     /// use dae_core::interp::InterpretedModel;
