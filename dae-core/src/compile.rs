@@ -183,6 +183,28 @@ impl Gradients {
         if let Some(g) = self.memo.get(e) {
             return g.clone();
         }
+        if let Expr::Sum(sum) = e {
+            // `∂(Σ c_i t_i)/∂y_k = Σ c_i ∂t_i/∂y_k` over the terms holding
+            // `y_k`: the terms' gradients are remembered, and the rows of a
+            // model share most of their terms (a pair force in both points'
+            // rows, the forces again in the constraint chain), so each term
+            // is differentiated once, and a row is not walked again for
+            // every unknown it holds. The sum of the scaled derivatives is
+            // built by `add_all`, as `expr::diff` builds it, so the result
+            // is the same expression.
+            let mut parts: std::collections::BTreeMap<usize, Vec<Expr>> = Default::default();
+            for (t, c) in &sum.terms {
+                for (k, d) in self.of(t).iter() {
+                    parts.entry(*k).or_default().push(expr::scale(c, d));
+                }
+            }
+            let g: Rc<[(usize, Expr)]> = parts
+                .into_iter()
+                .map(|(k, ds)| (k, expr::add_all(ds)))
+                .collect();
+            self.memo.insert(e.clone(), g.clone());
+            return g;
+        }
         let g: Rc<[(usize, Expr)]> = e
             .symbols()
             .into_iter()
@@ -456,6 +478,55 @@ mod tests {
                 rows * cols
             );
         }
+    }
+
+    /// The remembered gradients, built term by term for a sum, are the
+    /// derivatives `expr::diff` gives, expression for expression, for every
+    /// row and constraint of every formulation of a three-point model with
+    /// pair forces (terms shared between rows and with the chain).
+    #[test]
+    fn gradients_are_the_derivatives_of_diff() {
+        let d = Derived::from_str(
+            "pub P { parameters { a = 0.5 } \
+             differential { x1, y1, x2, y2, x3, y3, u1, v1, u2, v2, u3, v3 } \
+             algebraic { l1, l2, l3 } \
+             definitions { r12 = (x1 - x2)^2 + (y1 - y2)^2; r13 = (x1 - x3)^2 + (y1 - y3)^2; \
+             r23 = (x2 - x3)^2 + (y2 - y3)^2; } \
+             equations { der(x1) = u1; der(y1) = v1; der(x2) = u2; der(y2) = v2; \
+             der(x3) = u3; der(y3) = v3; \
+             der(u1) = (x1 - x2)/r12^(3/2) + (x1 - x3)/r13^(3/2) - 2*l1*x1 - a*u1; \
+             der(v1) = (y1 - y2)/r12^(3/2) + (y1 - y3)/r13^(3/2) - 2*l1*y1 - a*v1; \
+             der(u2) = (x2 - x1)/r12^(3/2) + (x2 - x3)/r23^(3/2) - 2*l2*x2 - a*u2; \
+             der(v2) = (y2 - y1)/r12^(3/2) + (y2 - y3)/r23^(3/2) - 2*l2*y2 - a*v2; \
+             der(u3) = (x3 - x1)/r13^(3/2) + (x3 - x2)/r23^(3/2) - 2*l3*x3 - a*u3; \
+             der(v3) = (y3 - y1)/r13^(3/2) + (y3 - y2)/r23^(3/2) - 2*l3*y3 - a*v3; \
+             0 = x1^2 + y1^2 - 1; 0 = x2^2 + y2^2 - 1; 0 = x3^2 + y3^2 - 1; } }",
+        )
+        .expect("the model derives");
+        let mut grads = Gradients::default();
+        let mut exprs: Vec<Expr> = d
+            .analysis
+            .flat()
+            .into_iter()
+            .map(|(_, _, e)| e.clone())
+            .collect();
+        for f in &d.formulations {
+            exprs.extend(f.rows.iter().map(|r| r.f.clone()));
+        }
+        let mut sums = 0;
+        for e in &exprs {
+            sums += usize::from(matches!(e, Expr::Sum(_)));
+            let want: Vec<(usize, Expr)> = e
+                .symbols()
+                .into_iter()
+                .filter_map(|s| match s {
+                    Sym::Var(k) => Some((k as usize, expr::diff(e, s))),
+                    _ => None,
+                })
+                .collect();
+            assert_eq!(&*grads.of(e), &want[..], "{e:?}");
+        }
+        assert!(sums > 20, "{sums} sums among {} rows", exprs.len());
     }
 
     /// A formulation whose row of `E` holds the time: `(1 + t)·x·der(x)`,

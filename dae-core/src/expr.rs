@@ -196,8 +196,93 @@ impl Hasher for Fnv {
     }
 }
 
+/// Hash a rational: its numerator and denominator as machine integers when
+/// they fit (every coefficient and exponent of a real model), else
+/// `num_rational`'s hash (a continued fraction, walked term by term: a
+/// tenth of the lowering of a large model before this fast path). A value
+/// is hashed one way only, so equal rationals hash equally.
 fn hash_q(v: &Q, h: &mut Fnv) {
-    v.hash(h);
+    match (v.numer().to_i64(), v.denom().to_i64()) {
+        (Some(n), Some(d)) => {
+            h.write_u8(0);
+            h.write_i64(n);
+            h.write_i64(d);
+        }
+        _ => {
+            h.write_u8(1);
+            v.hash(h);
+        }
+    }
+}
+
+/// Bound on the numerator and denominator of a rational that the fast
+/// paths below compute with in `i64`: products of two such numbers and
+/// sums of two such products stay below `2^63`.
+const SMALL_Q: u64 = 1 << 31;
+
+/// `(numerator, denominator)` of `v` when both are below [`SMALL_Q`] in
+/// magnitude (the denominator of a [`Q`] is positive).
+fn small_q(v: &Q) -> Option<(i64, i64)> {
+    let n = v.numer().to_i64()?;
+    let d = v.denom().to_i64()?;
+    (n.unsigned_abs() < SMALL_Q && d.unsigned_abs() < SMALL_Q).then_some((n, d))
+}
+
+/// The rational `n/d` for `d > 0`, reduced as [`Q::new`] reduces it, but
+/// with machine integers (no big-integer gcd or division).
+fn q_small(n: i64, d: i64) -> Q {
+    debug_assert!(d > 0);
+    if d == 1 {
+        return Q::from_integer(BigInt::from(n));
+    }
+    let g = n.gcd(&d);
+    Q::new_raw(BigInt::from(n / g), BigInt::from(d / g))
+}
+
+/// `a · b`, exactly; machine arithmetic when both are small ([`small_q`]).
+fn q_mul(a: &Q, b: &Q) -> Q {
+    if a.is_one() {
+        return b.clone();
+    }
+    if b.is_one() {
+        return a.clone();
+    }
+    match (small_q(a), small_q(b)) {
+        (Some((na, da)), Some((nb, db))) => q_small(na * nb, da * db),
+        _ => a * b,
+    }
+}
+
+/// `a + b`, exactly; machine arithmetic when both are small ([`small_q`]).
+fn q_add(a: &Q, b: &Q) -> Q {
+    if a.is_zero() {
+        return b.clone();
+    }
+    if b.is_zero() {
+        return a.clone();
+    }
+    match (small_q(a), small_q(b)) {
+        (Some((na, da)), Some((nb, db))) => {
+            if da == db {
+                q_small(na + nb, da)
+            } else {
+                q_small(na * db + nb * da, da * db)
+            }
+        }
+        _ => a + b,
+    }
+}
+
+/// `*a += b` through [`q_add`].
+fn q_add_to(a: &mut Q, b: &Q) {
+    *a = q_add(a, b);
+}
+
+/// `*a *= b` through [`q_mul`].
+fn q_mul_to(a: &mut Q, b: &Q) {
+    if !b.is_one() {
+        *a = q_mul(a, b);
+    }
 }
 
 /// The bit of `s` in a [`Meta::syms`] mask.
@@ -836,14 +921,17 @@ fn make_sum(constant: Q, map: BTreeMap<Expr, Q>) -> Expr {
 
 fn add_into(constant: &mut Q, map: &mut BTreeMap<Expr, Q>, e: &Expr, scale: &Q) {
     match e {
-        Expr::Num(v) => *constant += &**v * scale,
+        Expr::Num(v) => q_add_to(constant, &q_mul(v, scale)),
         Expr::Sum(s) => {
-            *constant += &s.constant * scale;
+            q_add_to(constant, &q_mul(&s.constant, scale));
             for (t, c) in &s.terms {
-                *map.entry(t.clone()).or_insert_with(Q::zero) += c * scale;
+                q_add_to(
+                    map.entry(t.clone()).or_insert_with(Q::zero),
+                    &q_mul(c, scale),
+                );
             }
         }
-        _ => *map.entry(e.clone()).or_insert_with(Q::zero) += scale.clone(),
+        _ => q_add_to(map.entry(e.clone()).or_insert_with(Q::zero), scale),
     }
 }
 
@@ -906,12 +994,12 @@ impl ProdBuilder {
     }
 
     fn push_factor(&mut self, base: Expr, exp: Q) {
-        *self.factors.entry(base).or_insert_with(Q::zero) += exp;
+        q_add_to(self.factors.entry(base).or_insert_with(Q::zero), &exp);
     }
 
     fn push(&mut self, e: &Expr) {
         match e {
-            Expr::Num(v) => self.coef *= &**v,
+            Expr::Num(v) => q_mul_to(&mut self.coef, v),
             Expr::Prod(p) => {
                 for (b, x) in &p.factors {
                     self.push_factor(b.clone(), x.clone());
@@ -920,7 +1008,7 @@ impl ProdBuilder {
             Expr::Sum(_) => {
                 let (c, rest) = split_coefficient(e);
                 if !matches!(rest, Expr::Sum(_)) {
-                    self.coef *= c;
+                    q_mul_to(&mut self.coef, &c);
                     self.push(&rest);
                 } else if self.factors.contains_key(e) {
                     // (a+b)^k · (a+b) merges exponents instead of expanding.
@@ -941,7 +1029,7 @@ impl ProdBuilder {
         let mut sums = Vec::new();
         for s in std::mem::take(&mut self.sums) {
             if let Some(x) = self.factors.get_mut(&s) {
-                *x += q(1);
+                q_add_to(x, &q(1));
             } else {
                 sums.push(s);
             }
@@ -956,7 +1044,7 @@ impl ProdBuilder {
                 if x.denom().is_one() {
                     if let Some(k) = x.numer().to_i64() {
                         if let Some(p) = pow_q(v, k) {
-                            self.coef *= p;
+                            q_mul_to(&mut self.coef, &p);
                             continue;
                         }
                     }
@@ -990,7 +1078,7 @@ impl ProdBuilder {
         match rest {
             Expr::Prod(p) => {
                 for (b, x) in &p.factors {
-                    *factors.entry(b.clone()).or_insert_with(Q::zero) += x.clone();
+                    q_add_to(factors.entry(b.clone()).or_insert_with(Q::zero), x);
                 }
             }
             e if e.is_one() => {}
@@ -1044,7 +1132,7 @@ fn distribute(a: &Expr, b: &Expr) -> Expr {
     for (ca, ta) in &pa {
         for (cb, tb) in &pb {
             let prod = mul_monomials(ta, tb);
-            add_into(&mut constant, &mut map, &prod, &(ca * cb));
+            add_into(&mut constant, &mut map, &prod, &q_mul(ca, cb));
         }
     }
     make_sum(constant, map)
@@ -1083,7 +1171,7 @@ fn pow_q(v: &Q, k: i64) -> Option<Q> {
     }
     let mut r = q(1);
     for _ in 0..k.abs() {
-        r *= v;
+        q_mul_to(&mut r, v);
     }
     if k < 0 {
         r = r.recip();
@@ -1150,7 +1238,7 @@ pub fn pow_rational(base: &Expr, x: &Q) -> Expr {
             let factors = p
                 .factors
                 .iter()
-                .map(|(b, e)| (b.clone(), e * x))
+                .map(|(b, e)| (b.clone(), q_mul(e, x)))
                 .collect::<Vec<_>>();
             let mut pb = ProdBuilder::new();
             for (b, e) in factors {
@@ -1304,7 +1392,7 @@ fn diff_node(e: &Expr, s: Sym, memo: &mut Memo) -> Expr {
                 if db.is_zero() {
                     continue;
                 }
-                let mut items = vec![Expr::num(x.clone()), pow_rational(b, &(x - q(1))), db];
+                let mut items = vec![Expr::num(x.clone()), pow_rational(b, &q_add(x, &q(-1))), db];
                 for (j, (bj, xj)) in p.factors.iter().enumerate() {
                     if j != i {
                         items.push(pow_rational(bj, xj));
@@ -1473,6 +1561,53 @@ mod tests {
     }
     fn y() -> Expr {
         Expr::var(1)
+    }
+
+    /// The machine-integer paths of `q_mul` and `q_add` give `num_rational`'s
+    /// exact, reduced results, and their hash is that of the same value
+    /// built the slow way: at zero, one, signs, common denominators, at the
+    /// edge of [`SMALL_Q`] and past it, where the big-integer path takes
+    /// over.
+    #[test]
+    fn small_rational_fast_paths_agree_with_big_rationals() {
+        let edge = SMALL_Q as i64;
+        let values = [
+            q(0),
+            q(1),
+            q(-1),
+            q(7),
+            qr(-3, 2),
+            qr(1, 2),
+            qr(5, 6),
+            qr(-4, 9),
+            q(edge - 1),
+            qr(1, edge - 1),
+            qr(-(edge - 1), 3),
+            q(edge),
+            qr(edge + 1, 2),
+            Q::new(BigInt::from(i64::MAX) * 3, BigInt::from(5)),
+        ];
+        let hash = |v: &Q| {
+            let mut h = Fnv::new();
+            hash_q(v, &mut h);
+            h.finish()
+        };
+        for a in &values {
+            for b in &values {
+                let (m, s) = (q_mul(a, b), q_add(a, b));
+                assert_eq!(m, a * b, "{a} · {b}");
+                assert_eq!(s, a + b, "{a} + {b}");
+                // Reduced as `Q::new` reduces: the same numerator and
+                // denominator, so the same hash.
+                assert_eq!((m.numer(), m.denom()), ((a * b).numer(), (a * b).denom()));
+                assert_eq!((s.numer(), s.denom()), ((a + b).numer(), (a + b).denom()));
+                assert_eq!(hash(&m), hash(&(a * b)), "{a} · {b}");
+                let mut acc = a.clone();
+                q_add_to(&mut acc, b);
+                q_mul_to(&mut acc, b);
+                assert_eq!(acc, (a + b) * b, "({a} + {b}) · {b}");
+            }
+        }
     }
 
     #[test]

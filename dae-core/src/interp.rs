@@ -13,6 +13,7 @@ use crate::system::{
 use crate::tape::{Inputs, Tape, TapeBuilder};
 use nalgebra::DMatrix;
 use std::cell::{OnceCell, RefCell};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
 
 /// A model loaded at run time.
@@ -35,11 +36,42 @@ pub struct InterpretedModel {
 struct Lowered {
     /// The model text, derived again to lower a formulation not lowered
     /// yet (the derived model itself holds `Rc`s and cannot be kept by a
-    /// model that moves between threads); `None` when all are lowered.
+    /// model that moves between threads; the thread that derived it keeps
+    /// it in [`KEPT`] instead); `None` when all are lowered.
     source: Option<Arc<str>>,
+    /// This model's key in [`KEPT`] (unique in the process).
+    id: u64,
     /// One slot per provided formulation, in the order of
     /// `ModelInfo::formulations`.
     slots: Vec<OnceLock<Arc<Compiled>>>,
+}
+
+thread_local! {
+    /// The derived model of the last [`InterpretedModel::lazy`] made on
+    /// this thread, with its [`Lowered::id`], while it has formulations
+    /// left to lower: lowering on the thread that derived (a run) then
+    /// derives once, not twice (BENCHMARKS.md §10). One model at most, so
+    /// the memory held is one derivation's; a model lowered elsewhere, or
+    /// after another lazy model was made here, derives its text again.
+    static KEPT: RefCell<Option<(u64, Derived)>> = const { RefCell::new(None) };
+}
+
+/// Source of [`Lowered::id`]: 0 is a model lowered eagerly.
+static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+
+impl Drop for Lowered {
+    fn drop(&mut self) {
+        // Release the kept derivation with the last clone of its model (on
+        // the thread that kept it; elsewhere the next lazy model replaces
+        // it). `try_with`: the thread's locals may be gone at its exit.
+        let _ = KEPT.try_with(|k| {
+            if let Ok(mut k) = k.try_borrow_mut() {
+                if k.as_ref().is_some_and(|(kept, _)| *kept == self.id) {
+                    *k = None;
+                }
+            }
+        });
+    }
 }
 
 impl InterpretedModel {
@@ -66,6 +98,7 @@ impl InterpretedModel {
             d,
             Lowered {
                 source: None,
+                id: 0,
                 slots,
             },
         )
@@ -77,7 +110,9 @@ impl InterpretedModel {
     /// ([`Model::prepare`], with the gradients of the rows they share
     /// computed once). A run that uses one formulation of a model with
     /// six lowers one: the set-up of a large model is mostly lowering
-    /// (BENCHMARKS.md §10). Lowering later derives the text again.
+    /// (BENCHMARKS.md §10). Lowering on the thread that made the model
+    /// uses the derivation kept then; on another thread it derives the
+    /// text again.
     ///
     /// ```
     /// use dae_core::interp::InterpretedModel;
@@ -92,13 +127,17 @@ impl InterpretedModel {
     /// ```
     pub fn lazy(src: &str) -> Result<Self, syn::Error> {
         let d = Derived::from_str(src)?;
-        Ok(Self::with(
+        let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
+        let m = Self::with(
             &d,
             Lowered {
                 source: Some(Arc::from(src)),
+                id,
                 slots: d.formulations.iter().map(|_| OnceLock::new()).collect(),
             },
-        ))
+        );
+        KEPT.with(|k| *k.borrow_mut() = Some((id, d)));
+        Ok(m)
     }
 
     fn with(d: &Derived, lowered: Lowered) -> Self {
@@ -139,12 +178,28 @@ impl InterpretedModel {
         if missing.is_empty() {
             return;
         }
-        // The text derived when the model was made: it derives again, to
-        // the same formulations (derivation is deterministic).
-        let d = Derived::from_str(src).expect("the model's text derived before");
+        let id = self.lowered.id;
+        // The derived model this thread kept when it made the model, or the
+        // text derived again, to the same formulations (derivation is
+        // deterministic).
+        let d = KEPT
+            .with(|k| {
+                let mut k = k.borrow_mut();
+                match k.take() {
+                    Some((kept, d)) if kept == id => Some(d),
+                    other => {
+                        *k = other;
+                        None
+                    }
+                }
+            })
+            .unwrap_or_else(|| Derived::from_str(src).expect("the model's text derived before"));
         for (k, c) in missing.iter().zip(compile_selected(&d, &missing)) {
             // Another thread may have lowered it meanwhile: the same tapes.
             let _ = slots[*k].set(Arc::new(c));
+        }
+        if slots.iter().any(|s| s.get().is_none()) {
+            KEPT.with(|k| *k.borrow_mut() = Some((id, d)));
         }
     }
 
@@ -536,5 +591,63 @@ impl crate::accel::AccelParts for InterpretedSystem {
             self.inputs(t, y, &[], &[]),
             out,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::expr::work;
+
+    const SRC: &str = "pub M { differential { x, v } algebraic { la } \
+                       equations { der(x) = v; der(v) = -la*x; 0 = x^2 - 1; } }";
+
+    /// A lazy model lowered on the thread that made it lowers from the
+    /// derivation kept then (the symbolic work of lowering alone, counted
+    /// by `expr::work`); on another thread it derives the text again. Both
+    /// give the eager model's tapes.
+    #[test]
+    fn a_lazy_model_derives_once_on_its_thread() {
+        let d = Derived::from_str(SRC).expect("derives");
+        let k = d
+            .formulations
+            .iter()
+            .position(|f| f.name == "ggl1")
+            .expect("ggl1 provided");
+        let w = work();
+        let eager = compile_selected(&d, &[k]).remove(0);
+        let lowering = work() - w;
+        let w = work();
+        let _ = Derived::from_str(SRC).expect("derives");
+        let deriving = work() - w;
+        assert!(lowering > 0 && deriving > 0);
+
+        let here = InterpretedModel::lazy(SRC).expect("derives");
+        let w = work();
+        let sys = here.system("ggl1").expect("provided");
+        assert_eq!(work() - w, lowering, "lowered without deriving again");
+        assert_eq!(*sys.compiled(), eager);
+        // The kept derivation serves the next formulation too, and goes
+        // with the model.
+        let kept = || KEPT.with(|k| k.borrow().as_ref().map(|(id, _)| *id));
+        assert_eq!(kept(), Some(here.lowered.id));
+        let other = &d.formulations[(k + 1) % d.formulations.len()].name;
+        let _ = here.system(other).expect("provided");
+        assert_eq!(kept(), Some(here.lowered.id));
+        drop(here);
+        assert!(KEPT.with(|k| k.borrow().is_none()));
+
+        let there = InterpretedModel::lazy(SRC).expect("derives");
+        let (spent, same) = std::thread::scope(|s| {
+            s.spawn(|| {
+                let w = work();
+                let sys = there.system("ggl1").expect("provided");
+                (work() - w, *sys.compiled() == eager)
+            })
+            .join()
+            .expect("the other thread lowers")
+        });
+        assert!(same);
+        assert_eq!(spent, deriving + lowering, "derived again elsewhere");
     }
 }
