@@ -1862,28 +1862,19 @@ pub(crate) fn check_residuals(
             what: "residual",
         });
     }
-    let mut jac = DMatrix::zeros(m, n);
-    sys.rhs_jacobian(t0, y0, &mut jac);
-    jac.neg_mut();
-    if !info.constant_leading {
-        let mut lj = DMatrix::zeros(m, n);
-        sys.leading_jacobian(t0, y0, yp0, &mut lj);
-        jac += lj;
-    }
-    let mut lead = DMatrix::zeros(m, n);
-    sys.leading(t0, y0, &mut lead);
     stats.jacobian_evals += 1;
     let scale: Vec<f64> = (0..n)
         .map(|j| tol.atol(j) + tol.rtol(j) * y0[j].abs())
         .collect();
+    // Per row: `Σ_j |E_ij y'_j|` and `Σ_j |∂F_i/∂y_j| scale_j`.
+    let (ey, allowed) = row_sums(sys, t0, y0, yp0, &scale);
     let mut worst: Option<(usize, f64)> = None;
     for i in 0..m {
         let ri = r[i].abs();
-        let ey: f64 = (0..n).map(|j| (lead[(i, j)] * yp0[j]).abs()).sum();
-        if ri <= 100.0 * f64::EPSILON * (f[i].abs() + ey) {
+        if ri <= 100.0 * f64::EPSILON * (f[i].abs() + ey[i]) {
             continue;
         }
-        let allowed: f64 = (0..n).map(|j| (jac[(i, j)] * scale[j]).abs()).sum();
+        let allowed = allowed[i];
         let ratio = if allowed > 0.0 {
             ri / allowed
         } else {
@@ -1908,6 +1899,59 @@ pub(crate) fn check_residuals(
         }),
         None => Ok(()),
     }
+}
+
+/// [`check_residuals`]' row sums: `Σ_j |E_ij y'_j|` and
+/// `Σ_j |(∂(E y')/∂y − ∂f/∂y)_ij| scale_j` for every row `i`. From
+/// [`SPARSE_FROM`] unknowns on, a square system with a constant `E` is
+/// evaluated on its structural non-zeros ([`DaeSystem::sparsity`]): no
+/// `N × N` matrix (at 1 000 unknowns the dense form was 59 M instructions,
+/// a tenth of bdf's whole run on the 200-link chain, BENCHMARKS.md §16c).
+/// The sums are the dense ones bit for bit: the same terms in the same
+/// order (ascending `j`), without the exact zeros.
+fn row_sums(
+    sys: &dyn DaeSystem,
+    t0: f64,
+    y0: &[f64],
+    yp0: &[f64],
+    scale: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
+    let info = sys.info();
+    let (m, n) = (info.equations(), y0.len());
+    let (mut ey, mut allowed) = (vec![0.0; m], vec![0.0; m]);
+    if n >= SPARSE_FROM && m == n && info.constant_leading {
+        let sparsity = sys.sparsity();
+        let (e, j) = (&sparsity.leading, &sparsity.rhs_jacobian);
+        if (e.rows, e.cols, j.rows, j.cols) == (m, n, m, n) {
+            let mut values = vec![0.0; e.nnz()];
+            sys.leading_values(t0, y0, e, &mut values);
+            for ((r, c), v) in e.entries().zip(&values) {
+                ey[r] += (v * yp0[c]).abs();
+            }
+            values.clear();
+            values.resize(j.nnz(), 0.0);
+            sys.rhs_jacobian_values(t0, y0, j, &mut values);
+            for ((r, c), v) in j.entries().zip(&values) {
+                allowed[r] += (v * scale[c]).abs();
+            }
+            return (ey, allowed);
+        }
+    }
+    let mut jac = DMatrix::zeros(m, n);
+    sys.rhs_jacobian(t0, y0, &mut jac);
+    jac.neg_mut();
+    if !info.constant_leading {
+        let mut lj = DMatrix::zeros(m, n);
+        sys.leading_jacobian(t0, y0, yp0, &mut lj);
+        jac += lj;
+    }
+    let mut lead = DMatrix::zeros(m, n);
+    sys.leading(t0, y0, &mut lead);
+    for i in 0..m {
+        ey[i] = (0..n).map(|j| (lead[(i, j)] * yp0[j]).abs()).sum();
+        allowed[i] = (0..n).map(|j| (jac[(i, j)] * scale[j]).abs()).sum();
+    }
+    (ey, allowed)
 }
 
 #[cfg(all(test, feature = "sparse"))]
@@ -1945,6 +1989,37 @@ mod tests {
         let mut y0: Vec<f64> = [q.0, q.1, q.2, q.3].concat();
         y0.extend((0..n).map(|i| 0.5 * i as f64));
         y0
+    }
+
+    /// `check_residuals`' row sums over the structural non-zeros are the
+    /// dense sums bit for bit (the chain's `rcd0`, 65 unknowns, constant
+    /// `E`), and an initial value off its row is still refused.
+    #[test]
+    fn row_sums_on_the_structure_are_the_dense_ones() {
+        let model = InterpretedModel::from_str(&chain_model(13)).expect("the chain derives");
+        let sys = model.system("rcd0").expect("formulation");
+        let info = sys.info();
+        let (m, n) = (info.equations(), info.unknowns());
+        assert!(n >= SPARSE_FROM && info.constant_leading, "the sparse sums");
+        let y0 = chain_start(13);
+        let yp0: Vec<f64> = (0..n).map(|i| 0.7 - 0.03 * i as f64).collect();
+        let scale: Vec<f64> = (0..n).map(|j| 1e-6 * (1.0 + y0[j].abs())).collect();
+        let (ey, allowed) = row_sums(&sys, 0.0, &y0, &yp0, &scale);
+        let (mut jac, mut lead) = (DMatrix::zeros(m, n), DMatrix::zeros(m, n));
+        sys.rhs_jacobian(0.0, &y0, &mut jac);
+        sys.leading(0.0, &y0, &mut lead);
+        for i in 0..m {
+            let e: f64 = (0..n).map(|j| (lead[(i, j)] * yp0[j]).abs()).sum();
+            let a: f64 = (0..n).map(|j| (-jac[(i, j)] * scale[j]).abs()).sum();
+            assert_eq!((ey[i], allowed[i]), (e, a), "row {i}");
+        }
+        assert!(allowed.iter().any(|&a| a > 0.0));
+        let tol = Tolerances::uniform(1e-6);
+        let err = check_residuals(&sys, &tol, 0.0, &y0, &yp0, &mut Stats::default());
+        assert!(
+            matches!(err, Err(SolveError::InconsistentInitialValues { .. })),
+            "an arbitrary y'0 violates the dynamics: {err:?}"
+        );
     }
 
     /// Sparse and dense initial derivatives of the chain's index-1 and GGL
