@@ -565,12 +565,13 @@ pub enum RunError {
 /// lower bound `100 ε` written in full: `[2.220446049250313e-14, 1)`. A
 /// rounded bound (`2.2e-14`) would name a value that is itself refused.
 ///
+/// The library's [`dae_solvers::options::uniform_range`].
+///
 /// ```
 /// assert_eq!(dae::runner::tolerance_range(), "[2.220446049250313e-14, 1)");
 /// ```
 pub fn tolerance_range() -> String {
-    use dae_solvers::options::{RTOL_MAX, RTOL_MIN};
-    format!("[{RTOL_MIN:e}, {RTOL_MAX})")
+    dae_solvers::options::uniform_range()
 }
 
 /// Run one integration. `Err` only for bad input; solver failures are an

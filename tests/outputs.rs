@@ -309,4 +309,7 @@ fn literals_that_cannot_be_honoured_are_refused_where_written() {
         "{}",
         stderr(&o)
     );
+    // Nowhere a rounded bound beside the refused value (before: "below
+    // 100·ε ≈ 2.2e-14").
+    assert!(!stderr(&o).contains("≈ 2.2e-14"), "{}", stderr(&o));
 }

@@ -113,6 +113,42 @@ pub struct Prod {
     meta: Meta,
 }
 
+/// A number double precision cannot hold, found by
+/// [`Expr::unrepresentable_number`].
+///
+/// ```
+/// use dae_core::expr::Unrepresentable;
+/// let u = Unrepresentable { order: -400.0, overflows: false };
+/// assert_eq!(u.to_string(), "a number of about 1e-400 underflows to 0 in double precision \
+///     (the smallest positive value is 4.9e-324); write 0 if 0 is meant");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unrepresentable {
+    /// Its decimal order of magnitude, rounded (`400` for `1e400`).
+    pub order: f64,
+    /// `true`: above the largest finite `f64`; `false`: a non-zero value
+    /// below the smallest positive one.
+    pub overflows: bool,
+}
+
+impl fmt::Display for Unrepresentable {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.overflows {
+            write!(
+                f,
+                "a number of about 1e{} is too large for double precision (the largest is 1.8e308)",
+                self.order
+            )
+        } else {
+            write!(
+                f,
+                "a number of about 1e{} underflows to 0 in double precision (the smallest positive value is 4.9e-324); write 0 if 0 is meant",
+                self.order
+            )
+        }
+    }
+}
+
 /// `base ^ exponent` with a non-numeric exponent.
 #[derive(Clone, Debug)]
 pub struct Power {
@@ -803,6 +839,79 @@ impl Expr {
             }
             e.push_children(&mut stack);
         }
+    }
+
+    /// A number in the expression — a constant, a coefficient, an
+    /// exponent, or a number's power such as `2^2000` — that double
+    /// precision cannot hold: its value overflows to an infinity (`1e400`)
+    /// or, not zero, underflows to 0 (`1e-400`). Numbers are exact
+    /// rationals while an expression is built (`1e-400*1e400*x` is `x`),
+    /// but every evaluation uses the `f64` of each number left, so model
+    /// checking refuses such a number as it refuses a parameter default of
+    /// `1e-400`. A loop over the distinct nodes.
+    ///
+    /// ```
+    /// use dae_core::expr::{mul, Expr, Q};
+    /// use num_bigint::BigInt;
+    /// let big = Q::from_integer(BigInt::from(10).pow(400));
+    /// let e = mul(&Expr::Num(big.clone().into()), &Expr::var(0));
+    /// let found = e.unrepresentable_number().unwrap();
+    /// assert!(found.overflows && found.order == 400.0);
+    /// let tiny = Expr::Num(big.recip().into());
+    /// assert!(!tiny.unrepresentable_number().unwrap().overflows);
+    /// // Exact arithmetic first: the product of the two is 1.
+    /// assert!(mul(&e, &tiny).unrepresentable_number().is_none());
+    /// ```
+    pub fn unrepresentable_number(&self) -> Option<Unrepresentable> {
+        let number = |q: &Q| {
+            let f = q_to_f64(q);
+            if f.is_finite() && (f != 0.0 || q.is_zero()) {
+                return None;
+            }
+            // The decimal order from the bit lengths (the number may have
+            // hundreds of digits).
+            let bits = q.numer().bits() as f64 - q.denom().bits() as f64;
+            Some(Unrepresentable {
+                order: (bits * std::f64::consts::LOG10_2).round(),
+                overflows: !f.is_finite(),
+            })
+        };
+        let power = |b: &Expr, x: &Q| {
+            let Expr::Num(b) = b else { return None };
+            let v = pow_f64(q_to_f64(b), x);
+            if v.is_nan() || (v.is_finite() && v != 0.0) {
+                return None;
+            }
+            Some(Unrepresentable {
+                order: (q_to_f64(x) * q_to_f64(b).abs().log10()).round(),
+                overflows: !v.is_finite(),
+            })
+        };
+        let mut seen: std::collections::HashSet<*const ()> = std::collections::HashSet::new();
+        let mut stack: Vec<&Expr> = vec![self];
+        while let Some(e) = stack.pop() {
+            if let Some(key) = node_key(e) {
+                if !seen.insert(key) {
+                    continue;
+                }
+            }
+            let bad = match e {
+                Expr::Num(q) => number(q),
+                Expr::Sum(sum) => std::iter::once(&sum.constant)
+                    .chain(sum.terms.iter().map(|(_, c)| c))
+                    .find_map(number),
+                Expr::Prod(p) => p
+                    .factors
+                    .iter()
+                    .find_map(|(b, x)| number(x).or_else(|| power(b, x))),
+                Expr::Pow(_) | Expr::Func(_) | Expr::Sym(_) => None,
+            };
+            if bad.is_some() {
+                return bad;
+            }
+            e.push_children(&mut stack);
+        }
+        None
     }
 
     /// The outermost subexpression free of symbols whose value is not a

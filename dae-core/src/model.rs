@@ -1524,7 +1524,15 @@ impl Scope<'_> {
 /// ([`Model::parse_expr`]), where `ln(-1)` is a valid expression of the
 /// language (the property test `printed_text_reads_back` generates such
 /// constants and expects them to read back). `true` when there is none.
+///
+/// A number double precision cannot hold ([`Expr::unrepresentable_number`]:
+/// `1e400`, or `1e-400`, which would silently be 0) is refused the same
+/// way, in the words of a parameter default's refusal.
 fn check_constants(e: &Expr, span: Span, errors: &mut Errors) -> bool {
+    if let Some(u) = e.unrepresentable_number() {
+        errors.push(span, u.to_string());
+        return false;
+    }
     let Some(c) = e.non_finite_constant() else {
         return true;
     };

@@ -182,3 +182,48 @@ fn non_finite_constants_are_refused_where_they_are_written() {
     // A constant in the domain is fine.
     Derived::from_str(&model(&[], "x - sqrt(4) + ln(1)")).unwrap();
 }
+
+/// Issue 27, defect 9: a number double precision cannot hold in an
+/// equation or definition — `1e-400` silently became 0 at every
+/// evaluation, `1e400` an infinity (derive accepted both; only a
+/// parameter default was refused) — is refused at the definition or
+/// equation that holds it, in the words of the parameter's refusal.
+/// Exact arithmetic comes first: what cancels is fine.
+#[test]
+fn numbers_double_precision_cannot_hold_are_refused_where_they_are_written() {
+    let cases = [
+        (model(&[], "x - 1e400"), 7, "1e400", "too large"),
+        (model(&[], "x - 1e-400*v"), 7, "1e-400", "underflows to 0"),
+        (
+            model(&["c = 2^2000*x".into()], "x - c"),
+            5,
+            "2^2000",
+            "too large",
+        ),
+        (
+            model(&[], "x^(1e-330) - 1"),
+            7,
+            "exponent 1e-330",
+            "underflows",
+        ),
+        (model(&[], "x - 0.1^400*v"), 7, "0.1^400", "underflows to 0"),
+    ];
+    for (src, line, what, says) in cases {
+        let e = Derived::from_str(&src)
+            .map(|_| ())
+            .map_err(|e| render_error(&e, "m.dae"))
+            .expect_err(what);
+        assert_eq!(e.lines().count(), 1, "{e}");
+        assert!(e.starts_with(&format!("m.dae:{line}:")), "{what}: {e}");
+        assert!(e.contains(says), "{what}: {e}");
+    }
+    // What cancels exactly, and the extremes double precision holds.
+    for ok in [
+        "x - 1e-400*1e400*v",
+        "x - 1e308*v",
+        "x - 5e-324*v",
+        "x - 1e-400/1e-400",
+    ] {
+        Derived::from_str(&model(&[], ok)).unwrap_or_else(|e| panic!("{ok}: {e:?}"));
+    }
+}

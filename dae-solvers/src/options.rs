@@ -106,7 +106,7 @@ pub enum ToleranceIssue {
     Zero,
     /// Positive but below [`RTOL_MIN`].
     #[error(
-        "is below 100·ε ≈ 2.2e-14, the smallest relative tolerance double precision can honour"
+        "is below 100·ε = 2.220446049250313e-14, the smallest relative tolerance double precision can honour"
     )]
     BelowRoundOff,
     /// At or above [`RTOL_MAX`].
@@ -161,10 +161,21 @@ pub fn check_uniform(tol: f64) -> Result<(), ToleranceIssue> {
     check_relative(tol)
 }
 
-/// The accepted range of a uniform tolerance, for messages:
-/// `[2.2e-14, 1)`.
+/// The accepted range of a uniform tolerance, for messages, its lower
+/// bound written in full: a rounded bound (`2.2e-14`) would name a value
+/// that is itself refused (issue 27, defect 9).
+///
+/// ```
+/// use dae_solvers::options::{check_uniform, uniform_range, RTOL_MIN};
+///
+/// assert_eq!(uniform_range(), "[2.220446049250313e-14, 1)");
+/// // The bound as written is the bound applied.
+/// assert_eq!("2.220446049250313e-14".parse::<f64>(), Ok(RTOL_MIN));
+/// assert!(check_uniform(2.220446049250313e-14).is_ok());
+/// assert!(check_uniform(2.2e-14).is_err());
+/// ```
 pub fn uniform_range() -> String {
-    format!("[{RTOL_MIN:.1e}, {RTOL_MAX})")
+    format!("[{RTOL_MIN:e}, {RTOL_MAX})")
 }
 
 /// Relative and absolute tolerances. The error weight of component `i` is
