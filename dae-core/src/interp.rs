@@ -322,6 +322,8 @@ pub struct InterpretedSystem {
     c: Arc<Compiled>,
     params: Vec<f64>,
     scratch: RefCell<Vec<f64>>,
+    /// The nodes' derivatives of [`DaeSystem::rhs_tangents`].
+    dots: RefCell<Vec<f64>>,
     /// The patterns of the sparse tapes, made when first asked for.
     structure: OnceCell<Structure>,
 }
@@ -378,6 +380,7 @@ impl InterpretedSystem {
             c,
             params,
             scratch: RefCell::new(vec![0.0; size]),
+            dots: RefCell::new(Vec::new()),
             structure: OnceCell::new(),
         }
     }
@@ -472,6 +475,27 @@ impl DaeSystem for InterpretedSystem {
     }
     fn rhs_jacobian(&self, t: f64, y: &[f64], j: &mut DMatrix<f64>) {
         self.sparse(&self.c.rhs_jacobian, self.inputs(t, y, &[], &[]), j)
+    }
+    fn rhs_tangents(
+        &self,
+        t: f64,
+        y: &[f64],
+        dy: &[f64],
+        count: usize,
+        f: &mut [f64],
+        df: &mut [f64],
+    ) {
+        let tape = &self.c.rhs;
+        let (mut s, mut dots) = (self.scratch.borrow_mut(), self.dots.borrow_mut());
+        tape.eval_tangents(&self.inputs(t, y, &[], &[]), dy, count, &mut s, &mut dots);
+        let m = f.len();
+        for (r, (o, &node)) in f.iter_mut().zip(&tape.outputs).enumerate() {
+            let node = node as usize;
+            *o = s[node];
+            for (k, &d) in dots[node * count..(node + 1) * count].iter().enumerate() {
+                df[k * m + r] = d;
+            }
+        }
     }
     fn leading_jacobian(&self, t: f64, y: &[f64], z: &[f64], j: &mut DMatrix<f64>) {
         self.sparse(&self.c.leading_jacobian, self.inputs(t, y, &[], z), j)

@@ -30,6 +30,15 @@
 //! `ggl1` adds `Gᵀη` also to `der(p)`, a row the sensitivity system drops,
 //! and its other rows match.
 //!
+//! # What a residual costs
+//!
+//! The rows of the whole system, `f(y)` and every `J sᵢ + ∂f/∂pᵢ`, come
+//! from one forward pass over the augmented formulation's tape of `f` at
+//! `[y, p]` along the directions `(sᵢ, e_pᵢ)`
+//! ([`DaeSystem::rhs_tangents`]): the derivative of `f(y, p)` along
+//! `(sᵢ, e_pᵢ)` is `J sᵢ + ∂f/∂pᵢ`. No Jacobian is formed per residual,
+//! and the state's rows come from the same pass (BENCHMARKS.md §13c).
+//!
 //! # What the solvers see
 //!
 //! The Jacobian the system reports is block lower triangular: `∂f/∂y` of
@@ -268,6 +277,8 @@ pub struct SensitivitySystem {
     row_of: Vec<usize>,
     /// `E` of the state (constant).
     e: DMatrix<f64>,
+    /// Its non-zeros `(row, column, value)`, for the residuals.
+    e_entries: Vec<(usize, usize, f64)>,
     /// Whether the sensitivities are in the methods' error test.
     error_control: bool,
     scratch: RefCell<Scratch>,
@@ -284,8 +295,15 @@ struct Scratch {
     block: DMatrix<f64>,
     /// The state's constraint Jacobian.
     cblock: DMatrix<f64>,
-    /// `f` of the sensitivity rows for the residual.
-    f: Vec<f64>,
+    /// The augmented Jacobian at a moved point, and that point (`Bᵢ`).
+    moved: DMatrix<f64>,
+    dir: Vec<f64>,
+    /// The directions `(sᵢ, e_pᵢ)` in the augmented unknowns, one after
+    /// the other (the parameters' unit entries set once).
+    dirs: Vec<f64>,
+    /// The augmented formulation's `f` and its derivatives along `dirs`.
+    fa: Vec<f64>,
+    dfa: Vec<f64>,
 }
 
 impl std::fmt::Debug for SensitivitySystem {
@@ -467,13 +485,27 @@ impl SensitivitySystem {
         }
         let mut e = DMatrix::zeros(m, n);
         state.leading(0.0, &vec![0.0; n], &mut e);
+        let e_entries = (0..n)
+            .flat_map(|c| (0..m).map(move |r| (r, c)))
+            .filter(|&(r, c)| e[(r, c)] != 0.0)
+            .map(|(r, c)| (r, c, e[(r, c)]))
+            .collect();
+        let na = ai.unknowns();
+        let mut dirs = vec![0.0; np * na];
+        for (i, &c) in param_cols.iter().enumerate() {
+            dirs[i * na + c] = 1.0;
+        }
         let scratch = RefCell::new(Scratch {
             point,
-            jac: DMatrix::zeros(ai.equations(), ai.unknowns()),
-            cjac: DMatrix::zeros(k, ai.unknowns()),
+            jac: DMatrix::zeros(ai.equations(), na),
+            cjac: DMatrix::zeros(k, na),
             block: DMatrix::zeros(m, n),
             cblock: DMatrix::zeros(k, n),
-            f: vec![0.0; m * (1 + np)],
+            moved: DMatrix::zeros(ai.equations(), na),
+            dir: vec![0.0; na],
+            dirs,
+            fa: vec![0.0; ai.equations()],
+            dfa: vec![0.0; ai.equations() * np],
         });
         Ok(SensitivitySystem {
             state,
@@ -483,6 +515,7 @@ impl SensitivitySystem {
             param_cols,
             row_of,
             e,
+            e_entries,
             error_control: true,
             scratch,
         })
@@ -559,20 +592,36 @@ impl SensitivitySystem {
         }
     }
 
-    /// The sensitivity rows' `f` (`J sᵢ + ∂f/∂pᵢ`) for `y = [y; s…]` into
-    /// `out` (length `m P`).
-    fn sensitivity_rhs(&self, s: &mut Scratch, t: f64, y: &[f64], out: &mut [f64]) {
-        let (n, m) = (self.state_unknowns(), self.state.info().equations());
-        self.lift(s, &y[..n]);
-        self.augmented.rhs_jacobian(t, &s.point, &mut s.jac);
-        for (i, &pc) in self.param_cols.iter().enumerate() {
-            let si = &y[n * (i + 1)..n * (i + 2)];
-            for (r, &ar) in self.row_of.iter().enumerate() {
-                let mut v = s.jac[(ar, pc)];
-                for (j, &c) in self.var_cols.iter().enumerate() {
-                    v += s.jac[(ar, c)] * si[j];
-                }
-                out[m * i + r] = v;
+    /// `f` of the whole system for `y = [y; s₁; …; s_P]` into `out`
+    /// (length `m (1 + P)`): the state's rows `f(y)` and each parameter's
+    /// `J sᵢ + ∂f/∂pᵢ`, both from one forward pass of the augmented
+    /// formulation at `[y, p]` along the directions `(sᵢ, e_pᵢ)`
+    /// ([`DaeSystem::rhs_tangents`]): the derivative of `f(y, p)` along
+    /// `(sᵢ, e_pᵢ)` is `J sᵢ + ∂f/∂pᵢ`, and no Jacobian is formed.
+    fn whole_rhs(&self, s: &mut Scratch, t: f64, y: &[f64], out: &mut [f64]) {
+        let n = self.var_cols.len();
+        let m = self.row_of.len();
+        let np = self.param_cols.len();
+        let (point, dirs) = (&mut s.point, &mut s.dirs);
+        let na = point.len();
+        for (&c, &v) in self.var_cols.iter().zip(&y[..n]) {
+            point[c] = v;
+        }
+        for (dir, si) in dirs.chunks_exact_mut(na).zip(y[n..].chunks_exact(n)) {
+            for (&c, &v) in self.var_cols.iter().zip(si) {
+                dir[c] = v;
+            }
+        }
+        self.augmented
+            .rhs_tangents(t, point, dirs, np, &mut s.fa, &mut s.dfa);
+        let ma = s.fa.len();
+        let (state, sens) = out.split_at_mut(m);
+        for (o, &ar) in state.iter_mut().zip(&self.row_of) {
+            *o = s.fa[ar];
+        }
+        for (block, d) in sens.chunks_exact_mut(m).zip(s.dfa.chunks_exact(ma)) {
+            for (o, &ar) in block.iter_mut().zip(&self.row_of) {
+                *o = d[ar];
             }
         }
     }
@@ -588,29 +637,23 @@ impl DaeSystem for SensitivitySystem {
     }
 
     fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
-        let (n, m) = (self.state_unknowns(), self.state.info().equations());
-        self.state.rhs(t, &y[..n], &mut f[..m]);
         let s = &mut *self.scratch.borrow_mut();
-        self.sensitivity_rhs(s, t, y, &mut f[m..]);
+        self.whole_rhs(s, t, y, f);
     }
 
+    /// `blockdiag(E, …, E) y' − f`, `f` from [`SensitivitySystem::rhs`]'s
+    /// one pass (the state's rows included: `E` is constant).
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
-        let (n, m) = (self.state_unknowns(), self.state.info().equations());
-        self.state.residual(t, &y[..n], &yp[..n], &mut r[..m]);
-        let s = &mut *self.scratch.borrow_mut();
-        let mut f = std::mem::take(&mut s.f);
-        self.sensitivity_rhs(s, t, y, &mut f[m..]);
-        for i in 0..self.parameters() {
-            let sp = &yp[n * (i + 1)..n * (i + 2)];
-            for row in 0..m {
-                let mut v = -f[m * (i + 1) + row];
-                for (j, &d) in sp.iter().enumerate() {
-                    v += self.e[(row, j)] * d;
-                }
-                r[m * (i + 1) + row] = v;
+        let (n, m) = (self.var_cols.len(), self.row_of.len());
+        self.whole_rhs(&mut self.scratch.borrow_mut(), t, y, r);
+        for (rb, ypb) in r.chunks_exact_mut(m).zip(yp.chunks_exact(n)) {
+            for v in rb.iter_mut() {
+                *v = -*v;
+            }
+            for &(row, col, e) in &self.e_entries {
+                rb[row] += e * ypb[col];
             }
         }
-        s.f = f;
     }
 
     fn leading(&self, _t: f64, _y: &[f64], e: &mut DMatrix<f64>) {
@@ -641,26 +684,24 @@ impl DaeSystem for SensitivitySystem {
         // symmetry of second derivatives is the derivative of J along
         // dᵢ = (sᵢ, e_pᵢ) in the augmented unknowns: one augmented Jacobian
         // per parameter by a directional difference.
-        let base = std::mem::replace(&mut s.jac, DMatrix::zeros(0, 0));
+        let (base, moved, dir) = (&s.jac, &mut s.moved, &mut s.dir);
         let scale = s.point.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
-        let mut moved = DMatrix::zeros(base.nrows(), base.ncols());
         for (i, &pc) in self.param_cols.iter().enumerate() {
             let si = &y[n * (i + 1)..n * (i + 2)];
             let size = si.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
             let eps = f64::EPSILON.sqrt() * scale / size;
-            let mut dir = s.point.clone();
+            dir.copy_from_slice(&s.point);
             for (k, &c) in self.var_cols.iter().enumerate() {
                 dir[c] += eps * si[k];
             }
             dir[pc] += eps;
-            self.augmented.rhs_jacobian(t, &dir, &mut moved);
+            self.augmented.rhs_jacobian(t, dir, moved);
             for (r, &ar) in self.row_of.iter().enumerate() {
                 for (c, &ac) in self.var_cols.iter().enumerate() {
                     j[(m * (i + 1) + r, c)] = (moved[(ar, ac)] - base[(ar, ac)]) / eps;
                 }
             }
         }
-        s.jac = base;
     }
 
     fn leading_jacobian(&self, _t: f64, _y: &[f64], _z: &[f64], j: &mut DMatrix<f64>) {

@@ -491,6 +491,48 @@ pub trait DaeSystem {
         None
     }
 
+    /// `f(t, y)` into `f` (length M) and its derivatives along `count`
+    /// directions in the unknowns: `df[k M..(k + 1) M] = (∂f/∂y) dy_k`
+    /// with `dy_k = dy[k N..(k + 1) N]` — the right-hand sides of forward
+    /// sensitivities ([`crate::sensitivity`]), without forming `∂f/∂y`.
+    /// The default evaluates `f` and the dense Jacobian (allocates); an
+    /// interpreted system makes one forward pass over its tape of `f`
+    /// ([`crate::tape::Tape::eval_tangents`]).
+    ///
+    /// ```
+    /// use dae_core::interp::InterpretedModel;
+    /// use dae_core::system::DaeSystem;
+    ///
+    /// let m = InterpretedModel::from_str(
+    ///     "pub M { differential { x } algebraic { z } equations { der(x) = -x * z; 0 = z - x; } }",
+    /// )
+    /// .unwrap();
+    /// let sys = m.system("rcd0").unwrap();
+    /// let (mut f, mut df) = ([0.0; 2], [0.0; 2]);
+    /// // along (1, 0) at x = 2, z = 3: the derivative of −x z is −z
+    /// sys.rhs_tangents(0.0, &[2.0, 3.0], &[1.0, 0.0], 1, &mut f, &mut df);
+    /// assert_eq!(f[0], -6.0);
+    /// assert_eq!(df[0], -3.0);
+    /// ```
+    fn rhs_tangents(
+        &self,
+        t: f64,
+        y: &[f64],
+        dy: &[f64],
+        count: usize,
+        f: &mut [f64],
+        df: &mut [f64],
+    ) {
+        let (m, n) = (self.info().equations(), self.info().unknowns());
+        self.rhs(t, y, f);
+        let mut j = DMatrix::zeros(m, n);
+        self.rhs_jacobian(t, y, &mut j);
+        for k in 0..count {
+            let d = nalgebra::DVectorView::from_slice(&dy[k * n..(k + 1) * n], n);
+            df[k * m..(k + 1) * m].copy_from_slice((&j * d).as_slice());
+        }
+    }
+
     /// `∂f/∂y` at the entries of `pattern` (this system's
     /// `sparsity().rhs_jacobian`, or any pattern of its shape), in its
     /// order, into `values` (length `pattern.nnz()`). The default
@@ -579,6 +621,17 @@ macro_rules! forward_dae_system {
             }
             fn blocks(&self) -> Option<Blocks> {
                 (**self).blocks()
+            }
+            fn rhs_tangents(
+                &self,
+                t: f64,
+                y: &[f64],
+                dy: &[f64],
+                count: usize,
+                f: &mut [f64],
+                df: &mut [f64],
+            ) {
+                (**self).rhs_tangents(t, y, dy, count, f, df)
             }
             fn rhs_jacobian_values(&self, t: f64, y: &[f64], p: &Pattern, v: &mut [f64]) {
                 (**self).rhs_jacobian_values(t, y, p, v)

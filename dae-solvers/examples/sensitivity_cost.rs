@@ -8,6 +8,18 @@
 //! ```sh
 //! cargo run --release -p dae-solvers --example sensitivity_cost [tol]
 //! ```
+//!
+//! One case per process, integrated once, for an instruction count of the
+//! integration alone (`solve_case` is the function to collect; the model's
+//! derivation and the consistent start stay outside it):
+//!
+//! ```sh
+//! valgrind --tool=callgrind --toggle-collect='*solve_case*' \
+//!     target/release/examples/sensitivity_cost 1e-8 radau5 rcd0 1 on
+//! ```
+//!
+//! with `P` = 0 for the plain run (the error control argument is then
+//! ignored).
 
 use dae_core::interp::InterpretedModel;
 use dae_core::sensitivity::Sensitivities;
@@ -17,7 +29,9 @@ use dae_solvers::sensitivity::consistent_start;
 use dae_solvers::{solver_by_name, Options, Problem, Stats};
 use std::time::Instant;
 
-fn run(solver: &str, sys: &dyn DaeSystem, y0: &[f64], tol: f64) -> (Stats, f64) {
+/// One integration of S01's horizon: what an instruction count collects.
+#[inline(never)]
+fn solve_case(solver: &str, sys: &dyn DaeSystem, y0: &[f64], tol: f64) -> Stats {
     let options = Options::with_tol(tol);
     let problem = Problem {
         system: sys,
@@ -26,13 +40,17 @@ fn run(solver: &str, sys: &dyn DaeSystem, y0: &[f64], tol: f64) -> (Stats, f64) 
         t_end: 20.0,
     };
     let solver = solver_by_name(solver).unwrap();
+    solver.solve(&problem, &options).unwrap().stats
+}
+
+/// The counts of one run and the least wall time of `repeat`.
+fn run(solver: &str, sys: &dyn DaeSystem, y0: &[f64], tol: f64, repeat: usize) -> (Stats, f64) {
     let mut best = f64::INFINITY;
     let mut stats = Stats::default();
-    for _ in 0..5 {
+    for _ in 0..repeat {
         let start = Instant::now();
-        let sol = solver.solve(&problem, &options).unwrap();
+        stats = solve_case(solver, sys, y0, tol);
         best = best.min(start.elapsed().as_secs_f64());
-        stats = sol.stats;
     }
     (stats, best)
 }
@@ -47,15 +65,65 @@ fn released(
     start(&y0).unwrap().y
 }
 
-fn main() {
-    let tol: f64 = std::env::args()
-        .nth(1)
-        .map_or(1e-8, |s| s.parse().expect("a tolerance"));
+/// The model text of the pendulum.
+fn pendulum() -> String {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/pendulum.dae");
-    let src = std::fs::read_to_string(path).unwrap();
+    std::fs::read_to_string(path).unwrap()
+}
+
+/// The sensitivity parameters of `p` = 1 or 2.
+fn parameters(p: usize) -> &'static [&'static str] {
+    match p {
+        1 => &["g"],
+        _ => &["g", "l"],
+    }
+}
+
+/// `solver formulation P on|off`: one integration, its counts.
+fn one_case(tol: f64, args: &[String]) {
+    let [solver, f, p, control] = args else {
+        panic!("expected: tol solver formulation P on|off");
+    };
+    let p: usize = p.parse().expect("P: 0, 1 or 2");
+    let src = pendulum();
+    let stats = if p == 0 {
+        let plain = InterpretedModel::from_str(&src).unwrap();
+        let sys = plain.system(f).unwrap();
+        let y0 = released(&sys, |y| consistent(&sys, 0.0, y, &InitOptions::default()));
+        solve_case(solver, &sys, &y0, tol)
+    } else {
+        let model = Sensitivities::from_str(&src, parameters(p)).unwrap();
+        let mut sys = model.formulation(f).unwrap();
+        sys.set_error_control(control == "on");
+        let y0 = released(&sys, |y| {
+            consistent_start(&sys, 0.0, y, &InitOptions::default())
+        });
+        solve_case(solver, &sys, &y0, tol)
+    };
+    println!(
+        "{solver}({f}) P = {p} error control {control}: steps {} rejected {} residual evals {} \
+         Jacobians {} LUs {} Newton iterations {}",
+        stats.steps,
+        stats.rejected,
+        stats.residual_evals,
+        stats.jacobian_evals,
+        stats.factorizations,
+        stats.newton_iterations
+    );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let tol: f64 = args
+        .first()
+        .map_or(1e-8, |s| s.parse().expect("a tolerance"));
+    if args.len() > 1 {
+        return one_case(tol, &args[1..]);
+    }
+    let src = pendulum();
     let plain = InterpretedModel::from_str(&src).unwrap();
-    let one = Sensitivities::from_str(&src, &["g"]).unwrap();
-    let two = Sensitivities::from_str(&src, &["g", "l"]).unwrap();
+    let one = Sensitivities::from_str(&src, parameters(1)).unwrap();
+    let two = Sensitivities::from_str(&src, parameters(2)).unwrap();
     println!("tol {tol:e}; time: least of 5 runs (wall, s); ratio: against the plain run");
     println!("| solver(formulation) | P | error control | steps | residual evals | Jacobians | LUs | time | time ratio | (1 + 0.6 P) |");
     println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|");
@@ -69,6 +137,7 @@ fn main() {
                     consistent(&base, 0.0, y, &InitOptions::default())
                 }),
                 tol,
+                5,
             );
             let row = |p: usize, control: &str, s: &Stats, t: f64| {
                 println!(
@@ -89,7 +158,7 @@ fn main() {
                     let y0 = released(&sys, |y| {
                         consistent_start(&sys, 0.0, y, &InitOptions::default())
                     });
-                    let (s, t) = run(solver, &sys, &y0, tol);
+                    let (s, t) = run(solver, &sys, &y0, tol, 5);
                     row(p, if control { "on" } else { "off" }, &s, t);
                 }
             }

@@ -64,9 +64,6 @@ pub(crate) struct Lower<S> {
     /// `Bᵢ` for `i = 1…P`, stacked (`P N × N`): the negated sub-diagonal
     /// blocks of the iteration matrix.
     below: DMatrix<f64>,
-    /// Scratch for `Bᵢ x₀` (real; and the imaginary part).
-    re: Vec<f64>,
-    im: Vec<f64>,
 }
 
 /// Whether `blocks` describes an `m × n` system a block solve can take.
@@ -92,8 +89,6 @@ impl<S> Lower<S> {
                 if full { 0 } else { n },
             )),
             below: DMatrix::zeros(p * n, n),
-            re: vec![0.0; n],
-            im: vec![0.0; n],
         }
     }
 
@@ -104,15 +99,24 @@ impl<S> Lower<S> {
         let (first, rest) = x.split_at_mut(n);
         solve(&mut self.inner, first);
         for (i, xi) in rest[..n * (self.count - 1)].chunks_exact_mut(n).enumerate() {
-            let b = self.below.rows(n * i, n);
-            for (c, &x0) in first.iter().enumerate() {
-                if x0 != 0.0 {
-                    for (v, &bv) in xi.iter_mut().zip(b.column(c).iter()) {
-                        *v += bv * x0;
-                    }
-                }
-            }
+            add_below(&self.below, n, i, first, xi);
             solve(&mut self.inner, xi);
+        }
+    }
+}
+
+/// `xi += B_{i+1} x0`, `B` stacked in `below` (`P n × n`, column-major:
+/// column `c` of block `i` is contiguous).
+#[inline]
+fn add_below(below: &DMatrix<f64>, n: usize, i: usize, x0: &[f64], xi: &mut [f64]) {
+    let stride = below.nrows();
+    let data = below.as_slice();
+    for (c, &x) in x0.iter().enumerate() {
+        if x != 0.0 {
+            let at = c * stride + n * i;
+            for (v, &b) in xi.iter_mut().zip(&data[at..at + n]) {
+                *v += b * x;
+            }
         }
     }
 }
@@ -218,21 +222,18 @@ impl<S: StageSystems> StageSystems for Block<S> {
             Block::Lower(b) => b,
         };
         let n = b.size;
-        b.inner.solve_complex(&mut re[..n], &mut im[..n]);
-        for i in 1..b.count {
-            let below = b.below.rows(n * (i - 1), n);
-            b.re.copy_from_slice(&re[n * i..n * (i + 1)]);
-            b.im.copy_from_slice(&im[n * i..n * (i + 1)]);
-            for c in 0..n {
-                let (xr, xi) = (re[c], im[c]);
-                for (r, &bv) in below.column(c).iter().enumerate() {
-                    b.re[r] += bv * xr;
-                    b.im[r] += bv * xi;
-                }
-            }
-            b.inner.solve_complex(&mut b.re, &mut b.im);
-            re[n * i..n * (i + 1)].copy_from_slice(&b.re);
-            im[n * i..n * (i + 1)].copy_from_slice(&b.im);
+        let (re0, re_rest) = re.split_at_mut(n);
+        let (im0, im_rest) = im.split_at_mut(n);
+        b.inner.solve_complex(re0, im0);
+        let blocks = n * (b.count - 1);
+        for (i, (rei, imi)) in re_rest[..blocks]
+            .chunks_exact_mut(n)
+            .zip(im_rest[..blocks].chunks_exact_mut(n))
+            .enumerate()
+        {
+            add_below(&b.below, n, i, re0, rei);
+            add_below(&b.below, n, i, im0, imi);
+            b.inner.solve_complex(rei, imi);
         }
     }
 }
