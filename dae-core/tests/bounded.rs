@@ -171,16 +171,23 @@ fn non_finite_constants_are_refused_where_they_are_written() {
         (model(&["c = 2*sqrt(-4)".into()], "x - c"), 5, "sqrt(-4)"),
     ];
     for (src, line, what) in cases {
-        let e = Derived::from_str(&src)
-            .map(|_| ())
-            .map_err(|e| render_error(&e, "m.dae"))
-            .expect_err(what);
-        assert_eq!(e.lines().count(), 1, "{e}");
-        assert!(e.starts_with(&format!("m.dae:{line}:")), "{what}: {e}");
+        let e = refused_at(&src, line, what);
         assert!(e.contains("not a finite real number"), "{what}: {e}");
     }
     // A constant in the domain is fine.
     Derived::from_str(&model(&[], "x - sqrt(4) + ln(1)")).unwrap();
+}
+
+/// The error deriving `src` (as `m.dae`) must give: one line, located at
+/// `line`; `what` names the case in a failure.
+fn refused_at(src: &str, line: usize, what: &str) -> String {
+    let e = Derived::from_str(src)
+        .map(|_| ())
+        .map_err(|e| render_error(&e, "m.dae"))
+        .expect_err(what);
+    assert_eq!(e.lines().count(), 1, "{e}");
+    assert!(e.starts_with(&format!("m.dae:{line}:")), "{what}: {e}");
+    e
 }
 
 /// Issue 27, defect 9: a number double precision cannot hold in an
@@ -209,12 +216,7 @@ fn numbers_double_precision_cannot_hold_are_refused_where_they_are_written() {
         (model(&[], "x - 0.1^400*v"), 7, "0.1^400", "underflows to 0"),
     ];
     for (src, line, what, says) in cases {
-        let e = Derived::from_str(&src)
-            .map(|_| ())
-            .map_err(|e| render_error(&e, "m.dae"))
-            .expect_err(what);
-        assert_eq!(e.lines().count(), 1, "{e}");
-        assert!(e.starts_with(&format!("m.dae:{line}:")), "{what}: {e}");
+        let e = refused_at(&src, line, what);
         assert!(e.contains(says), "{what}: {e}");
     }
     // What cancels exactly, and the extremes double precision holds.
