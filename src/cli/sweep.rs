@@ -39,7 +39,8 @@ pub struct SweepArgs {
     #[arg(long, value_delimiter = ',')]
     pub tols: Option<Vec<f64>>,
     /// Timed integrations per run, at least: more (up to 50) while they
-    /// total under 0.25 s of CPU time, fewer once they total 1 s; tsim is
+    /// total under 0.25 s of CPU time or fewer than 3 lie within 1 % of
+    /// their minimum, fewer once they total 1 s; tsim is
     /// their minimum (interference only adds time), in CPU time of the
     /// integrating thread (wall time beside it in results.csv/json).
     #[arg(long, default_value_t = 3)]

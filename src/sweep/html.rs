@@ -409,8 +409,8 @@ pub fn index(
     let _ = write!(
         s,
         "<h2 id=\"efficiency\">Efficiency</h2>\n<p>One row per run. tsim_s: integration time in seconds, the CPU time of the integrating thread (minimum of \
-         the timed integrations, at least the sweep's repeats and more for short runs: interference only adds \
-         time; the Pareto front and the fastest pairs use it, times within 5 % tied); wall_s: the wall-clock time of the \
+         the timed integrations, at least the sweep's repeats, more for short runs and until three lie within 1 % of \
+         the minimum: interference only adds time; the Pareto front and the fastest pairs use it, times within 5 % tied); wall_s: the wall-clock time of the \
          same integrations (their minimum); err: largest pointwise \
          error of the differential unknowns over the reference's times; err_sum: sum over those times of the errors \
          of all unknowns the reference gives (SPEC's reading of the paper's ERR; results.csv also has err_l2, their \
