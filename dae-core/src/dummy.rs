@@ -273,8 +273,11 @@ impl<S: DaeSystem> std::fmt::Debug for DummyDerivatives<S> {
 impl<S: DaeSystem> DummyDerivatives<S> {
     /// `mex0` around `inner`, the model's `mex0` rows (every level of every
     /// constraint, as in `ovd0`). The structure is probed at `t = 0`, `y = 0`
-    /// and perturbed points (or `y = 1` where `0` is not finite); the first
-    /// selection is made where the system is first evaluated.
+    /// and perturbed points — or, where `0` is not finite, at `y = 1`, and
+    /// where that is not either (a distance `sqrt((x₂ − x₁)² + …)` in a
+    /// denominator is zero wherever all unknowns are equal), at a point
+    /// whose unknowns all differ; the first selection is made where the
+    /// system is first evaluated.
     pub fn new(inner: S) -> Result<Self, DummyError> {
         let src = inner.info().clone();
         if src.name != NAME {
@@ -284,8 +287,9 @@ impl<S: DaeSystem> DummyDerivatives<S> {
         // Probe points: the chain's pattern and the leading matrix's.
         let mut pattern = None;
         let mut base = vec![0.0; n];
-        for start in [0.0, 1.0] {
-            base = vec![start; n];
+        let starts = [vec![0.0; n], vec![1.0; n], distinct(n)];
+        for start in starts {
+            base = start;
             pattern = crate::system::chain_pattern(&inner, 0.0, &base);
             if pattern.is_some() {
                 break;
@@ -514,6 +518,15 @@ impl<S: DaeSystem> DummyDerivatives<S> {
             }
         }
     }
+}
+
+/// A probe point whose `n` unknowns are distinct and in `[0.5, 1.5)`:
+/// `0.5 + frac((j + 1) φ)`, φ the golden ratio (no two equal, none zero).
+fn distinct(n: usize) -> Vec<f64> {
+    let phi = 0.5 * (1.0 + 5f64.sqrt());
+    (0..n)
+        .map(|j| 0.5 + ((j + 1) as f64 * phi).fract())
+        .collect()
 }
 
 /// The block's Jacobian (members × `cols`), each row scaled to unit largest

@@ -767,7 +767,10 @@ pub enum FormulationError {
     },
     /// `psi1`/`psi0` the model has no symbolic selector for, and that the
     /// numerical selector cannot build from its `ovd1`/`ovd0`.
-    #[error("model `{model}` does not provide formulation `{name}`: {reason} (it provides: {available})")]
+    #[error(
+        "model `{model}` does not provide formulation `{name}`: {reason} (it provides: {})",
+        others(available, name)
+    )]
     NoSelector {
         /// Model name.
         model: String,
@@ -778,6 +781,21 @@ pub enum FormulationError {
         /// Comma-separated list.
         available: String,
     },
+}
+
+/// The comma-separated `list` without `name`: what a model provides besides
+/// the formulation it could not build.
+fn others(list: &str, name: &str) -> String {
+    let kept: Vec<&str> = list
+        .split(',')
+        .map(str::trim)
+        .filter(|f| !f.is_empty() && *f != name)
+        .collect();
+    if kept.is_empty() {
+        "no other formulation".to_string()
+    } else {
+        kept.join(", ")
+    }
 }
 
 /// A model with parameters: the struct the `dae!` macro generates, or an

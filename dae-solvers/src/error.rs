@@ -48,6 +48,29 @@ pub enum SolveError {
         /// Iterations in the last attempt.
         iterations: usize,
     },
+    /// The Newton iterations of one step failed with increments that did
+    /// not shrink as the step was cut from `h_from` to `h`: the arithmetic
+    /// cannot determine `unknown` to its tolerance there — the round-off of
+    /// its residual is of the tolerance's size or larger (or an
+    /// inconsistency that no step resolves) — so a shorter step cannot help
+    /// ([`crate::Options`]: loosen that unknown's tolerance, or choose a
+    /// formulation that keeps it out of the error test).
+    #[error(
+        "at t = {t:e} the Newton increments of `{unknown}` stall at {level:.2} of its tolerance for every step from h = {h_from:e} down to {h:e}: round-off in its equations is at the tolerance's size, so no step size can meet it; loosen that unknown's tolerance"
+    )]
+    RoundOffFloor {
+        /// Time reached.
+        t: f64,
+        /// Step size tried last.
+        h: f64,
+        /// Step size of the first stalled attempt.
+        h_from: f64,
+        /// The unknown with the largest weighted increment of the last
+        /// attempt.
+        unknown: String,
+        /// That attempt's last increment, weighted (1 = the tolerance).
+        level: f64,
+    },
     /// The iteration matrix is singular and stays so after step-size
     /// reductions.
     #[error("singular iteration matrix at t = {t:e} (h = {h:e})")]
@@ -189,6 +212,7 @@ impl SolveError {
         match self {
             SolveError::StepSizeTooSmall { .. } => "step_size_too_small",
             SolveError::NewtonFailure { .. } => "newton_failure",
+            SolveError::RoundOffFloor { .. } => "round_off_floor",
             SolveError::SingularMatrix { .. } => "singular_matrix",
             SolveError::NonFinite { .. } => "non_finite",
             SolveError::StepLimit { .. } => "step_limit",
@@ -210,6 +234,7 @@ impl SolveError {
         match self {
             SolveError::StepSizeTooSmall { t, .. }
             | SolveError::NewtonFailure { t, .. }
+            | SolveError::RoundOffFloor { t, .. }
             | SolveError::SingularMatrix { t, .. }
             | SolveError::NonFinite { t, .. }
             | SolveError::StepLimit { t, .. } => Some(*t),
@@ -238,6 +263,7 @@ impl SolveError {
         match self {
             SolveError::StepSizeTooSmall { .. }
             | SolveError::NewtonFailure { .. }
+            | SolveError::RoundOffFloor { .. }
             | SolveError::SingularMatrix { .. } => Failure::Breakdown,
             SolveError::StepLimit { .. } | SolveError::TooManyResets { .. } => Failure::Budget,
             SolveError::NonFinite { .. } => Failure::NonFinite,

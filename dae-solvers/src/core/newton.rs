@@ -264,6 +264,80 @@ impl Contraction {
     }
 }
 
+/// Newton failures on one step, for telling a step that is too long from
+/// an iteration that no step can help: the increments of the failed
+/// iterations, as the step is shortened, either shrink with it (the
+/// predictor's error and the nonlinearity scale with powers of `h`) or they
+/// do not — the round-off of a residual whose terms are far larger than the
+/// tolerance of an unknown they determine (a multiplier balancing a stiff
+/// spring of 10⁷ N/m, asked for to 10⁻⁸), where halving the step ten more
+/// times only walks it down to `newton_failure` at `h ≈ 10⁻¹¹`.
+///
+/// [`Stall::failed`] is told the weighted norm of the last increment of each
+/// failed iteration; it answers `true` once [`STALL_FAILURES`] failures in a
+/// row have increments between [`STALL_MIN`] and [`STALL_MAX`] (of the order
+/// of the tolerance: noise, not a gross divergence) that vary by at most
+/// [`STALL_SPREAD`] while the step has shrunk by [`STALL_SHRINK`] or more.
+/// Any other failure starts the count again, as does an accepted step or
+/// one rejected by its error test ([`Stall::reset`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Stall {
+    count: usize,
+    h_first: f64,
+    lo: f64,
+    hi: f64,
+}
+
+/// Failed iterations in a row that make a stall.
+pub(crate) const STALL_FAILURES: usize = 4;
+/// Smallest increment (weighted norm) of a stall: below it the iteration
+/// converges under the round-off floor ([`ROUND_OFF_FLOOR`]).
+pub(crate) const STALL_MIN: f64 = 0.05;
+/// Largest increment of a stall: beyond a few tolerances the failure is a
+/// divergence, whatever its cause.
+pub(crate) const STALL_MAX: f64 = 4.0;
+/// Largest ratio between the stalled increments.
+pub(crate) const STALL_SPREAD: f64 = 2.0;
+/// The step must have shrunk by at least this factor over the stall (three
+/// halvings), in which increments that scale with `h` would have fallen by
+/// more than [`STALL_SPREAD`].
+pub(crate) const STALL_SHRINK: f64 = 8.0;
+
+impl Stall {
+    /// A step was accepted or failed its error test (the iteration
+    /// converged): the count starts again.
+    pub(crate) fn reset(&mut self) {
+        self.count = 0;
+    }
+
+    /// The step of the first failure counted.
+    pub(crate) fn first_step(&self) -> f64 {
+        self.h_first
+    }
+
+    /// An iteration at step `h` failed with a last increment of weighted
+    /// norm `norm`; `true` when the failures make a stall.
+    pub(crate) fn failed(&mut self, h: f64, norm: f64) -> bool {
+        if !(STALL_MIN..=STALL_MAX).contains(&norm) {
+            self.count = 0;
+            return false;
+        }
+        if self.count == 0 {
+            (self.h_first, self.lo, self.hi) = (h, norm, norm);
+        } else {
+            self.lo = self.lo.min(norm);
+            self.hi = self.hi.max(norm);
+        }
+        self.count += 1;
+        if self.hi > STALL_SPREAD * self.lo {
+            // Increments that changed this much are not a floor: count
+            // from this failure on.
+            (self.count, self.h_first, self.lo, self.hi) = (1, h, norm, norm);
+        }
+        self.count >= STALL_FAILURES && h * STALL_SHRINK <= self.h_first
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -381,5 +455,44 @@ mod tests {
             assert_eq!(c.observe(norm, 0.0), Verdict::Continue);
         }
         assert_eq!(c.observe(1.270e-6, 0.0), Verdict::Converged);
+    }
+
+    #[test]
+    fn a_stall_is_increments_that_do_not_shrink_with_the_step() {
+        // The stiff spring's multiplier: 0.3–0.65 of the tolerance at every
+        // step from 2.4e-8 down (`tests/stiff_spring.rs`).
+        let mut s = Stall::default();
+        let mut h = 2.4e-8;
+        let mut stalled = Vec::new();
+        for norm in [0.58, 0.56, 0.64, 0.65, 0.65] {
+            stalled.push(s.failed(h, norm));
+            h *= 0.5;
+        }
+        assert_eq!(stalled, [false, false, false, true, true]);
+        // Increments that shrink with the step are a step too long.
+        let mut s = Stall::default();
+        let mut h = 1e-3;
+        let mut norm = 3.0;
+        for _ in 0..10 {
+            assert!(!s.failed(h, norm));
+            h *= 0.5;
+            norm *= 0.5;
+        }
+        // Four flat failures without enough shrinking are not one either
+        // (a constant step retried, a failure at the same h).
+        let mut s = Stall::default();
+        for _ in 0..6 {
+            assert!(!s.failed(1e-3, 0.5));
+        }
+        // Gross divergence is not a stall, and resets the count.
+        let mut s = Stall::default();
+        let mut h = 1e-3;
+        for norm in [0.5, 0.5, 0.5, 50.0, 0.5, 0.5, 0.5] {
+            assert!(!s.failed(h, norm));
+            h *= 0.5;
+        }
+        assert!(s.failed(h, 0.5));
+        s.reset();
+        assert!(!s.failed(h * 0.5, 0.5));
     }
 }

@@ -7,6 +7,7 @@ use super::tableau::Collocation;
 use super::{FACL, FACR, QUOT1, QUOT2, SAFE};
 use crate::core::attempt::Steps;
 use crate::core::matrix::StageSystems;
+use crate::core::newton::Stall;
 
 /// What the step loop does next (RADAU5's labels 10, 20, 30).
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -53,6 +54,8 @@ pub(super) struct Control {
     pub(super) next: Next,
     /// The quasi-constant step rule of a symmetric method.
     pub(super) hold: Hold,
+    /// Newton failures of this step whose increments do not shrink with it.
+    pub(super) stall: Stall,
 }
 
 impl Control {

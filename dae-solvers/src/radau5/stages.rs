@@ -318,6 +318,9 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
             }
             let verdict = self.newton.observe(dyno, 0.0);
             let iterations = self.newton.iterations();
+            if matches!(verdict, Verdict::Diverged | Verdict::TooSlow { .. }) {
+                self.newton_last = (dyno, largest_weighted(&w.dw, w.weights.get(), m));
+            }
             match verdict {
                 Verdict::Diverged => return Newton::Diverged(iterations),
                 Verdict::TooSlow { factor } => {
@@ -561,4 +564,19 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         let y_lo = self.compensated.then_some(&mut w.y_lo[..]);
         kernels::advance::<K>(&w.z, h, &mut w.y, y_lo, &mut w.yp, &mut w.cont);
     }
+}
+
+/// The unknown with the largest weighted entry in the three stage blocks
+/// of `dw` (`m` rows each; rows beyond the weights' length count as none).
+fn largest_weighted(dw: &[f64], weights: &[f64], m: usize) -> usize {
+    let mut best = (0, 0.0);
+    for block in dw.chunks(m).take(3) {
+        for (j, (d, w)) in block.iter().zip(weights).enumerate() {
+            let v = (d * w).abs();
+            if v > best.1 {
+                best = (j, v);
+            }
+        }
+    }
+    best.0
 }

@@ -11,7 +11,7 @@ use crate::core::control::{self, Failure};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::StageSystems;
-use crate::core::newton::{Contraction, Rule};
+use crate::core::newton::{Contraction, Rule, Stall};
 use crate::linalg::{all_finite, two_sum};
 use crate::options::Options;
 use crate::{Problem, SolveError, Stats};
@@ -57,6 +57,9 @@ pub(super) struct Integrator<'a, S, K> {
     /// [`crate::gauss`]); zero otherwise.
     pub(super) newton_floor: f64,
     pub(super) newton_drift: f64,
+    /// The last failed Newton iteration: its last increment's weighted
+    /// norm and the unknown that dominated it.
+    pub(super) newton_last: (f64, usize),
 }
 
 impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
@@ -195,6 +198,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             method: std::marker::PhantomData,
             newton_floor: fnewt,
             newton_drift,
+            newton_last: (0.0, 0),
             w,
             stats: Stats::default(),
             newton,
@@ -221,6 +225,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 ),
                 next: Next::Jacobian,
                 hold: Hold::default(),
+                stall: Stall::default(),
             },
         }
     }
@@ -333,6 +338,18 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             }
         }
 
+        // Failed iterations whose increments stay put as the step shrinks:
+        // no step helps (`Stall`).
+        let (level, unknown) = self.newton_last;
+        if retry.is_some() && !non_finite && fixed.is_none() && self.c.stall.failed(h, level) {
+            return Err(SolveError::RoundOffFloor {
+                t,
+                h,
+                h_from: self.c.stall.first_step(),
+                unknown: self.sys.info().variables[unknown].name.clone(),
+                level,
+            });
+        }
         let c = &mut self.c;
         if let Some(mut retry) = retry {
             // ---- Newton failure (RADAU5's label 78) ----
@@ -341,6 +358,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             } else {
                 Failure::Newton
             };
+
             if fixed.is_some() && !c.caljac {
                 c.next = Next::Jacobian;
                 retry = Retry::Refresh;
@@ -358,6 +376,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             });
         }
 
+        c.stall.reset();
         if err >= 1.0 {
             // ---- rejected by the error test ----
             c.reject = true;

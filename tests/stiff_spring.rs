@@ -1,0 +1,105 @@
+//! A pendulum carrying a second mass on a stiff spring (k = 10⁷ … 10⁹ N/m):
+//! issue 26, "done when" 3 — `radau5` finishes on every formulation it
+//! takes, or fails typed with the reason. The index-1 forms (`rcd0`, `psi0`,
+//! `mex0`) determine the rod's multiplier λ from the acceleration-level
+//! constraint, into which the spring force enters with its stiffness: at
+//! tol 1e-8 the round-off of λ's equations is of the tolerance's size, the
+//! Newton increments of λ stay at 0.6–0.7 of it whatever the step, and
+//! before this test they walked the step down to `newton_failure` at
+//! h ≈ 10⁻¹¹. Now that stall is the typed `round_off_floor`, naming λ.
+
+use dae::dae_core::interp::InterpretedModel;
+use dae::dae_core::system::Model;
+use dae::dae_core::Derived;
+use dae::dae_solvers::radau5::Radau5;
+use dae::dae_solvers::{init, Options, Problem, SolveError, Solver};
+
+const MODEL: &str = "
+/// A pendulum (m1 on a rigid rod of length l) with m2 hanging from it on a
+/// stiff spring (stiffness k, rest length r).
+pub StiffSpring {
+    parameters { m1 = 1.0, m2 = 1.0, l = 1.0, r = 0.5, k = 1e7, g = 9.81 }
+    differential { x1, y1, x2, y2, vx1, vy1, vx2, vy2 }
+    algebraic { lambda }
+    definitions {
+        d = sqrt((x2 - x1)^2 + (y2 - y1)^2);
+        f = k * (d - r) / d;
+    }
+    equations {
+        der(x1) = vx1;
+        der(y1) = vy1;
+        der(x2) = vx2;
+        der(y2) = vy2;
+        m1 * der(vx1) = -2 * x1 * lambda + f * (x2 - x1);
+        m1 * der(vy1) = -2 * y1 * lambda + f * (y2 - y1) - m1 * g;
+        m2 * der(vx2) = -f * (x2 - x1);
+        m2 * der(vy2) = -f * (y2 - y1) - m2 * g;
+        0 = x1^2 + y1^2 - l^2;
+    }
+}
+";
+
+/// `radau5` on `formulation` with spring stiffness `k` at `tol`, t ∈ [0, 1],
+/// from the rod horizontal and the spring at its rest length, hanging.
+fn run(formulation: &str, k: f64, tol: f64) -> Result<usize, SolveError> {
+    let derived = Derived::from_str(MODEL).unwrap();
+    let mut m = InterpretedModel::new(&derived);
+    m.set_parameter("k", k).unwrap();
+    let sys = m.formulation(formulation).unwrap();
+    let info = sys.info().clone();
+    let mut y0 = vec![0.0; info.unknowns()];
+    for (name, v) in [("x1", 1.0), ("y1", 0.0), ("x2", 1.0), ("y2", -0.5)] {
+        y0[info.variable(name).unwrap()] = v;
+    }
+    let start = init::consistent(&*sys, 0.0, &y0, &init::InitOptions::default()).unwrap();
+    let problem = Problem {
+        system: &*sys,
+        t0: 0.0,
+        y0: &start.y,
+        t_end: 1.0,
+    };
+    Radau5
+        .solve(&problem, &Options::with_tol(tol))
+        .map(|s| s.stats.steps)
+}
+
+#[test]
+fn the_index_1_forms_stop_typed_at_the_round_off_floor_of_the_multiplier() {
+    for k in [1e7, 1e9] {
+        for f in ["rcd0", "psi0", "mex0"] {
+            match run(f, k, 1e-8) {
+                Err(SolveError::RoundOffFloor {
+                    unknown,
+                    level,
+                    h,
+                    h_from,
+                    t,
+                }) => {
+                    assert_eq!(unknown, "lambda", "{f}, k = {k}");
+                    assert!((0.05..=4.0).contains(&level), "{f}: level {level}");
+                    // The stall is seen over a shrinking step, early: not a
+                    // walk down to round-off in h.
+                    assert!(h * 8.0 <= h_from && h > 1e-10, "{f}: h {h}, from {h_from}");
+                    assert!(t < 1e-3, "{f}: t = {t}");
+                }
+                other => panic!("{f}, k = {k}: {other:?}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn the_other_forms_finish_and_the_index_1_forms_finish_at_a_tolerance_above_the_floor() {
+    for k in [1e7, 1e9] {
+        for f in ["ori2", "rcd1", "ggl1", "psi1"] {
+            let steps = run(f, k, 1e-8).unwrap_or_else(|e| panic!("{f}, k = {k}: {e}"));
+            assert!(steps < 10_000, "{f}, k = {k}: {steps} steps");
+        }
+    }
+    // At k = 1e7 the floor lies between 1e-8 and 3e-8: above it rcd0
+    // finishes (a floor of the arithmetic, not a defect of the form).
+    for tol in [1e-7, 3e-8] {
+        let steps = run("rcd0", 1e7, tol).unwrap_or_else(|e| panic!("rcd0 at {tol}: {e}"));
+        assert!(steps < 10_000, "rcd0 at {tol}: {steps} steps");
+    }
+}
