@@ -288,3 +288,30 @@ fn transamp_inconsistent_start_is_projected_or_refused() {
         e.message
     );
 }
+
+// ------------------------------------------------------------------ refusals
+
+/// `gauss` makes its end point consistent on the rows of `E` that are
+/// zero; the CV loop's source current and the amplifier's node equations
+/// are fixed by combinations of rows holding derivatives, so it refuses
+/// both with that reason before a step (issue 26: it used to stop with
+/// `singular_matrix` at its first step on the loop, and at h ≈ 1e-18 on
+/// the amplifier), while radau5 takes them.
+#[test]
+fn gauss_refuses_algebraic_conditions_that_are_not_rows() {
+    for (name, zero_rows, conditions) in [("mna_cv_loop", 1, 2), ("transamp", 0, 3)] {
+        let scene = Scene::load(scenes_dir().join(format!("{name}.toml"))).unwrap();
+        let inputs = inputs(&scene).unwrap();
+        let r = runner::run(&inputs.spec(&scene, "gauss", "rcd0", 1e-6)).unwrap();
+        let error = r.error.unwrap_or_else(|| panic!("{name}: gauss ran"));
+        assert_eq!(error.kind, "not_applicable", "{name}: {}", error.message);
+        assert!(
+            error.message.contains(&format!(
+                "E has {conditions} null directions (algebraic conditions) but only {zero_rows} zero rows"
+            )),
+            "{name}: {}",
+            error.message
+        );
+        assert_eq!(r.stats.steps, 0, "{name}: refused before a step");
+    }
+}

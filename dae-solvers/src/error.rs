@@ -515,6 +515,19 @@ pub enum NotApplicable {
     /// harness snapshot); a time-dependent `E` gets the same reason.
     #[error("state-dependent leading matrix E(y): solver needs a constant one")]
     LeadingMatrixNotConstant,
+    /// A method that makes its end point consistent on the rows of `E`
+    /// that are zero (`gauss`), on a system with more algebraic conditions
+    /// than such rows: some are combinations of rows holding derivatives
+    /// (a loop of capacitors and a voltage source).
+    #[error(
+        "E has {conditions} null directions (algebraic conditions) but only {zero_rows} zero rows: the other conditions are combinations of rows holding derivatives, onto which this solver cannot project its end point; use radau5 or bdf"
+    )]
+    AlgebraicConditionsNotRows {
+        /// Rows of `E` that are zero (constraint rows).
+        zero_rows: usize,
+        /// `m − rank E`.
+        conditions: usize,
+    },
     /// An unknown has a higher index than the method integrates.
     #[error("index {index}: solver takes unknowns of index at most {max}")]
     IndexTooHigh {

@@ -14,6 +14,7 @@ use crate::core::newton::Verdict;
 use crate::core::weights::Weights;
 use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
 use crate::options::Options;
+use crate::NotApplicable;
 use crate::SolveError;
 use dae_core::system::{DaeSystem, FormulationInfo, RowKind};
 use nalgebra::DMatrix;
@@ -372,9 +373,20 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// The algebraic rows of the end-point projection, from `E(y₀)`
     /// (evaluated by the start); only for a method that is not stiffly
     /// accurate.
-    pub(super) fn find_algebraic_rows(&mut self, info: &FormulationInfo) {
+    ///
+    /// The projection makes the end point satisfy the rows of `E` that are
+    /// zero: it needs every algebraic condition of the system to be such a
+    /// row, i.e. as many zero rows as `E` has null directions
+    /// (`m − rank E`). Where an algebraic condition is a combination of
+    /// rows that hold derivatives — a loop of capacitors and a voltage
+    /// source in a circuit, whose current is fixed only by the sum of the
+    /// loop's rows — there are fewer, the projection's matrix is singular,
+    /// and the method is refused with that reason
+    /// ([`NotApplicable::AlgebraicConditionsNotRows`]) rather than failing
+    /// at its first step.
+    pub(super) fn find_algebraic_rows(&mut self, info: &FormulationInfo) -> Result<(), SolveError> {
         if K::END.is_none() || S::LEAST_SQUARES {
-            return;
+            return Ok(());
         }
         let e = self.w.e_n.dense();
         self.w.algebraic = (0..self.m)
@@ -383,6 +395,22 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
                     && (0..self.n).all(|j| e[(i, j)] == 0.0)
             })
             .collect();
+        let scale = e.amax();
+        let rank = if scale > 0.0 {
+            let tol = 1e3 * f64::EPSILON * scale * self.m.max(self.n) as f64;
+            e.clone().svd(false, false).rank(tol)
+        } else {
+            0
+        };
+        let null = self.m - rank;
+        if self.w.algebraic.len() < null {
+            return Err(SolveError::NotApplicable(
+                NotApplicable::AlgebraicConditionsNotRows {
+                    zero_rows: self.w.algebraic.len(),
+                    conditions: null,
+                },
+            ));
+        }
         if self.constant_leading && !self.w.algebraic.is_empty() {
             let zero_columns: Vec<usize> = (0..self.n)
                 .filter(|&j| (0..self.m).all(|i| e[(i, j)] == 0.0))
@@ -392,6 +420,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
                 self.w.algebraic_unknowns = zero_columns;
             }
         }
+        Ok(())
     }
 
     /// Make the end point of an accepted step consistent (a method that is

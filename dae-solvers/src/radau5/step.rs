@@ -263,7 +263,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         let span = t_end - t0;
         self.evaluate_at_step_point(t0, true)?;
         let sys = self.sys.clone();
-        self.find_algebraic_rows(sys.info());
+        self.find_algebraic_rows(sys.info())?;
         let c = &mut self.c;
         c.h = match c.fixed {
             Some(hf) => hf,
