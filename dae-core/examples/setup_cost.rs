@@ -1,18 +1,26 @@
 //! The set-up cost of a model read at run time, part by part: derivation,
 //! then lowering each formulation to tapes on its own (what loading a model
 //! cost before `compile_all`), then all formulations at once with
-//! [`compile_all`] (what `dae run` and `dae sweep` pay now).
+//! [`compile_all`] (what `dae sweep` pays for a model it runs in all its
+//! formulations). With a formulation's name after the model, only that
+//! formulation is lowered, as `dae run` lowers the one it runs: derivation
+//! and lowering are then the set-up of a run but for the solver's own
+//! (the consistent initial values, the sparsity pattern), and a count of
+//! instructions under callgrind measures them without the noise of a
+//! shared machine.
 //!
 //! ```sh
 //! scripts/fekete.py 20 /tmp/fekete20
 //! cargo run --release -p dae-core --example setup_cost -- /tmp/fekete20.dae
+//! cargo build --release -p dae-core --example setup_cost
+//! valgrind --tool=callgrind target/release/examples/setup_cost /tmp/fekete20.dae ggl1
 //! ```
 //!
 //! Times are the process's CPU time (user + system, from `/proc/self/stat`,
 //! so Linux only, 10 ms resolution): on a shared machine wall time measures
 //! the other jobs as well.
 
-use dae_core::compile::{compile, compile_all};
+use dae_core::compile::{compile, compile_all, compile_selected};
 use dae_core::derive::Derived;
 
 /// CPU time of this process so far, in seconds.
@@ -37,7 +45,7 @@ fn cpu_seconds() -> f64 {
 
 fn main() {
     let Some(path) = std::env::args().nth(1) else {
-        eprintln!("usage: setup_cost MODEL.dae");
+        eprintln!("usage: setup_cost MODEL.dae [FORMULATION]");
         std::process::exit(2);
     };
     let src = match std::fs::read_to_string(&path) {
@@ -56,6 +64,23 @@ fn main() {
         }
     };
     println!("derive: {:.2} s", cpu_seconds() - t);
+    if let Some(name) = std::env::args().nth(2) {
+        let Some(k) = d.formulations.iter().position(|f| f.name == name) else {
+            eprintln!("{path}: no formulation {name}");
+            std::process::exit(2);
+        };
+        let t = cpu_seconds();
+        let c = compile_selected(&d, &[k]).remove(0);
+        println!(
+            "compile {name}: {:.2} s ({} entries of ∂f/∂y, {} of ∂g/∂y, {} + {} tape nodes)",
+            cpu_seconds() - t,
+            c.rhs_jacobian.entries.len(),
+            c.constraints_jacobian.entries.len(),
+            c.rhs_jacobian.tape.nodes.len(),
+            c.constraints_jacobian.tape.nodes.len()
+        );
+        return;
+    }
     let mut each = 0.0;
     for f in &d.formulations {
         let t = cpu_seconds();

@@ -3,11 +3,11 @@
 //! consume the result.
 
 use crate::derive::Derived;
-use crate::expr::{self, Expr, Sym};
+use crate::expr::{self, Expr, Func, Sym};
 use crate::formulation::Formulation;
 use crate::system::{ConstraintInfo, FormulationInfo, RowInfo};
-use crate::tape::{Tape, TapeBuilder};
-use std::collections::HashMap;
+use crate::tape::{FastMap, Tape, TapeBuilder};
+use std::collections::{BTreeMap, BTreeSet};
 use std::rc::Rc;
 
 /// A sparse matrix whose entries are the outputs of a tape.
@@ -168,53 +168,198 @@ pub fn compile_selected(d: &Derived, which: &[usize]) -> Vec<Compiled> {
         .collect()
 }
 
-/// The non-zero partial derivatives of expressions with respect to the
-/// unknowns, each expression differentiated once (the key's hash is cached
-/// in the expression, so a look-up does not walk it).
+/// The partial derivatives of expressions with respect to the unknowns,
+/// each distinct subexpression differentiated once (the key's hash is
+/// cached in the expression, so a look-up does not walk it).
+///
+/// A node's gradient is assembled from its children's, by the rule
+/// [`expr::diff`] applies to the node, with the same constructions in the
+/// same order — so every derivative is the expression `expr::diff` gives
+/// (a test compares them), but a subexpression shared by several rows, or
+/// met under several unknowns of one row (the distance of a pair of
+/// points under each of its six coordinates), is differentiated once, not
+/// once per row and unknown.
 #[derive(Default)]
 struct Gradients {
-    memo: HashMap<Expr, Rc<[(usize, Expr)]>>,
+    memo: FastMap<Expr, Rc<[(usize, Expr)]>>,
+}
+
+/// One step of the walk of [`Gradients::of`].
+enum Visit<'a> {
+    /// Find or build this expression's gradient.
+    Enter(&'a Expr),
+    /// Its children's gradients are remembered: build its own.
+    Build(&'a Expr),
 }
 
 impl Gradients {
     /// `(k, ∂e/∂y_k)` for every unknown `y_k` that `e` contains, ascending
-    /// in `k`.
+    /// in `k` (a derivative may be zero where the terms cancel).
+    ///
+    /// A walk with an explicit stack, children before parents, so an
+    /// expression of any height is differentiated in constant native
+    /// stack.
     fn of(&mut self, e: &Expr) -> Rc<[(usize, Expr)]> {
-        if let Some(g) = self.memo.get(e) {
-            return g.clone();
-        }
-        if let Expr::Sum(sum) = e {
-            // `∂(Σ c_i t_i)/∂y_k = Σ c_i ∂t_i/∂y_k` over the terms holding
-            // `y_k`: the terms' gradients are remembered, and the rows of a
-            // model share most of their terms (a pair force in both points'
-            // rows, the forces again in the constraint chain), so each term
-            // is differentiated once, and a row is not walked again for
-            // every unknown it holds. The sum of the scaled derivatives is
-            // built by `add_all`, as `expr::diff` builds it, so the result
-            // is the same expression.
-            let mut parts: std::collections::BTreeMap<usize, Vec<Expr>> = Default::default();
-            for (t, c) in &sum.terms {
-                for (k, d) in self.of(t).iter() {
-                    parts.entry(*k).or_default().push(expr::scale(c, d));
+        let mut steps = vec![Visit::Enter(e)];
+        while let Some(step) = steps.pop() {
+            match step {
+                Visit::Enter(e) => {
+                    if self.memo.contains_key(e) {
+                        continue;
+                    }
+                    match e {
+                        Expr::Num(_) | Expr::Sym(_) => {
+                            let g = self.build(e);
+                            self.memo.insert(e.clone(), g);
+                        }
+                        Expr::Sum(s) => {
+                            steps.push(Visit::Build(e));
+                            steps.extend(s.terms.iter().map(|(t, _)| Visit::Enter(t)));
+                        }
+                        Expr::Prod(p) => {
+                            steps.push(Visit::Build(e));
+                            steps.extend(p.factors.iter().map(|(b, _)| Visit::Enter(b)));
+                        }
+                        Expr::Pow(p) => {
+                            steps.push(Visit::Build(e));
+                            steps.push(Visit::Enter(&p.base));
+                            steps.push(Visit::Enter(&p.exponent));
+                        }
+                        Expr::Func(_) => {
+                            steps.push(Visit::Build(e));
+                            steps.push(Visit::Enter(chain_link(e)));
+                        }
+                    }
+                }
+                Visit::Build(e) => {
+                    // A child may be the expression's equal met twice.
+                    if !self.memo.contains_key(e) {
+                        let g = self.build(e);
+                        self.memo.insert(e.clone(), g);
+                    }
                 }
             }
-            let g: Rc<[(usize, Expr)]> = parts
-                .into_iter()
-                .map(|(k, ds)| (k, expr::add_all(ds)))
-                .collect();
-            self.memo.insert(e.clone(), g.clone());
-            return g;
         }
-        let g: Rc<[(usize, Expr)]> = e
-            .symbols()
-            .into_iter()
-            .filter_map(|s| match s {
-                Sym::Var(k) => Some((k as usize, expr::diff(e, s))),
-                _ => None,
-            })
-            .collect();
-        self.memo.insert(e.clone(), g.clone());
-        g
+        self.memo
+            .get(e)
+            .cloned()
+            .unwrap_or_else(|| Rc::from(Vec::new()))
+    }
+
+    /// The remembered gradient of a child of a node being built.
+    fn child(&self, e: &Expr) -> Rc<[(usize, Expr)]> {
+        self.memo
+            .get(e)
+            .cloned()
+            .unwrap_or_else(|| Rc::from(Vec::new()))
+    }
+
+    /// The gradient of `e` from its children's, which are remembered.
+    fn build(&self, e: &Expr) -> Rc<[(usize, Expr)]> {
+        match e {
+            Expr::Num(_) => Rc::from(Vec::new()),
+            Expr::Sym(Sym::Var(k)) => Rc::from(vec![(*k as usize, Expr::one())]),
+            Expr::Sym(_) => Rc::from(Vec::new()),
+            Expr::Sum(sum) => {
+                // `∂(Σ c_i t_i)/∂y_k = Σ c_i ∂t_i/∂y_k` over the terms
+                // holding `y_k`, added by `add_all` as `expr::diff` adds
+                // them (the terms without `y_k` add zeros).
+                let mut parts: BTreeMap<usize, Vec<Expr>> = BTreeMap::new();
+                for (t, c) in &sum.terms {
+                    for (k, d) in self.child(t).iter() {
+                        parts.entry(*k).or_default().push(expr::scale(c, d));
+                    }
+                }
+                parts
+                    .into_iter()
+                    .map(|(k, ds)| (k, expr::add_all(ds)))
+                    .collect()
+            }
+            Expr::Prod(p) => {
+                // The product rule of `expr::diff`: for each factor `b^x`
+                // whose derivative is not zero, in order, the product
+                // `x · b^(x−1) · b' · Π_(j≠i) b_j^(x_j)`. The powers do not
+                // depend on the unknown: built once for all of them.
+                let grads: Vec<Rc<[(usize, Expr)]>> =
+                    p.factors.iter().map(|(b, _)| self.child(b)).collect();
+                let lowered: Vec<Expr> = p
+                    .factors
+                    .iter()
+                    .map(|(b, x)| expr::pow_rational(b, &(x - expr::q(1))))
+                    .collect();
+                let powers: Vec<Expr> = p
+                    .factors
+                    .iter()
+                    .map(|(b, x)| expr::pow_rational(b, x))
+                    .collect();
+                let mut parts: BTreeMap<usize, Vec<Expr>> = BTreeMap::new();
+                for (i, g) in grads.iter().enumerate() {
+                    for (k, db) in g.iter() {
+                        let terms = parts.entry(*k).or_default();
+                        if db.is_zero() {
+                            continue;
+                        }
+                        let mut items = Vec::with_capacity(p.factors.len() + 2);
+                        items.push(Expr::num(p.factors[i].1.clone()));
+                        items.push(lowered[i].clone());
+                        items.push(db.clone());
+                        items.extend(
+                            powers
+                                .iter()
+                                .enumerate()
+                                .filter(|(j, _)| *j != i)
+                                .map(|(_, x)| x.clone()),
+                        );
+                        terms.push(expr::mul_all(items));
+                    }
+                }
+                parts
+                    .into_iter()
+                    .map(|(k, ts)| (k, expr::add_all(ts)))
+                    .collect()
+            }
+            Expr::Pow(p) => {
+                // `d(b^e) = b^e · (e' ln b + e b'/b)`, as `expr::diff`.
+                let (b, x) = (&p.base, &p.exponent);
+                let (gb, gx) = (self.child(b), self.child(x));
+                let ln_b = expr::func(Func::Ln, b);
+                let inv_b = expr::pow_rational(b, &expr::q(-1));
+                let ks: BTreeSet<usize> = gb.iter().chain(gx.iter()).map(|(k, _)| *k).collect();
+                let at = |g: &[(usize, Expr)], k: usize| {
+                    g.iter()
+                        .find(|(j, _)| *j == k)
+                        .map_or_else(Expr::zero, |(_, d)| d.clone())
+                };
+                ks.into_iter()
+                    .map(|k| {
+                        let inner = expr::add(
+                            &expr::mul(&at(&gx, k), &ln_b),
+                            &expr::mul_all([x.clone(), at(&gb, k), inv_b.clone()]),
+                        );
+                        (k, expr::mul(e, &inner))
+                    })
+                    .collect()
+            }
+            Expr::Func(_) => {
+                // The chain rule along the whole chain `f(g(h(…)))` at
+                // once, as `expr::diff`: the outer derivatives, then the
+                // innermost argument's derivative.
+                let mut outer = Vec::new();
+                let mut link = e;
+                while let Expr::Func(c) = link {
+                    outer.push(expr::outer_derivative(c, link));
+                    link = &c.arg;
+                }
+                self.child(link)
+                    .iter()
+                    .map(|(k, d)| {
+                        let mut factors = outer.clone();
+                        factors.push(d.clone());
+                        (*k, expr::mul_all(factors))
+                    })
+                    .collect()
+            }
+        }
     }
 
     /// Row `i` of `∂f/∂y` into `out`: `(i, k, ∂f/∂y_k)` for the unknowns
@@ -227,6 +372,15 @@ impl Gradients {
             }
         }
     }
+}
+
+/// The innermost argument of a chain of calls `f(g(h(a)))`: `a`.
+fn chain_link(e: &Expr) -> &Expr {
+    let mut link = e;
+    while let Expr::Func(c) = link {
+        link = &c.arg;
+    }
+    link
 }
 
 fn compile_with(d: &Derived, f: &Formulation, grads: &mut Gradients) -> Compiled {
@@ -527,6 +681,46 @@ mod tests {
             assert_eq!(&*grads.of(e), &want[..], "{e:?}");
         }
         assert!(sums > 20, "{sums} sums among {} rows", exprs.len());
+    }
+
+    /// The gradients built node by node from the children's are the
+    /// derivatives of `expr::diff` through every kind of node: calls and
+    /// chains of calls, symbolic powers, products of sums with rational
+    /// exponents, parameters, the time and der() held fixed, a subtree met
+    /// twice, and one row sharing the memo with the others.
+    #[test]
+    fn gradients_of_every_kind_of_node_are_those_of_diff() {
+        use crate::expr::{add, func, mul, mul_all, pow, pow_rational, qr, sub};
+        let (x, y, z) = (Expr::var(0), Expr::var(1), Expr::var(2));
+        let (p, t, dx) = (Expr::param(0), Expr::sym(Sym::Time), Expr::der(0));
+        let r = add(&mul(&x, &x), &mul(&y, &y));
+        let exprs = [
+            func(Func::Sin, &func(Func::Cos, &mul(&x, &y))),
+            pow(&x, &y),
+            pow(&add(&x, &z), &mul(&p, &y)),
+            mul_all([sub(&x, &y), pow_rational(&r, &qr(-3, 2)), p.clone()]),
+            mul_all([func(Func::Exp, &x), func(Func::Ln, &y), t.clone()]),
+            add(
+                &func(Func::Tan, &pow_rational(&r, &qr(1, 2))),
+                &mul(&dx, &z),
+            ),
+            mul(&pow_rational(&r, &qr(1, 3)), &func(Func::Sin, &r)),
+            add(&mul(&p, &t), &dx),
+            Expr::int(7),
+            x.clone(),
+        ];
+        let mut grads = Gradients::default();
+        for e in &exprs {
+            let want: Vec<(usize, Expr)> = e
+                .symbols()
+                .into_iter()
+                .filter_map(|s| match s {
+                    Sym::Var(k) => Some((k as usize, expr::diff(e, s))),
+                    _ => None,
+                })
+                .collect();
+            assert_eq!(&*grads.of(e), &want[..], "{e:?}");
+        }
     }
 
     /// A formulation whose row of `E` holds the time: `(1 + t)·x·der(x)`,

@@ -1537,7 +1537,7 @@ fn diff_node(e: &Expr, s: Sym, memo: &mut Memo) -> Expr {
 }
 
 /// `f'(a)` for the call `e = f(a)`.
-fn outer_derivative(c: &Call, e: &Expr) -> Expr {
+pub(crate) fn outer_derivative(c: &Call, e: &Expr) -> Expr {
     let a = &c.arg;
     match c.func {
         Func::Sin => func(Func::Cos, a),

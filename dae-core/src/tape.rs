@@ -10,6 +10,7 @@
 use crate::expr::{q_to_f64, Expr, Func, Sym, Q};
 use num_traits::{One, Signed, ToPrimitive};
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 /// Index of a node in its tape.
 pub type NodeId = u32;
@@ -72,6 +73,50 @@ fn key(op: &Op) -> Key {
     }
 }
 
+/// The hasher of the symbolic core's look-up tables (the tape builder's,
+/// the memo of gradients): one multiply and rotate per word, as rustc's
+/// `FxHasher`. Their keys are node ids, float bits and the structural
+/// hashes expressions cache (already mixed), so the default SipHash's
+/// defence against chosen keys buys nothing but time. Deterministic; what
+/// a table holds does not depend on its hasher, only how fast it is
+/// found.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct FastHasher(u64);
+
+impl Hasher for FastHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+    fn write_u8(&mut self, n: u8) {
+        self.write_u64(u64::from(n));
+    }
+    fn write_u32(&mut self, n: u32) {
+        self.write_u64(u64::from(n));
+    }
+    fn write_usize(&mut self, n: usize) {
+        self.write_u64(n as u64);
+    }
+    fn write_isize(&mut self, n: isize) {
+        self.write_u64(n as u64);
+    }
+    fn write_i32(&mut self, n: i32) {
+        self.write_u64(n as u64);
+    }
+    fn write_u64(&mut self, n: u64) {
+        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+/// A hash map with [`FastHasher`].
+pub(crate) type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
+
 /// A flat arena with named outputs.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Tape {
@@ -85,8 +130,27 @@ pub struct Tape {
 #[derive(Default)]
 pub struct TapeBuilder {
     tape: Tape,
-    by_key: HashMap<Key, NodeId>,
-    by_expr: HashMap<Expr, NodeId>,
+    by_key: FastMap<Key, NodeId>,
+    by_expr: FastMap<Expr, NodeId>,
+    /// The node of every compound expression met, by its address: an
+    /// expression met again as the same shared node (a Jacobian's entries
+    /// share most of their subexpressions) is found without comparing its
+    /// structure with an equal one built apart, a walk of both. `kept`
+    /// holds the expressions, so an address is not reused meanwhile.
+    by_node: FastMap<usize, NodeId>,
+    kept: Vec<Expr>,
+}
+
+/// The address of a compound expression's node; `None` for a number or a
+/// symbol (cheap to look up by value).
+fn address(e: &Expr) -> Option<usize> {
+    match e {
+        Expr::Num(_) | Expr::Sym(_) => None,
+        Expr::Sum(x) => Some(std::rc::Rc::as_ptr(x) as *const () as usize),
+        Expr::Prod(x) => Some(std::rc::Rc::as_ptr(x) as *const () as usize),
+        Expr::Pow(x) => Some(std::rc::Rc::as_ptr(x) as *const () as usize),
+        Expr::Func(x) => Some(std::rc::Rc::as_ptr(x) as *const () as usize),
+    }
 }
 
 impl TapeBuilder {
@@ -126,7 +190,16 @@ impl TapeBuilder {
         while let Some(step) = steps.pop() {
             match step {
                 Step::Visit(e) => {
+                    let at = address(e);
+                    if let Some(&id) = at.and_then(|a| self.by_node.get(&a)) {
+                        values.push(id);
+                        continue;
+                    }
                     if let Some(&id) = self.by_expr.get(e) {
+                        if let Some(a) = at {
+                            self.by_node.insert(a, id);
+                            self.kept.push(e.clone());
+                        }
                         values.push(id);
                         continue;
                     }
@@ -181,6 +254,9 @@ impl TapeBuilder {
                 Step::Build(e) => {
                     let id = self.build(e, &mut values);
                     self.by_expr.insert(e.clone(), id);
+                    if let Some(a) = address(e) {
+                        self.by_node.insert(a, id);
+                    }
                     values.push(id);
                 }
             }
