@@ -769,6 +769,14 @@ impl DaeSystem for SensitivitySystem {
         })
     }
 
+    /// The state's own formulation: the first block's rows and Jacobian
+    /// (the diagonal blocks and the state's rows this system reports come
+    /// from the augmented formulation's tape, equal up to the order of the
+    /// terms).
+    fn first_block(&self) -> Option<&dyn DaeSystem> {
+        self.blocks().map(|_| &*self.state as &dyn DaeSystem)
+    }
+
     fn event_names(&self) -> &[String] {
         self.state.event_names()
     }

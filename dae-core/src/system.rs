@@ -491,6 +491,29 @@ pub trait DaeSystem {
         None
     }
 
+    /// The first block of a system with [`blocks`](DaeSystem::blocks) as a
+    /// system of its own: the state of a state and its sensitivities
+    /// ([`crate::sensitivity::SensitivitySystem::state`]), whose rows and
+    /// Jacobian are the first block's of this system (up to the order in
+    /// which terms are summed). A solver's staggered corrector iterates the
+    /// state on it, then the sensitivities, which are linear, with the
+    /// state's factorisation. `None` (the default) for a system without
+    /// blocks, or one that does not offer its first block alone.
+    ///
+    /// ```
+    /// use dae_core::interp::InterpretedModel;
+    /// use dae_core::system::DaeSystem;
+    ///
+    /// let m = InterpretedModel::from_str(
+    ///     "pub M { differential { x } equations { der(x) = -x; } }",
+    /// )
+    /// .unwrap();
+    /// assert!(m.system("rcd0").unwrap().first_block().is_none());
+    /// ```
+    fn first_block(&self) -> Option<&dyn DaeSystem> {
+        None
+    }
+
     /// `f(t, y)` into `f` (length M) and its derivatives along `count`
     /// directions in the unknowns: `df[k M..(k + 1) M] = (∂f/∂y) dy_k`
     /// with `dy_k = dy[k N..(k + 1) N]` — the right-hand sides of forward
@@ -621,6 +644,9 @@ macro_rules! forward_dae_system {
             }
             fn blocks(&self) -> Option<Blocks> {
                 (**self).blocks()
+            }
+            fn first_block(&self) -> Option<&dyn DaeSystem> {
+                (**self).first_block()
             }
             fn rhs_tangents(
                 &self,

@@ -39,6 +39,20 @@ use crate::linalg::Singular;
 use dae_core::system::Blocks;
 use nalgebra::DMatrix;
 
+/// Which blocks a staggered corrector solves for
+/// ([`StageSystems::solve_real_part`]): the state's first, with its rows
+/// alone, then the sensitivities' with the state fixed, whose stage
+/// equations are linear and whose matrix is the state's `A` on every
+/// block (the sub-diagonal `Bᵢ` multiply the state's increment, zero once
+/// the state is fixed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Part {
+    /// The first block, `x[..N]` (the rest of `x` untouched).
+    First,
+    /// Every later block by `A` alone (the first block untouched).
+    Rest,
+}
+
 /// A square solver `S` (a [`Corrector`] or a [`StageSystems`]) of the whole
 /// system, or of the state's block only with block forward substitution.
 pub(crate) enum Block<S> {
@@ -214,6 +228,38 @@ impl<S: StageSystems> StageSystems for Block<S> {
         match self {
             Block::Plain(s) => s.solve_real(x),
             Block::Lower(b) => b.substitute(x, |s, xi| s.solve_real(xi)),
+        }
+    }
+    fn solve_real_part(&mut self, x: &mut [f64], part: Part) {
+        match (self, part) {
+            (Block::Plain(s), Part::First) => s.solve_real(x),
+            (Block::Plain(_), Part::Rest) => {}
+            (Block::Lower(b), Part::First) => b.inner.solve_real(&mut x[..b.size]),
+            (Block::Lower(b), Part::Rest) => {
+                let n = b.size;
+                for xi in x[n..n * b.count].chunks_exact_mut(n) {
+                    b.inner.solve_real(xi);
+                }
+            }
+        }
+    }
+    fn solve_complex_part(&mut self, re: &mut [f64], im: &mut [f64], part: Part) {
+        match (self, part) {
+            (Block::Plain(s), Part::First) => s.solve_complex(re, im),
+            (Block::Plain(_), Part::Rest) => {}
+            (Block::Lower(b), Part::First) => {
+                let n = b.size;
+                b.inner.solve_complex(&mut re[..n], &mut im[..n]);
+            }
+            (Block::Lower(b), Part::Rest) => {
+                let (n, end) = (b.size, b.size * b.count);
+                for (rei, imi) in re[n..end]
+                    .chunks_exact_mut(n)
+                    .zip(im[n..end].chunks_exact_mut(n))
+                {
+                    b.inner.solve_complex(rei, imi);
+                }
+            }
         }
     }
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]) {

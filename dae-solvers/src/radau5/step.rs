@@ -4,6 +4,7 @@
 
 use super::control::{classical_quotient, predictive_quotient, Control, Hold, Next};
 use super::stages::{Newton, Work};
+use super::stagger::rhs_for_error;
 use super::tableau::{dense, Collocation};
 use super::{smallest_tolerance, H0_DEFAULT, TIGHT_NEWTON, TIGHT_TOL, UROUND};
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
@@ -175,6 +176,10 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             slow_exit: K::SLOW_EXIT && options.fixed_step.is_none(),
         };
         let mut newton = Contraction::new(rule, K::MAX_NEWTON, fnewt, 1.0);
+        if let Some(st) = &mut w.stagger {
+            // The sensitivities' iteration: the state's rule and bound.
+            st.newton = Contraction::new(rule, K::MAX_NEWTON, fnewt, 1.0);
+        }
         if K::NEWTON_ROUND_OFF.is_some() {
             // Iterating towards round-off: stagnation counts as convergence
             // only at a few hundred units of round-off.
@@ -241,7 +246,8 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 });
             }
         }
-        self.sys.rhs(t, &self.w.y, &mut self.w.f0);
+        let w = &mut self.w;
+        rhs_for_error(&*self.sys, w.stagger.as_ref(), t, &w.y, &mut w.f0);
         self.stats.residual_evals += 1;
         if !all_finite(&self.w.f0) {
             return Err(SolveError::NonFinite {
