@@ -29,6 +29,12 @@
 //! factorisation and `1 + P` solves. A system without blocks (every other)
 //! goes to the plain solver unchanged.
 //!
+//! A staggered corrector (radau5's, `radau5/stagger.rs`) solves the parts
+//! one after the other instead ([`Part`]): the first block alone while it
+//! iterates the state, then every later block by `A` alone while it
+//! iterates the sensitivities with the state fixed (the state's increment,
+//! which `Bᵢ` multiplies, is then zero), and its `J` holds no `Bᵢ`.
+//!
 //! The sensitivities may leave the error test ([`Blocks::error_control`]
 //! false, [`in_error_test`]): they are then also out of the Newton norm,
 //! which is safe because their rows are linear in them — the iteration
@@ -391,6 +397,56 @@ mod tests {
         dense.solve(&mut x1);
         block.solve(&mut x2);
         close(&x2, &x1);
+    }
+
+    /// The staggered corrector's part solves: the first block by `A`
+    /// alone with the rest untouched, and every later block by `A` alone
+    /// (no `Bᵢ`) with the first untouched; real and complex.
+    #[test]
+    fn part_solves_are_the_state_blocks_solves() {
+        let mut next = rng(5);
+        let (n, count) = (3, 3);
+        let w = n * count;
+        let [e, j] = system(n, count, &mut next);
+        let blocks = Some(Blocks {
+            size: n,
+            count,
+            error_control: false,
+        });
+        let rows = Rows::square();
+        let (g, a, b) = (3.7, 2.5, 1.5);
+        let mut block = Block::<SquareStages>::with_blocks(w, w, blocks);
+        let (em, jm) = (Matrix::Dense(e.clone()), Matrix::Dense(j.clone()));
+        block.factor(&em, &jm, g, a, b, &rows).expect("nonsingular");
+        let mut state = SquareStages::new(n, n);
+        let e0 = Matrix::Dense(e.view((0, 0), (n, n)).into_owned());
+        let j0 = Matrix::Dense(j.view((0, 0), (n, n)).into_owned());
+        state.factor(&e0, &j0, g, a, b, &rows).expect("nonsingular");
+        let re: Vec<f64> = (0..w).map(|_| next()).collect();
+        let im: Vec<f64> = (0..w).map(|_| next()).collect();
+
+        let mut x = re.clone();
+        block.solve_real_part(&mut x, Part::First);
+        let mut x0 = re[..n].to_vec();
+        state.solve_real(&mut x0);
+        close(&x[..n], &x0);
+        assert_eq!(x[n..], re[n..]);
+
+        let (mut xr, mut xi) = (re.clone(), im.clone());
+        block.solve_real_part(&mut x, Part::Rest);
+        block.solve_complex_part(&mut xr, &mut xi, Part::Rest);
+        assert_eq!(x[..n], x0[..]);
+        assert_eq!((&xr[..n], &xi[..n]), (&re[..n], &im[..n]));
+        for i in 1..count {
+            let at = n * i..n * (i + 1);
+            let mut s = re[at.clone()].to_vec();
+            state.solve_real(&mut s);
+            close(&x[at.clone()], &s);
+            let (mut sr, mut si) = (re[at.clone()].to_vec(), im[at.clone()].to_vec());
+            state.solve_complex(&mut sr, &mut si);
+            close(&xr[at.clone()], &sr);
+            close(&xi[at], &si);
+        }
     }
 
     /// Without blocks, or with blocks that do not fit, the plain solver.

@@ -16,13 +16,16 @@
 //! 2. with the state's stages fixed, the sensitivities' stage equations
 //!    `E Sᵢ'(c_k) = J(Y_k) Sᵢ(c_k) + ∂f/∂pᵢ(Y_k)`, linear in the
 //!    sensitivity stages, by the same simplified Newton iteration with
-//!    `J₀` in place of each `J(Y_k)`: a contraction of order `h ‖J(Y_k) −
-//!    J₀‖`, typically one or two iterations, each a forward pass of the
-//!    residual along the sensitivities' directions
-//!    ([`DaeSystem::rhs_tangents`]) and `P` solves by the same LUs. The
-//!    state's increment is zero there, so the sub-diagonal blocks `Bᵢ` of
-//!    the simultaneous corrector are never formed: a Jacobian is the
-//!    state's alone.
+//!    `J₀` in place of each `J(Y_k)` (a contraction of the order of the
+//!    state's: about three iterations a step on the pendulum, BENCHMARKS.md
+//!    §13d). `[J | ∂f/∂p]` at the three stage points is evaluated once
+//!    ([`DaeSystem::first_block_linearisation`]) and each iteration's
+//!    residuals are products with it (a system that offers no
+//!    linearisation gets its whole residual, [`DaeSystem::rhs_tangents`]'s
+//!    forward pass, instead), then `P` solves by the same LUs. The state's
+//!    increment is zero there, so the sub-diagonal blocks `Bᵢ` of the
+//!    simultaneous corrector are never formed: a Jacobian is the state's
+//!    alone.
 //!
 //! The sensitivities' iteration has its own contraction monitor (its `η`
 //! carried across steps like the state's) and its own weights: every
@@ -41,6 +44,7 @@ use crate::core::block::Part;
 use crate::core::matrix::{Matrix, StageSystems};
 use crate::core::newton::{Contraction, Verdict};
 use crate::core::weights::Weights;
+use crate::linalg::with_size;
 use crate::options::Options;
 use dae_core::system::{Blocks, DaeSystem};
 use nalgebra::DMatrix;
@@ -57,6 +61,9 @@ pub(super) struct Stagger {
     sens_weights: Weights,
     /// The state's Jacobian (`N × N`).
     jac: DMatrix<f64>,
+    /// `[∂f/∂y | ∂f/∂p]` of the state's rows at the three stage points
+    /// (`N × (N + P)` each, [`DaeSystem::first_block_linearisation`]).
+    lin: [DMatrix<f64>; 3],
     /// The sensitivities' contraction monitor.
     pub(super) newton: Contraction,
 }
@@ -121,6 +128,7 @@ impl Stagger {
             state_weights,
             sens_weights,
             jac: DMatrix::zeros(b.size, b.size),
+            lin: std::array::from_fn(|_| DMatrix::zeros(b.size, b.size + b.count - 1)),
             newton: Contraction::new(
                 crate::core::newton::Rule::Radau5 { slow_exit: false },
                 K::MAX_NEWTON,
@@ -150,8 +158,8 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// The staggered corrector of one attempt: the state's stages, then
     /// the sensitivities' (see the [module documentation](self)). The
     /// iterations reported are the state's (they steer the step size as
-    /// in the plain run); the sensitivities' count as residual
-    /// evaluations.
+    /// in the plain run); the sensitivities' are not in the statistics
+    /// (BENCHMARKS.md §13d counts them from a profile).
     pub(super) fn newton_staggered(&mut self, t: f64, h: f64, may_shorten: bool) -> Newton {
         if let Some(st) = &mut self.w.stagger {
             st.update_weights(&self.w.y, h);
@@ -203,9 +211,14 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
                 g[size..].fill(0.0);
             }
         }
+        // The sensitivities' rows are linear in them: with the state's
+        // stages fixed, their matrices at the three stage points once, and
+        // each iteration's residuals by products.
+        let linear = phase == Phase::Sensitivities && self.linearise(t, h);
         loop {
             match phase {
                 Phase::State => self.state_stage_residuals(t, h, size),
+                Phase::Sensitivities if linear => self.linear_stage_residuals(h),
                 Phase::Whole | Phase::Sensitivities => self.stage_residuals(t, h),
             }
             let w = &mut self.w;
@@ -288,6 +301,54 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         self.stats.residual_evals += 3;
     }
 
+    /// `[∂f/∂y | ∂f/∂p]` at the state's three stage points (the stages
+    /// as the state's iteration left them); whether the system offers it.
+    fn linearise(&mut self, t: f64, h: f64) -> bool {
+        let n = self.n;
+        let w = &mut self.w;
+        let Some(st) = &mut w.stagger else {
+            return false;
+        };
+        super::kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
+        let size = st.size;
+        for (k, (&ck, lin)) in K::C.iter().zip(&mut st.lin).enumerate() {
+            if !self
+                .sys
+                .first_block_linearisation(t + ck * h, &w.ys[k * n..k * n + size], lin)
+            {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// The sensitivities' stage residuals `E Sᵢ'(c_k) − J(Y_k) Sᵢ(c_k) −
+    /// ∂f/∂pᵢ(Y_k)` by products with the matrices of [`Self::linearise`],
+    /// into each stage's block of `res` after its first `N` rows (`E` is
+    /// constant and block diagonal: its first block is every block's).
+    fn linear_stage_residuals(&mut self, h: f64) {
+        let (n, m) = (self.n, self.m);
+        let w = &mut self.w;
+        let Some(st) = &w.stagger else {
+            return;
+        };
+        super::kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
+        let size = st.size;
+        // Column-major slices: `E`'s first block (leading dimension `m`)
+        // and each `[J | ∂f/∂p]` (leading dimension `N`).
+        let e = w.e_n.dense().as_slice();
+        for (k, lin) in st.lin.iter().enumerate() {
+            let lin = lin.as_slice();
+            let (ys, yd) = (&w.ys[k * n..(k + 1) * n], &w.yd[k * n..(k + 1) * n]);
+            let res = &mut w.res[k * m..(k + 1) * m];
+            for (i, r) in res[size..n].chunks_exact_mut(size).enumerate() {
+                let at = size * (i + 1);
+                let point = (&ys[at..at + size], &yd[at..at + size]);
+                with_size!(size, |N| linear_rows(r, point, e, m, lin, i, N));
+            }
+        }
+    }
+
     /// `J₀` of a staggered run: the state's Jacobian at `(t, y_n)` into
     /// the first block of `jac` (the rest of `jac` stays zero: no `Bᵢ`).
     /// Whether it applied (a staggered run with a dense `jac`).
@@ -331,5 +392,35 @@ pub(super) fn rhs_for_error(
             first.rhs(t, &y[..st.size], &mut f[..st.size])
         }
         _ => sys.rhs(t, y, f),
+    }
+}
+
+/// One sensitivity's stage residual `r = E₀ s' − J s − ∂f/∂pᵢ` at the
+/// stage point `(s, s')`: `e` is `E` column-major with leading dimension
+/// `m` (its first block `E₀`), `lin` is `[J | ∂f/∂p]` column-major with
+/// leading dimension `size` (the sizes of the formulations the solvers
+/// meet most made constants by [`with_size!`]).
+#[inline(always)]
+fn linear_rows(
+    r: &mut [f64],
+    (s, sd): (&[f64], &[f64]),
+    e: &[f64],
+    m: usize,
+    lin: &[f64],
+    i: usize,
+    size: usize,
+) {
+    let (r, s, sd) = (&mut r[..size], &s[..size], &sd[..size]);
+    let fp = &lin[(size + i) * size..(size + i + 1) * size];
+    for k in 0..size {
+        r[k] = -fp[k];
+    }
+    for c in 0..size {
+        let (sc, sdc) = (s[c], sd[c]);
+        let ec = &e[c * m..c * m + size];
+        let jc = &lin[c * size..(c + 1) * size];
+        for k in 0..size {
+            r[k] += ec[k] * sdc - jc[k] * sc;
+        }
     }
 }

@@ -177,8 +177,11 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         };
         let mut newton = Contraction::new(rule, K::MAX_NEWTON, fnewt, 1.0);
         if let Some(st) = &mut w.stagger {
-            // The sensitivities' iteration: the state's rule and bound.
-            st.newton = Contraction::new(rule, K::MAX_NEWTON, fnewt, 1.0);
+            // The sensitivities' iteration: the state's bound, without the
+            // early exit (their equations are linear: an iteration that
+            // contracts converges, and each costs products only).
+            st.newton =
+                Contraction::new(Rule::Radau5 { slow_exit: false }, K::MAX_NEWTON, fnewt, 1.0);
         }
         if K::NEWTON_ROUND_OFF.is_some() {
             // Iterating towards round-off: stagnation counts as convergence
