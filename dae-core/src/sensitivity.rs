@@ -48,7 +48,14 @@
 //! `(sᵢ, e_pᵢ)`: one augmented Jacobian per parameter by a directional
 //! difference. It declares that structure ([`DaeSystem::blocks`]), and
 //! `radau5` and `bdf` then factorise the state's block alone and solve by
-//! block forward substitution. Leaving `Bᵢ` out (a block-diagonal matrix,
+//! block forward substitution (bdf's simultaneous corrector). `radau5`
+//! instead staggers ([`DaeSystem::first_block`],
+//! [`DaeSystem::first_block_linearisation`]): it iterates the state on the
+//! state's own formulation, then the sensitivities' linear stage equations
+//! with the state fixed, by products with `[J | ∂f/∂p]` at the stage
+//! points and the state's factorisations, so that `Bᵢ` is never formed and
+//! with the sensitivities out of the error test the state takes the plain
+//! run's steps. Leaving `Bᵢ` out (a block-diagonal matrix,
 //! as IDA's simultaneous corrector does for its ODE-like index-1 systems)
 //! was measured: on the pendulum's `rcd0` the sensitivities' algebraic
 //! rows depend on `y` at order one, not `h`, and the simplified Newton
@@ -522,10 +529,14 @@ impl SensitivitySystem {
     }
 
     /// Take the sensitivities out of the methods' error test (`false`) or
-    /// put them back in (`true`, the default, as IDA's `IDASetSensErrCon`):
-    /// declared to the solvers by [`DaeSystem::blocks`]. Out of it, the
-    /// step sizes are the state's alone and the sensitivities are as
-    /// accurate as the state's steps make them (BENCHMARKS.md §13).
+    /// put them back in (`true`, the default here): declared to the
+    /// solvers by [`DaeSystem::blocks`]. Out of it, the step sizes are the
+    /// state's alone and the sensitivities are as accurate as the state's
+    /// steps make them (BENCHMARKS.md §13, §13d). SUNDIALS' default is the
+    /// other one: `IDASetSensErrCon` and `CVodeSetSensErrCon` default to
+    /// `SUNFALSE` (sensitivities out of the error test, always in the
+    /// Newton convergence test), which radau5's staggered corrector also
+    /// does.
     ///
     /// ```
     /// use dae_core::sensitivity::Sensitivities;
@@ -767,6 +778,38 @@ impl DaeSystem for SensitivitySystem {
             count: 1 + self.parameters(),
             error_control: self.error_control,
         })
+    }
+
+    /// The state's own formulation: the first block's rows and Jacobian
+    /// (the diagonal blocks and the state's rows this system reports come
+    /// from the augmented formulation's tape, equal up to the order of the
+    /// terms).
+    fn first_block(&self) -> Option<&dyn DaeSystem> {
+        self.blocks().map(|_| &*self.state as &dyn DaeSystem)
+    }
+
+    /// The augmented formulation's Jacobian at `[y, p]`, its state rows,
+    /// the state's columns then the parameters'.
+    fn first_block_linearisation(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>) -> bool {
+        let (n, np) = (self.var_cols.len(), self.param_cols.len());
+        if y.len() != n || out.nrows() != self.row_of.len() || out.ncols() != n + np {
+            return false;
+        }
+        let s = &mut *self.scratch.borrow_mut();
+        self.lift(s, y);
+        self.augmented.rhs_jacobian(t, &s.point, &mut s.jac);
+        // Column-major: each column of `out` gathers the state's rows of
+        // one column of the augmented Jacobian.
+        let rows = s.jac.nrows();
+        let (src, dst) = (s.jac.as_slice(), out.as_mut_slice());
+        let cols = self.var_cols.iter().chain(&self.param_cols);
+        for (o, &ac) in dst.chunks_exact_mut(self.row_of.len()).zip(cols) {
+            let col = &src[ac * rows..(ac + 1) * rows];
+            for (v, &ar) in o.iter_mut().zip(&self.row_of) {
+                *v = col[ar];
+            }
+        }
+        true
     }
 
     fn event_names(&self) -> &[String] {

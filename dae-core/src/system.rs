@@ -491,6 +491,56 @@ pub trait DaeSystem {
         None
     }
 
+    /// The first block of a system with [`blocks`](DaeSystem::blocks) as a
+    /// system of its own: the state of a state and its sensitivities
+    /// ([`crate::sensitivity::SensitivitySystem::state`]), whose rows and
+    /// Jacobian are the first block's of this system (up to the order in
+    /// which terms are summed). A solver's staggered corrector iterates the
+    /// state on it, then the sensitivities, which are linear, with the
+    /// state's factorisation. `None` (the default) for a system without
+    /// blocks, or one that does not offer its first block alone.
+    ///
+    /// ```
+    /// use dae_core::interp::InterpretedModel;
+    /// use dae_core::system::DaeSystem;
+    ///
+    /// let m = InterpretedModel::from_str(
+    ///     "pub M { differential { x } algebraic { z } equations { der(x) = -x * z; 0 = z - x; } }",
+    /// )
+    /// .unwrap();
+    /// // A formulation of a model has no blocks: it is its own state.
+    /// assert!(m.system("rcd0").unwrap().first_block().is_none());
+    /// ```
+    fn first_block(&self) -> Option<&dyn DaeSystem> {
+        None
+    }
+
+    /// For a state and its sensitivities: `[∂f/∂y | ∂f/∂p]` of the state's
+    /// rows at the state `y` (the first block's unknowns), `N × (N + P)`,
+    /// into `out`, the matrix of the sensitivities' rows `J sᵢ + ∂f/∂pᵢ`,
+    /// which are linear in `sᵢ`; `false` (the default, `out` untouched)
+    /// when the system offers none. A staggered corrector evaluates it once
+    /// per stage point and then forms the sensitivities' residuals by
+    /// products.
+    ///
+    /// ```
+    /// use dae_core::interp::InterpretedModel;
+    /// use dae_core::system::DaeSystem;
+    ///
+    /// let m = InterpretedModel::from_str(
+    ///     "pub M { differential { x } algebraic { z } equations { der(x) = -x * z; 0 = z - x; } }",
+    /// )
+    /// .unwrap();
+    /// let mut out = nalgebra::DMatrix::zeros(2, 2);
+    /// // Not a state with sensitivities: nothing offered, nothing written.
+    /// assert!(!m.system("rcd0").unwrap().first_block_linearisation(0.0, &[2.0, 3.0], &mut out));
+    /// assert_eq!(out.iter().filter(|v| **v != 0.0).count(), 0);
+    /// ```
+    fn first_block_linearisation(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>) -> bool {
+        let _ = (t, y, out);
+        false
+    }
+
     /// `f(t, y)` into `f` (length M) and its derivatives along `count`
     /// directions in the unknowns: `df[k M..(k + 1) M] = (∂f/∂y) dy_k`
     /// with `dy_k = dy[k N..(k + 1) N]` — the right-hand sides of forward
@@ -621,6 +671,12 @@ macro_rules! forward_dae_system {
             }
             fn blocks(&self) -> Option<Blocks> {
                 (**self).blocks()
+            }
+            fn first_block(&self) -> Option<&dyn DaeSystem> {
+                (**self).first_block()
+            }
+            fn first_block_linearisation(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>) -> bool {
+                (**self).first_block_linearisation(t, y, out)
             }
             fn rhs_tangents(
                 &self,

@@ -63,6 +63,76 @@ fn initial_sensitivities_are_the_horizontal_release_at_every_length() {
     }
 }
 
+/// The linearisation radau5's staggered corrector forms its sensitivity
+/// residuals with, `[J | ∂f/∂p]` of the state's rows, gives the system's
+/// own sensitivity rows `J sᵢ + ∂f/∂pᵢ` (the forward pass) at a point off
+/// the solution, for both parameters.
+#[test]
+fn linearisation_gives_the_sensitivity_rows() {
+    let model = Sensitivities::from_str(&repo("scenes/pendulum.dae"), &["g", "l"]).unwrap();
+    for f in ["rcd0", "ggl1"] {
+        let sys = model.formulation(f).unwrap();
+        let (n, u) = (sys.state_unknowns(), sys.info().unknowns());
+        let y: Vec<f64> = (0..u).map(|k| 0.3 + 0.17 * k as f64).collect();
+        let mut rows = vec![0.0; u];
+        sys.rhs(0.7, &y, &mut rows);
+        let mut lin = nalgebra::DMatrix::zeros(n, n + 2);
+        assert!(sys.first_block_linearisation(0.7, &y[..n], &mut lin));
+        for i in 0..2 {
+            let s = &y[n * (i + 1)..n * (i + 2)];
+            for r in 0..n {
+                let expect = lin[(r, n + i)] + (0..n).map(|c| lin[(r, c)] * s[c]).sum::<f64>();
+                let got = rows[n * (i + 1) + r];
+                assert!(
+                    (got - expect).abs() <= 1e-12 * (1.0 + got.abs()),
+                    "{f}: parameter {i}, row {r}: {got} against {expect}"
+                );
+            }
+        }
+        // A state of the wrong size is refused, the matrix untouched.
+        let mut small = nalgebra::DMatrix::zeros(n, n + 1);
+        assert!(!sys.first_block_linearisation(0.7, &y[..n], &mut small));
+    }
+}
+
+/// radau5's staggered corrector iterates the state on the state's own
+/// formulation: with the sensitivities out of the error test it takes the
+/// plain run's steps, Jacobians and factorisations (S01 at tol 1e-8 over a
+/// period), and with them in the test more steps, not fewer.
+#[test]
+fn radau5_staggered_takes_the_plain_steps_without_error_control() {
+    let src = repo("scenes/pendulum.dae");
+    let model = Sensitivities::from_str(&src, &["g", "l"]).unwrap();
+    let options = Options::with_tol(1e-8);
+    let radau5 = solver_by_name("radau5").unwrap();
+    let run = |sys: &dyn DaeSystem, y0: &[f64]| {
+        let problem = Problem {
+            system: sys,
+            t0: 0.0,
+            y0,
+            t_end: 2.0,
+        };
+        radau5.solve(&problem, &options).unwrap().stats
+    };
+    let plain = model.model().system("ggl1").unwrap();
+    let mut y0 = vec![0.0; plain.info().unknowns()];
+    y0[0] = 1.0;
+    let y0 = consistent(&plain, 0.0, &y0, &InitOptions::default())
+        .unwrap()
+        .y;
+    let base = run(&plain, &y0);
+    let mut sys = model.formulation("ggl1").unwrap();
+    sys.set_error_control(false);
+    let off = run(&sys, &start(&sys));
+    assert_eq!(
+        (off.steps, off.jacobian_evals, off.factorizations),
+        (base.steps, base.jacobian_evals, base.factorizations)
+    );
+    sys.set_error_control(true);
+    let on = run(&sys, &start(&sys));
+    assert!(on.steps >= base.steps, "{} < {}", on.steps, base.steps);
+}
+
 /// Both with the sensitivities in the error test (the default) and out of
 /// it. Out of it, bdf's steps are chosen for the state alone and its
 /// sensitivities are 2.5e-6 (rcd0) and 4.5e-6 (ggl1) off at t = 20 (as

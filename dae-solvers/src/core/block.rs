@@ -29,6 +29,12 @@
 //! factorisation and `1 + P` solves. A system without blocks (every other)
 //! goes to the plain solver unchanged.
 //!
+//! A staggered corrector (radau5's, `radau5/stagger.rs`) solves the parts
+//! one after the other instead ([`Part`]): the first block alone while it
+//! iterates the state, then every later block by `A` alone while it
+//! iterates the sensitivities with the state fixed (the state's increment,
+//! which `Bᵢ` multiplies, is then zero), and its `J` holds no `Bᵢ`.
+//!
 //! The sensitivities may leave the error test ([`Blocks::error_control`]
 //! false, [`in_error_test`]): they are then also out of the Newton norm,
 //! which is safe because their rows are linear in them — the iteration
@@ -38,6 +44,20 @@ use super::matrix::{write_dense, Corrector, Matrix, Rows, StageSystems};
 use crate::linalg::Singular;
 use dae_core::system::Blocks;
 use nalgebra::DMatrix;
+
+/// Which blocks a staggered corrector solves for
+/// ([`StageSystems::solve_real_part`]): the state's first, with its rows
+/// alone, then the sensitivities' with the state fixed, whose stage
+/// equations are linear and whose matrix is the state's `A` on every
+/// block (the sub-diagonal `Bᵢ` multiply the state's increment, zero once
+/// the state is fixed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Part {
+    /// The first block, `x[..N]` (the rest of `x` untouched).
+    First,
+    /// Every later block by `A` alone (the first block untouched).
+    Rest,
+}
 
 /// A square solver `S` (a [`Corrector`] or a [`StageSystems`]) of the whole
 /// system, or of the state's block only with block forward substitution.
@@ -216,6 +236,38 @@ impl<S: StageSystems> StageSystems for Block<S> {
             Block::Lower(b) => b.substitute(x, |s, xi| s.solve_real(xi)),
         }
     }
+    fn solve_real_part(&mut self, x: &mut [f64], part: Part) {
+        match (self, part) {
+            (Block::Plain(s), Part::First) => s.solve_real(x),
+            (Block::Plain(_), Part::Rest) => {}
+            (Block::Lower(b), Part::First) => b.inner.solve_real(&mut x[..b.size]),
+            (Block::Lower(b), Part::Rest) => {
+                let n = b.size;
+                for xi in x[n..n * b.count].chunks_exact_mut(n) {
+                    b.inner.solve_real(xi);
+                }
+            }
+        }
+    }
+    fn solve_complex_part(&mut self, re: &mut [f64], im: &mut [f64], part: Part) {
+        match (self, part) {
+            (Block::Plain(s), Part::First) => s.solve_complex(re, im),
+            (Block::Plain(_), Part::Rest) => {}
+            (Block::Lower(b), Part::First) => {
+                let n = b.size;
+                b.inner.solve_complex(&mut re[..n], &mut im[..n]);
+            }
+            (Block::Lower(b), Part::Rest) => {
+                let (n, end) = (b.size, b.size * b.count);
+                for (rei, imi) in re[n..end]
+                    .chunks_exact_mut(n)
+                    .zip(im[n..end].chunks_exact_mut(n))
+                {
+                    b.inner.solve_complex(rei, imi);
+                }
+            }
+        }
+    }
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]) {
         let b = match self {
             Block::Plain(s) => return s.solve_complex(re, im),
@@ -345,6 +397,56 @@ mod tests {
         dense.solve(&mut x1);
         block.solve(&mut x2);
         close(&x2, &x1);
+    }
+
+    /// The staggered corrector's part solves: the first block by `A`
+    /// alone with the rest untouched, and every later block by `A` alone
+    /// (no `Bᵢ`) with the first untouched; real and complex.
+    #[test]
+    fn part_solves_are_the_state_blocks_solves() {
+        let mut next = rng(5);
+        let (n, count) = (3, 3);
+        let w = n * count;
+        let [e, j] = system(n, count, &mut next);
+        let blocks = Some(Blocks {
+            size: n,
+            count,
+            error_control: false,
+        });
+        let rows = Rows::square();
+        let (g, a, b) = (3.7, 2.5, 1.5);
+        let mut block = Block::<SquareStages>::with_blocks(w, w, blocks);
+        let (em, jm) = (Matrix::Dense(e.clone()), Matrix::Dense(j.clone()));
+        block.factor(&em, &jm, g, a, b, &rows).expect("nonsingular");
+        let mut state = SquareStages::new(n, n);
+        let e0 = Matrix::Dense(e.view((0, 0), (n, n)).into_owned());
+        let j0 = Matrix::Dense(j.view((0, 0), (n, n)).into_owned());
+        state.factor(&e0, &j0, g, a, b, &rows).expect("nonsingular");
+        let re: Vec<f64> = (0..w).map(|_| next()).collect();
+        let im: Vec<f64> = (0..w).map(|_| next()).collect();
+
+        let mut x = re.clone();
+        block.solve_real_part(&mut x, Part::First);
+        let mut x0 = re[..n].to_vec();
+        state.solve_real(&mut x0);
+        close(&x[..n], &x0);
+        assert_eq!(x[n..], re[n..]);
+
+        let (mut xr, mut xi) = (re.clone(), im.clone());
+        block.solve_real_part(&mut x, Part::Rest);
+        block.solve_complex_part(&mut xr, &mut xi, Part::Rest);
+        assert_eq!(x[..n], x0[..]);
+        assert_eq!((&xr[..n], &xi[..n]), (&re[..n], &im[..n]));
+        for i in 1..count {
+            let at = n * i..n * (i + 1);
+            let mut s = re[at.clone()].to_vec();
+            state.solve_real(&mut s);
+            close(&x[at.clone()], &s);
+            let (mut sr, mut si) = (re[at.clone()].to_vec(), im[at.clone()].to_vec());
+            state.solve_complex(&mut sr, &mut si);
+            close(&xr[at.clone()], &sr);
+            close(&xi[at], &si);
+        }
     }
 
     /// Without blocks, or with blocks that do not fit, the plain solver.

@@ -59,6 +59,7 @@
 //! diverged on the first step). For a square nonsingular system the
 //! projection is the exact solve.
 
+use super::block::Part;
 use crate::linalg::lstsq::{null_space, split_rows};
 use crate::linalg::sparse::{Pattern, SparseFactor};
 use crate::linalg::{
@@ -616,6 +617,21 @@ pub(crate) trait StageSystems {
     /// Complex system with right-hand side `re[..M] + i im[..M]`; the
     /// solution in `re[..N] + i im[..N]`.
     fn solve_complex(&mut self, re: &mut [f64], im: &mut [f64]);
+    /// [`StageSystems::solve_real`] of one [`Part`] of a block system
+    /// (the staggered corrector, [`crate::core::block`]); without blocks
+    /// the whole system is the first part and there is no other.
+    fn solve_real_part(&mut self, x: &mut [f64], part: Part) {
+        if part == Part::First {
+            self.solve_real(x);
+        }
+    }
+    /// [`StageSystems::solve_complex`] of one [`Part`] (see
+    /// [`StageSystems::solve_real_part`]).
+    fn solve_complex_part(&mut self, re: &mut [f64], im: &mut [f64], part: Part) {
+        if part == Part::First {
+            self.solve_complex(re, im);
+        }
+    }
 }
 
 /// RADAU5's two LU factorisations (non-finite pivots count as singular):

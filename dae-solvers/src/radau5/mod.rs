@@ -147,6 +147,7 @@
 mod control;
 mod kernels;
 mod stages;
+mod stagger;
 mod step;
 pub(crate) mod tableau;
 

@@ -5,12 +5,11 @@
 //! accepted step.
 
 use super::kernels;
+use super::stagger::{rhs_for_error, Phase, Stagger};
 use super::step::Integrator;
 use super::tableau::Collocation;
-use super::{NIT_FIXED, UROUND};
-use crate::core::block;
+use crate::core::block::{self, Part};
 use crate::core::matrix::{Matrix, Rows, StageSystems, Structure};
-use crate::core::newton::Verdict;
 use crate::core::weights::Weights;
 use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
 use crate::options::Options;
@@ -98,6 +97,9 @@ pub(super) struct Work<S> {
     pub(super) projection_small: DenseLu,
     /// Its right-hand side, then the correction.
     pub(super) delta: Vec<f64>,
+    /// The staggered corrector of a state and its sensitivities
+    /// ([`super::stagger`]); `None` for every other system.
+    pub(super) stagger: Option<Stagger>,
     /// Scratch of the projected dense output ([`Integrator::project_output`]),
     /// which runs through `&self`: `f` at the output point, the correction,
     /// and the residual evaluations made (added to the statistics).
@@ -164,6 +166,7 @@ impl<S: StageSystems> Work<S> {
                 DMatrix::zeros(0, 0)
             },
             stages: S::with_blocks(m, n, blocks),
+            stagger: Stagger::of::<S, K>(sys, options, structure.is_none()),
             algebraic: Vec::new(),
             projection: DenseLu::new(if K::END.is_some() { n } else { 0 }, Pivoting::Checked),
             algebraic_unknowns: Vec::new(),
@@ -203,6 +206,15 @@ fn check_projection(delta: &[f64], t: f64) -> Result<(), SolveError> {
     }
 }
 
+/// The error estimate's real solve: every block, or one part of them
+/// ([`Integrator::error_part`]).
+fn solve_error<S: StageSystems>(stages: &mut S, err: &mut [f64], part: Option<Part>) {
+    match part {
+        None => stages.solve_real(err),
+        Some(part) => stages.solve_real_part(err, part),
+    }
+}
+
 /// Outcome of one simplified Newton iteration.
 pub(super) enum Newton {
     /// Converged after this many iterations.
@@ -219,8 +231,11 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// `J = ∂f/∂y − ∂(E z)/∂y` and `E₀` at `(t, y_n)` (`E₀` is `E(t_n, y_n)`
     /// from the step point's evaluation).
     pub(super) fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
+        let staggered = self.staggered_jacobian(t);
         let w = &mut self.w;
-        w.jac.rhs_jacobian(&*self.sys, t, &w.y);
+        if !staggered {
+            w.jac.rhs_jacobian(&*self.sys, t, &w.y);
+        }
         if !self.constant_leading {
             w.ljac.leading_jacobian(&*self.sys, t, &w.y, &w.yp);
             for (j, l) in w.jac.values_mut().iter_mut().zip(w.ljac.values()) {
@@ -270,7 +285,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     }
 
     /// Stage residuals `G_i(Z) = E(Y_i) Y'_i − f(t + c_i h, Y_i)` into `res`.
-    fn stage_residuals(&mut self, t: f64, h: f64) {
+    pub(super) fn stage_residuals(&mut self, t: f64, h: f64) {
         let m = self.m;
         let w = &mut self.w;
         let n = self.n;
@@ -287,55 +302,15 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     }
 
     /// Simplified Newton iteration for the stage increments (RADAU5's loop
-    /// at label 40). `may_shorten` allows the early exit on slow
-    /// convergence; without it (fixed-step mode) up to `NIT_FIXED`
-    /// iterations are made.
+    /// at label 40, [`Integrator::iterate`]), staggered for a state and its
+    /// sensitivities ([`super::stagger`]). `may_shorten` allows the early
+    /// exit on slow convergence; without it (fixed-step mode) up to
+    /// `NIT_FIXED` iterations are made.
     pub(super) fn newton(&mut self, t: f64, h: f64, may_shorten: bool) -> Newton {
-        let (n, m) = (self.n, self.m);
-        let max_iter = if may_shorten {
-            K::MAX_NEWTON
+        if self.w.stagger.is_some() {
+            self.newton_staggered(t, h, may_shorten)
         } else {
-            NIT_FIXED
-        };
-        let eta = self.newton.eta.max(UROUND).powf(0.8);
-        self.newton.restart(max_iter, eta, K::THET);
-        if K::NEWTON_ROUND_OFF.is_some() {
-            self.newton.kappa = self.newton_floor.max(self.newton_drift * h * h);
-        }
-        loop {
-            self.stage_residuals(t, h);
-            let w = &mut self.w;
-            // R = −(T⁻¹ ⊗ I) G.
-            if !kernels::transform_residuals::<K>(&w.res, &mut w.dw, m) {
-                return Newton::NonFinite(self.newton.iterations());
-            }
-            w.stages.solve_real(&mut w.dw[..m]);
-            let (re, im) = w.dw[m..].split_at_mut(m);
-            w.stages.solve_complex(re, im);
-
-            let dyno = w.weights.norm_blocks(&w.dw, m, 3);
-            if !dyno.is_finite() {
-                return Newton::NonFinite(self.newton.iterations() + 1);
-            }
-            let verdict = self.newton.observe(dyno, 0.0);
-            let iterations = self.newton.iterations();
-            if matches!(verdict, Verdict::Diverged | Verdict::TooSlow { .. }) {
-                self.newton_last = (dyno, largest_weighted(&w.dw, w.weights.get(), m));
-            }
-            match verdict {
-                Verdict::Diverged => return Newton::Diverged(iterations),
-                Verdict::TooSlow { factor } => {
-                    return Newton::TooSlow { iterations, factor };
-                }
-                Verdict::Continue | Verdict::Converged => {}
-            }
-
-            // Z += (T ⊗ I) ΔW   (T₃₂ = 1, T₃₃ = 0).
-            let w = &mut self.w;
-            kernels::add_increments::<K>(&w.dw, m, &mut w.z, n);
-            if verdict == Verdict::Converged {
-                return Newton::Converged(iterations);
-            }
+            self.iterate(t, h, may_shorten, Phase::Whole)
         }
     }
 
@@ -349,18 +324,20 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         for k in 0..m {
             w.err[k] = w.f0[k] + w.ez[k];
         }
-        w.stages.solve_real(&mut w.err);
+        let part = self.error_part();
+        let w = &mut self.w;
+        solve_error(&mut w.stages, &mut w.err, part);
         let mut err = w.weights.norm(&w.err[..n]);
         if err >= 1.0 && refine {
             for k in 0..n {
                 w.ys[k] = w.y[k] + w.err[k];
             }
-            self.sys.rhs(t, &w.ys[..n], &mut w.fm);
+            rhs_for_error(&*self.sys, w.stagger.as_ref(), t, &w.ys[..n], &mut w.fm);
             self.stats.residual_evals += 1;
             for k in 0..m {
                 w.err[k] = w.fm[k] + w.ez[k];
             }
-            w.stages.solve_real(&mut w.err);
+            solve_error(&mut w.stages, &mut w.err, part);
             err = w.weights.norm(&w.err[..n]);
         }
         if err.is_nan() {
@@ -597,7 +574,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
 
 /// The unknown with the largest weighted entry in the three stage blocks
 /// of `dw` (`m` rows each; rows beyond the weights' length count as none).
-fn largest_weighted(dw: &[f64], weights: &[f64], m: usize) -> usize {
+pub(super) fn largest_weighted(dw: &[f64], weights: &[f64], m: usize) -> usize {
     let mut best = (0, 0.0);
     for block in dw.chunks(m).take(3) {
         for (j, (d, w)) in block.iter().zip(weights).enumerate() {

@@ -4,6 +4,7 @@
 
 use super::control::{classical_quotient, predictive_quotient, Control, Hold, Next};
 use super::stages::{Newton, Work};
+use super::stagger::rhs_for_error;
 use super::tableau::{dense, Collocation};
 use super::{smallest_tolerance, H0_DEFAULT, TIGHT_NEWTON, TIGHT_TOL, UROUND};
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
@@ -178,6 +179,13 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             slow_exit: K::SLOW_EXIT && options.fixed_step.is_none(),
         };
         let mut newton = Contraction::new(rule, K::MAX_NEWTON, fnewt, 1.0);
+        if let Some(st) = &mut w.stagger {
+            // The sensitivities' iteration: the state's bound, without the
+            // early exit (their equations are linear: an iteration that
+            // contracts converges, and each costs products only).
+            st.newton =
+                Contraction::new(Rule::Radau5 { slow_exit: false }, K::MAX_NEWTON, fnewt, 1.0);
+        }
         if K::NEWTON_ROUND_OFF.is_some() {
             // Iterating towards round-off: stagnation counts as convergence
             // only at a few hundred units of round-off.
@@ -246,7 +254,8 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 });
             }
         }
-        self.sys.rhs(t, &self.w.y, &mut self.w.f0);
+        let w = &mut self.w;
+        rhs_for_error(&*self.sys, w.stagger.as_ref(), t, &w.y, &mut w.f0);
         self.stats.residual_evals += 1;
         if !all_finite(&self.w.f0) {
             return Err(SolveError::NonFinite {
@@ -346,7 +355,12 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 t,
                 h,
                 h_from: self.c.stall.first_step(),
-                unknown: self.sys.info().variables[unknown].name.clone(),
+                unknown: self
+                    .sys
+                    .info()
+                    .variables
+                    .get(unknown)
+                    .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
                 level,
             });
         }

@@ -1,0 +1,438 @@
+//! The staggered corrector of forward sensitivities (IDAS's
+//! `IDA_STAGGERED`, here for Radau IIA).
+//!
+//! A system of a state and its sensitivities
+//! ([`dae_core::sensitivity::SensitivitySystem`]) declares
+//! [`Blocks`] and offers its state alone
+//! ([`DaeSystem::first_block`]). Its stage equations are then solved in
+//! two phases per step attempt, both with the state's factorised iteration
+//! matrices `γ/h E₀ − J₀` and `(α + iβ)/h E₀ − J₀` (one real and one complex
+//! LU of the state's size, [`crate::core::block`]):
+//!
+//! 1. the state's stages by the simplified Newton iteration of the plain
+//!    run — the state's own residual, Jacobian and Newton norm, so that
+//!    with the sensitivities out of the error test the state takes the
+//!    plain run's steps, to the bit;
+//! 2. with the state's stages fixed, the sensitivities' stage equations
+//!    `E Sᵢ'(c_k) = J(Y_k) Sᵢ(c_k) + ∂f/∂pᵢ(Y_k)`, linear in the
+//!    sensitivity stages, by the same simplified Newton iteration with
+//!    `J₀` in place of each `J(Y_k)` (a contraction of the order of the
+//!    state's: about three iterations a step on the pendulum, BENCHMARKS.md
+//!    §13d). `[J | ∂f/∂p]` at the three stage points is evaluated once
+//!    ([`DaeSystem::first_block_linearisation`]) and each iteration's
+//!    residuals are products with it (a system that offers no
+//!    linearisation gets its whole residual, [`DaeSystem::rhs_tangents`]'s
+//!    forward pass, instead), then `P` solves by the same LUs. The state's
+//!    increment is zero there, so the sub-diagonal blocks `Bᵢ` of the
+//!    simultaneous corrector are never formed: a Jacobian is the state's
+//!    alone.
+//!
+//! The sensitivities' iteration has its own contraction monitor (its `η`
+//! carried across steps like the state's) and its own weights: every
+//! sensitivity is in its convergence test whether or not it is in the
+//! error test, as in IDAS ("in any event, all variables are considered in
+//! the convergence tests", `IDASetSensErrCon`). A sensitivity iteration
+//! that diverges or is too slow fails the attempt as the state's would.
+//! The error estimate is the method's over every component in the test;
+//! with the sensitivities out of it, only the state's part is computed.
+
+use super::stages::Newton;
+use super::step::Integrator;
+use super::tableau::Collocation;
+use super::UROUND;
+use crate::core::block::Part;
+use crate::core::matrix::{Matrix, StageSystems};
+use crate::core::newton::{Contraction, Verdict};
+use crate::core::weights::Weights;
+use crate::linalg::with_size;
+use crate::options::Options;
+use dae_core::system::{Blocks, DaeSystem};
+use nalgebra::DMatrix;
+
+/// The staggered corrector's state (see the [module documentation](self)).
+pub(super) struct Stagger {
+    /// Unknowns of the state, `N` (its rows too: the state is square).
+    pub(super) size: usize,
+    /// Whether the sensitivities are in the error test.
+    pub(super) error_control: bool,
+    /// The state's Newton weights (`N`, all in the norm).
+    state_weights: Weights,
+    /// The sensitivities' Newton weights (all unknowns, the state's out).
+    sens_weights: Weights,
+    /// The state's Jacobian (`N × N`).
+    jac: DMatrix<f64>,
+    /// `[∂f/∂y | ∂f/∂p]` of the state's rows at the three stage points
+    /// (`N × (N + P)` each, [`DaeSystem::first_block_linearisation`]).
+    lin: [DMatrix<f64>; 3],
+    /// The sensitivities' contraction monitor.
+    pub(super) newton: Contraction,
+}
+
+/// Which unknowns one simplified Newton iteration solves for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Phase {
+    /// All of them at once (every system without the staggered corrector).
+    Whole,
+    /// The state's (the first block), its rows alone.
+    State,
+    /// The sensitivities' (the later blocks), the state fixed.
+    Sensitivities,
+}
+
+impl Stagger {
+    /// The staggered corrector of `sys` for a method `K` whose stage
+    /// systems `S` are square, when `sys` has blocks, offers its first
+    /// block, and has a constant `E`; `None` otherwise (the simultaneous
+    /// corrector then runs). The contraction monitor is the caller's to
+    /// configure ([`Integrator::new`]).
+    pub(super) fn of<S: StageSystems, K: Collocation>(
+        sys: &dyn DaeSystem,
+        options: &Options,
+        dense: bool,
+    ) -> Option<Self> {
+        let info = sys.info();
+        let n = info.unknowns();
+        let b: Blocks = sys.blocks()?;
+        let first = sys.first_block()?;
+        let usable = !S::LEAST_SQUARES
+            && K::END.is_none()
+            && dense
+            && info.constant_leading
+            && b.size > 0
+            && b.count > 1
+            && b.unknowns() == n
+            && info.equations() == n
+            && first.info().unknowns() == b.size
+            && first.info().equations() == b.size;
+        if !usable {
+            return None;
+        }
+        let factor = |i: usize| K::tolerance_factor(options.tol.rtol(i), options.tol.atol(i));
+        let powers: Vec<i32> = info
+            .variables
+            .iter()
+            .map(|var| i32::from(var.index.max(1)) - 1)
+            .collect();
+        let state_weights = Weights::new(
+            &options.tol,
+            factor,
+            vec![true; b.size],
+            powers[..b.size].to_vec(),
+        );
+        let mut sens = vec![true; n];
+        sens[..b.size].fill(false);
+        let sens_weights = Weights::new(&options.tol, factor, sens, powers);
+        Some(Stagger {
+            size: b.size,
+            error_control: b.error_control,
+            state_weights,
+            sens_weights,
+            jac: DMatrix::zeros(b.size, b.size),
+            lin: std::array::from_fn(|_| DMatrix::zeros(b.size, b.size + b.count - 1)),
+            newton: Contraction::new(
+                crate::core::newton::Rule::Radau5 { slow_exit: false },
+                K::MAX_NEWTON,
+                1.0,
+                1.0,
+            ),
+        })
+    }
+
+    /// Both Newton weights for step size `h` at `y` (every unknown).
+    pub(super) fn update_weights(&mut self, y: &[f64], h: f64) {
+        self.state_weights.update_scaled(y, h);
+        self.sens_weights.update_scaled(y, h);
+    }
+
+    /// The Newton norm of phase `phase` of the stage increments `dw`
+    /// (three blocks `m` apart).
+    pub(super) fn norm(&self, phase: Phase, dw: &[f64], m: usize) -> f64 {
+        match phase {
+            Phase::Sensitivities => self.sens_weights.norm_blocks(dw, m, 3),
+            Phase::State | Phase::Whole => self.state_weights.norm_blocks(dw, m, 3),
+        }
+    }
+}
+
+impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
+    /// The staggered corrector of one attempt: the state's stages, then
+    /// the sensitivities' (see the [module documentation](self)). The
+    /// iterations reported are the state's (they steer the step size as
+    /// in the plain run); the sensitivities' are not in the statistics
+    /// (BENCHMARKS.md §13d counts them from a profile).
+    pub(super) fn newton_staggered(&mut self, t: f64, h: f64, may_shorten: bool) -> Newton {
+        if let Some(st) = &mut self.w.stagger {
+            st.update_weights(&self.w.y, h);
+        }
+        let state = self.iterate(t, h, may_shorten, Phase::State);
+        let Newton::Converged(k) = state else {
+            return state;
+        };
+        match self.iterate(t, h, may_shorten, Phase::Sensitivities) {
+            Newton::Converged(_) => Newton::Converged(k),
+            Newton::TooSlow { factor, .. } => Newton::TooSlow {
+                iterations: k,
+                factor,
+            },
+            Newton::Diverged(_) => Newton::Diverged(k),
+            Newton::NonFinite(_) => Newton::NonFinite(k),
+        }
+    }
+
+    /// The contraction monitor of `phase`.
+    fn monitor(&mut self, phase: Phase) -> &mut Contraction {
+        match (phase, &mut self.w.stagger) {
+            (Phase::Sensitivities, Some(st)) => &mut st.newton,
+            _ => &mut self.newton,
+        }
+    }
+
+    /// One simplified Newton iteration over the unknowns of `phase`
+    /// (RADAU5's loop at label 40). `may_shorten` allows the early exit on
+    /// slow convergence; without it (fixed-step mode) up to `NIT_FIXED`
+    /// iterations are made.
+    pub(super) fn iterate(&mut self, t: f64, h: f64, may_shorten: bool, phase: Phase) -> Newton {
+        let (n, m) = (self.n, self.m);
+        let max_iter = if may_shorten {
+            K::MAX_NEWTON
+        } else {
+            super::NIT_FIXED
+        };
+        let monitor = self.monitor(phase);
+        let eta = monitor.eta.max(UROUND).powf(0.8);
+        monitor.restart(max_iter, eta, K::THET);
+        if K::NEWTON_ROUND_OFF.is_some() {
+            self.newton.kappa = self.newton_floor.max(self.newton_drift * h * h);
+        }
+        let size = self.w.stagger.as_ref().map_or(n, |st| st.size);
+        if phase == Phase::State {
+            // The sensitivities' rows stay zero: their increments are zero.
+            for g in self.w.res.chunks_exact_mut(m) {
+                g[size..].fill(0.0);
+            }
+        }
+        // The sensitivities' rows are linear in them: with the state's
+        // stages fixed, their matrices at the three stage points once, and
+        // each iteration's residuals by products.
+        let linear = phase == Phase::Sensitivities && self.linearise(t, h);
+        loop {
+            match phase {
+                Phase::State => self.state_stage_residuals(t, h, size),
+                Phase::Sensitivities if linear => self.linear_stage_residuals(h),
+                Phase::Whole | Phase::Sensitivities => self.stage_residuals(t, h),
+            }
+            let w = &mut self.w;
+            if phase == Phase::Sensitivities {
+                // The state fixed: its rows are not iterated on.
+                for g in w.res.chunks_exact_mut(m) {
+                    g[..size].fill(0.0);
+                }
+            }
+            // R = −(T⁻¹ ⊗ I) G.
+            if !super::kernels::transform_residuals::<K>(&w.res, &mut w.dw, m) {
+                return Newton::NonFinite(self.monitor(phase).iterations());
+            }
+            let part = match phase {
+                Phase::Whole => None,
+                Phase::State => Some(Part::First),
+                Phase::Sensitivities => Some(Part::Rest),
+            };
+            let (real, complex) = w.dw.split_at_mut(m);
+            let (re, im) = complex.split_at_mut(m);
+            match part {
+                None => {
+                    w.stages.solve_real(real);
+                    w.stages.solve_complex(re, im);
+                }
+                Some(part) => {
+                    w.stages.solve_real_part(real, part);
+                    w.stages.solve_complex_part(re, im, part);
+                }
+            }
+            let dyno = match (&w.stagger, phase) {
+                (Some(st), Phase::State | Phase::Sensitivities) => st.norm(phase, &w.dw, m),
+                _ => w.weights.norm_blocks(&w.dw, m, 3),
+            };
+            if !dyno.is_finite() {
+                return Newton::NonFinite(self.monitor(phase).iterations() + 1);
+            }
+            let monitor = self.monitor(phase);
+            let verdict = monitor.observe(dyno, 0.0);
+            let iterations = monitor.iterations();
+            if matches!(verdict, Verdict::Diverged | Verdict::TooSlow { .. }) {
+                // What `Stall` judges: the state's increments (a
+                // sensitivity phase's failure starts its count again).
+                self.newton_last = if phase == Phase::Sensitivities {
+                    (0.0, 0)
+                } else {
+                    (
+                        dyno,
+                        super::stages::largest_weighted(&self.w.dw, self.w.weights.get(), m),
+                    )
+                };
+            }
+            match verdict {
+                Verdict::Diverged => return Newton::Diverged(iterations),
+                Verdict::TooSlow { factor } => {
+                    return Newton::TooSlow { iterations, factor };
+                }
+                Verdict::Continue | Verdict::Converged => {}
+            }
+
+            // Z += (T ⊗ I) ΔW   (T₃₂ = 1, T₃₃ = 0): zero increments outside
+            // the phase's unknowns.
+            let w = &mut self.w;
+            super::kernels::add_increments::<K>(&w.dw, m, &mut w.z, n);
+            if verdict == Verdict::Converged {
+                return Newton::Converged(iterations);
+            }
+        }
+    }
+
+    /// The state's stage residuals `G_i(Z) = E Y'_i − f(t + c_i h, Y_i)`
+    /// from its own formulation into the first `size` rows of each stage's
+    /// block of `res` (the stage points of every unknown are formed: the
+    /// sensitivities' are the next phase's).
+    fn state_stage_residuals(&mut self, t: f64, h: f64, size: usize) {
+        let (n, m) = (self.n, self.m);
+        let w = &mut self.w;
+        super::kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
+        let Some(first) = self.sys.first_block() else {
+            // Not reached: a staggered corrector exists only for a system
+            // with a first block.
+            return;
+        };
+        for (i, &ci) in K::C.iter().enumerate() {
+            first.residual(
+                t + ci * h,
+                &w.ys[i * n..i * n + size],
+                &w.yd[i * n..i * n + size],
+                &mut w.res[i * m..i * m + size],
+            );
+        }
+        self.stats.residual_evals += 3;
+    }
+
+    /// `[∂f/∂y | ∂f/∂p]` at the state's three stage points (the stages
+    /// as the state's iteration left them); whether the system offers it.
+    fn linearise(&mut self, t: f64, h: f64) -> bool {
+        let n = self.n;
+        let w = &mut self.w;
+        let Some(st) = &mut w.stagger else {
+            return false;
+        };
+        super::kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
+        let size = st.size;
+        for (k, (&ck, lin)) in K::C.iter().zip(&mut st.lin).enumerate() {
+            if !self
+                .sys
+                .first_block_linearisation(t + ck * h, &w.ys[k * n..k * n + size], lin)
+            {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// The sensitivities' stage residuals `E Sᵢ'(c_k) − J(Y_k) Sᵢ(c_k) −
+    /// ∂f/∂pᵢ(Y_k)` by products with the matrices of [`Self::linearise`],
+    /// into each stage's block of `res` after its first `N` rows (`E` is
+    /// constant and block diagonal: its first block is every block's).
+    fn linear_stage_residuals(&mut self, h: f64) {
+        let (n, m) = (self.n, self.m);
+        let w = &mut self.w;
+        let Some(st) = &w.stagger else {
+            return;
+        };
+        super::kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
+        let size = st.size;
+        // Column-major slices: `E`'s first block (leading dimension `m`)
+        // and each `[J | ∂f/∂p]` (leading dimension `N`).
+        let e = w.e_n.dense().as_slice();
+        for (k, lin) in st.lin.iter().enumerate() {
+            let lin = lin.as_slice();
+            let (ys, yd) = (&w.ys[k * n..(k + 1) * n], &w.yd[k * n..(k + 1) * n]);
+            let res = &mut w.res[k * m..(k + 1) * m];
+            for (i, r) in res[size..n].chunks_exact_mut(size).enumerate() {
+                let at = size * (i + 1);
+                let point = (&ys[at..at + size], &yd[at..at + size]);
+                with_size!(size, |N| linear_rows(r, point, e, m, lin, i, N));
+            }
+        }
+    }
+
+    /// `J₀` of a staggered run: the state's Jacobian at `(t, y_n)` into
+    /// the first block of `jac` (the rest of `jac` stays zero: no `Bᵢ`).
+    /// Whether it applied (a staggered run with a dense `jac`).
+    pub(super) fn staggered_jacobian(&mut self, t: f64) -> bool {
+        let w = &mut self.w;
+        let (Some(st), Matrix::Dense(jac)) = (&mut w.stagger, &mut w.jac) else {
+            return false;
+        };
+        let Some(first) = self.sys.first_block() else {
+            return false;
+        };
+        let size = st.size;
+        first.rhs_jacobian(t, &w.y[..size], &mut st.jac);
+        jac.view_mut((0, 0), (size, size)).copy_from(&st.jac);
+        true
+    }
+
+    /// The part of the error estimate's solve: the state's alone when the
+    /// sensitivities are out of the error test.
+    pub(super) fn error_part(&self) -> Option<Part> {
+        match &self.w.stagger {
+            Some(st) if !st.error_control => Some(Part::First),
+            _ => None,
+        }
+    }
+}
+
+/// `f(t, y)` of `sys` where the error estimate needs it: with a staggered
+/// corrector whose sensitivities are out of the error test, the state's
+/// rows alone from the state's formulation (the rest of `f` is then not
+/// read); every row otherwise.
+pub(super) fn rhs_for_error(
+    sys: &dyn DaeSystem,
+    stagger: Option<&Stagger>,
+    t: f64,
+    y: &[f64],
+    f: &mut [f64],
+) {
+    match (stagger, sys.first_block()) {
+        (Some(st), Some(first)) if !st.error_control => {
+            first.rhs(t, &y[..st.size], &mut f[..st.size])
+        }
+        _ => sys.rhs(t, y, f),
+    }
+}
+
+/// One sensitivity's stage residual `r = E₀ s' − J s − ∂f/∂pᵢ` at the
+/// stage point `(s, s')`: `e` is `E` column-major with leading dimension
+/// `m` (its first block `E₀`), `lin` is `[J | ∂f/∂p]` column-major with
+/// leading dimension `size` (the sizes of the formulations the solvers
+/// meet most made constants by [`with_size!`]).
+#[inline(always)]
+fn linear_rows(
+    r: &mut [f64],
+    (s, sd): (&[f64], &[f64]),
+    e: &[f64],
+    m: usize,
+    lin: &[f64],
+    i: usize,
+    size: usize,
+) {
+    let (r, s, sd) = (&mut r[..size], &s[..size], &sd[..size]);
+    let fp = &lin[(size + i) * size..(size + i + 1) * size];
+    for k in 0..size {
+        r[k] = -fp[k];
+    }
+    for c in 0..size {
+        let (sc, sdc) = (s[c], sd[c]);
+        let ec = &e[c * m..c * m + size];
+        let jc = &lin[c * size..(c + 1) * size];
+        for k in 0..size {
+            r[k] += ec[k] * sdc - jc[k] * sc;
+        }
+    }
+}
