@@ -1308,6 +1308,15 @@ fn distribute(a: &[(Q, Expr)], b: &Expr) -> Vec<(Q, Expr)> {
 /// dynamics, as in the pendulum's `d/dt (2xu + 2yv)` — are still decided:
 /// a product with a sum that is not a linear form is distributed as
 /// before, the linear forms staying factors of every term.
+///
+/// ```
+/// use dae_core::expr::{is_linear_form, mul, pow, sub, Expr};
+/// let d = sub(&Expr::var(1), &Expr::var(0));
+/// assert!(is_linear_form(&d));
+/// // Its square stays a power of the (normalised) difference.
+/// assert!(matches!(pow(&d, &Expr::int(2)), Expr::Prod(_)));
+/// assert!(!is_linear_form(&mul(&d, &Expr::var(2))));
+/// ```
 pub fn is_linear_form(e: &Expr) -> bool {
     let Expr::Sum(s) = e else {
         return false;
