@@ -670,17 +670,21 @@ mod tests {
         let mut sums = 0;
         for e in &exprs {
             sums += usize::from(matches!(e, Expr::Sum(_)));
-            let want: Vec<(usize, Expr)> = e
-                .symbols()
-                .into_iter()
-                .filter_map(|s| match s {
-                    Sym::Var(k) => Some((k as usize, expr::diff(e, s))),
-                    _ => None,
-                })
-                .collect();
-            assert_eq!(&*grads.of(e), &want[..], "{e:?}");
+            assert_eq!(&*grads.of(e), &by_diff(e)[..], "{e:?}");
         }
         assert!(sums > 20, "{sums} sums among {} rows", exprs.len());
+    }
+
+    /// The gradient of `e` by `expr::diff`, one unknown at a time: the
+    /// independent check of [`Gradients`].
+    fn by_diff(e: &Expr) -> Vec<(usize, Expr)> {
+        e.symbols()
+            .into_iter()
+            .filter_map(|s| match s {
+                Sym::Var(k) => Some((k as usize, expr::diff(e, s))),
+                _ => None,
+            })
+            .collect()
     }
 
     /// The gradients built node by node from the children's are the
@@ -711,15 +715,7 @@ mod tests {
         ];
         let mut grads = Gradients::default();
         for e in &exprs {
-            let want: Vec<(usize, Expr)> = e
-                .symbols()
-                .into_iter()
-                .filter_map(|s| match s {
-                    Sym::Var(k) => Some((k as usize, expr::diff(e, s))),
-                    _ => None,
-                })
-                .collect();
-            assert_eq!(&*grads.of(e), &want[..], "{e:?}");
+            assert_eq!(&*grads.of(e), &by_diff(e)[..], "{e:?}");
         }
     }
 
