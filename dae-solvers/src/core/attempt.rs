@@ -253,6 +253,14 @@ pub(crate) trait Attempts {
     /// typed error stops the run (a non-finite Jacobian, a failed
     /// re-start).
     fn attempt(&mut self) -> Result<Outcome, SolveError>;
+    /// The typed error for a failure that ends the step (its budget is
+    /// spent or the retry would be below the smallest step): the failure's
+    /// own ([`Budget::error`]) unless the family knows more about it (a
+    /// Newton iteration stalled at round-off, radau5's
+    /// [`SolveError::RoundOffFloor`]).
+    fn failure_error(&self, failure: Failure, t: f64, h: f64, iterations: usize) -> SolveError {
+        Budget::error(failure, t, h, iterations)
+    }
 }
 
 /// One accepted step of `family`: attempts, retried within the budgets.
@@ -295,7 +303,7 @@ pub(crate) fn step<A: Attempts + ?Sized>(family: &mut A) -> Result<(), SolveErro
                     || (steps.fixed && retry != Retry::Refresh)
                     || steps.check(t, h_next).is_err()
                 {
-                    return Err(Budget::error(failure, t, h, iterations));
+                    return Err(family.failure_error(failure, t, h, iterations));
                 }
                 h_next
             }

@@ -8,7 +8,7 @@ use super::stagger::rhs_for_error;
 use super::tableau::{dense, Collocation};
 use super::{smallest_tolerance, H0_DEFAULT, TIGHT_NEWTON, TIGHT_TOL, UROUND};
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
-use crate::core::control::{self, Failure};
+use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::StageSystems;
@@ -123,6 +123,24 @@ impl<S: StageSystems, K: Collocation> Attempts for Integrator<'_, S, K> {
     }
     fn attempt(&mut self) -> Result<Outcome, SolveError> {
         Integrator::attempt(self)
+    }
+    fn failure_error(&self, failure: Failure, t: f64, h: f64, iterations: usize) -> SolveError {
+        let (level, unknown) = self.newton_last;
+        if failure == Failure::Newton && self.c.stall.stalled() {
+            return SolveError::RoundOffFloor {
+                t,
+                h,
+                h_from: self.c.stall.first_step(),
+                unknown: self
+                    .sys
+                    .info()
+                    .variables
+                    .get(unknown)
+                    .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
+                level,
+            };
+        }
+        Budget::error(failure, t, h, iterations)
     }
 }
 
@@ -347,22 +365,10 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             }
         }
 
-        // Failed iterations whose increments stay put as the step shrinks:
-        // no step helps (`Stall`).
-        let (level, unknown) = self.newton_last;
-        if retry.is_some() && !non_finite && fixed.is_none() && self.c.stall.failed(h, level) {
-            return Err(SolveError::RoundOffFloor {
-                t,
-                h,
-                h_from: self.c.stall.first_step(),
-                unknown: self
-                    .sys
-                    .info()
-                    .variables
-                    .get(unknown)
-                    .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
-                level,
-            });
+        // Failed iterations whose increments stay put as the step shrinks
+        // (`Stall`): what the failure that ends the step is called.
+        if retry.is_some() && !non_finite && fixed.is_none() {
+            self.c.stall.failed(h, self.newton_last.0);
         }
         let c = &mut self.c;
         if let Some(mut retry) = retry {
