@@ -283,11 +283,10 @@ impl Contraction {
 /// test ([`Stall::reset`]).
 ///
 /// It names a failure, it does not cause one: the step is still shrunk
-/// within the failure budget (a stall at 0.6 of the tolerance has been seen
-/// to clear at a shorter step, on Andrews' squeezer in `mex0` at 1e-10),
-/// and only when the budget or the smallest step ends it does a stall make
-/// the error [`crate::SolveError::RoundOffFloor`] instead of
-/// `newton_failure`.
+/// within the failure budget — the thresholds are heuristics, and a run
+/// that shorter steps would get through must not be ended on them — and
+/// only when the budget or the smallest step ends it does a stall make the
+/// error [`crate::SolveError::RoundOffFloor`] instead of `newton_failure`.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Stall {
     count: usize,
