@@ -117,8 +117,8 @@ pub const MAX_TIMED: usize = 50;
 pub const FLOOR_HITS: usize = 3;
 /// How close to the minimum (relative) a timing must be to count as a hit
 /// of the floor: a fifth of the ranking's 5 % resolution
-/// ([`pareto::TIME_RESOLUTION`]).
-pub const FLOOR_WIDTH: f64 = 0.01;
+/// ([`pareto::TIME_RESOLUTION`]), 1 %.
+pub const FLOOR_WIDTH: f64 = pareto::TIME_RESOLUTION / 5.0;
 
 /// What to sweep and how.
 #[derive(Clone, Debug)]

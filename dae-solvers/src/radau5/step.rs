@@ -378,7 +378,6 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             } else {
                 Failure::Newton
             };
-
             if fixed.is_some() && !c.caljac {
                 c.next = Next::Jacobian;
                 retry = Retry::Refresh;
