@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The BDF family's accuracy and work against SUNDIALS IDA (a DASSL
 # descendant), side by side on one machine (BENCHMARKS.md §15b; issue 25
-# done-when 1, issue 26 done-when 2). Two problems:
+# done-when 1, issue 26 done-when 2). Three problems:
 #
 # 1. The pendulum released horizontally (scenes/pendulum_wall.dae: the
 #    SPEC's pendulum, period 2 s, with the event `cross = x`), index-1 form
@@ -19,9 +19,14 @@
 #    Jacobian) against `dae run scenes/transamp.toml --solver bdf
 #    --formulation rcd0`: steps, rejected steps, scd (the Test Set's
 #    significant correct digits at t = 0.2) and dae's steps over IDA's.
+# 3. The IVP Test Set's car axis (scenes/caraxis.toml, index 3, here in its
+#    index-1 form rcd0, t in [0, 3]): scripts/ida_caraxis.c (IDA, dense
+#    difference-quotient Jacobian) against `dae run scenes/caraxis.toml
+#    --solver bdf --formulation rcd0`: steps, rejected steps, scd over the
+#    positions and velocities at t = 3.
 #
 #   scripts/ida_pendulum.sh                       # both, default tolerances
-#   PENDULUM_TOLS="1e-10 1e-12" TRANSAMP_TOLS="" scripts/ida_pendulum.sh
+#   PENDULUM_TOLS="1e-10 1e-12" TRANSAMP_TOLS="" CARAXIS_TOLS="" scripts/ida_pendulum.sh
 #
 # rtol = atol = TOL for every unknown in both (`dae run --tol`). Counts, not
 # times: the runs are deterministic.
@@ -32,7 +37,8 @@
 # Not part of CI: a measurement.
 #
 # Environment: PENDULUM_TOLS (default "1e-8 1e-10"), TRANSAMP_TOLS (default
-# "1e-4 1e-5 1e-6 1e-7 1e-8"), DAE (default target/release/dae), OUT
+# "1e-4 1e-5 1e-6 1e-7 1e-8"), CARAXIS_TOLS (default "1e-4 1e-6 1e-8
+# 1e-10"), DAE (default target/release/dae), OUT
 # (scratch directory, default a temporary one, removed at the end).
 set -euo pipefail
 
@@ -40,6 +46,7 @@ repo="$(cd "$(dirname "$0")/.." && pwd)"
 dae="${DAE:-$repo/target/release/dae}"
 pendulum_tols="${PENDULUM_TOLS-1e-8 1e-10}"
 transamp_tols="${TRANSAMP_TOLS-1e-4 1e-5 1e-6 1e-7 1e-8}"
+caraxis_tols="${CARAXIS_TOLS-1e-4 1e-6 1e-8 1e-10}"
 if [ ! -x "$dae" ]; then
     echo "$0: no dae binary at $dae: run 'cargo build --release --bin dae' or set DAE" >&2
     exit 2
@@ -57,6 +64,8 @@ libs="-lsundials_ida -lsundials_nvecserial -lsundials_sunlinsoldense -lsundials_
 gcc -O2 -Wall -Wextra -o "$dir/ida_pendulum" "$repo/scripts/ida_pendulum.c" $libs
 # shellcheck disable=SC2086
 gcc -O2 -Wall -Wextra -o "$dir/ida_transamp" "$repo/scripts/ida_transamp.c" $libs
+# shellcheck disable=SC2086
+gcc -O2 -Wall -Wextra -o "$dir/ida_caraxis" "$repo/scripts/ida_caraxis.c" $libs
 
 echo "# $(uname -srm), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores"
 echo "# SUNDIALS $(sed -n 's/^#define SUNDIALS_VERSION "\(.*\)"/\1/p' /usr/include/sundials/sundials_config.h); dae $(cd "$repo" && git rev-parse --short HEAD 2>/dev/null || echo '?'), $dae"
@@ -89,11 +98,16 @@ for tol in $transamp_tols; do
     "$dae" run "$repo/scenes/transamp.toml" --solver bdf --formulation rcd0 --tol "$tol" \
         --format json >"$dir/dae_transamp.$tol.json"
 done
+for tol in $caraxis_tols; do
+    "$dir/ida_caraxis" "$tol" >"$dir/ida_caraxis.$tol.json"
+    "$dae" run "$repo/scenes/caraxis.toml" --solver bdf --formulation rcd0 --tol "$tol" \
+        --format json >"$dir/dae_caraxis.$tol.json"
+done
 
-python3 - "$dir" "$pendulum_tols" "$transamp_tols" <<'PY'
+python3 - "$dir" "$pendulum_tols" "$transamp_tols" "$caraxis_tols" <<'PY'
 import json, math, sys
 
-d, ptols, ttols = sys.argv[1], sys.argv[2].split(), sys.argv[3].split()
+d, ptols, ttols, ctols = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4].split()
 G = 13.7503716373294544
 
 
@@ -152,4 +166,16 @@ for tol in ttols:
     print(f"  {tol:>6} {i['steps']:>9} {i['error_test_failures'] + i['newton_failures']:>7} "
           f"{i['scd']:>5.2f} {str(i['orders']):<40} {s['steps']:>9} {s['rejected']:>7} "
           f"{j['scd']:>5.2f} {s['steps'] / i['steps']:>7.2f}")
+
+if ctols:
+    print("caraxis (IVP Test Set), rcd0, t in [0, 3]")
+    print(f"  {'tol':>6} {'ida steps':>9} {'rej':>4} {'scd':>5} {'orders 1..5':<28}"
+          f" {'dae steps':>9} {'rej':>4} {'scd':>5}")
+for tol in ctols:
+    i = json.load(open(f"{d}/ida_caraxis.{tol}.json"))
+    j = dae_run(f"{d}/dae_caraxis.{tol}.json")
+    s = j["stats"]
+    print(f"  {tol:>6} {i['steps']:>9} {i['error_test_failures'] + i['newton_failures']:>4} "
+          f"{i['scd']:>5.2f} {str(i['orders']):<28} {s['steps']:>9} {s['rejected']:>4} "
+          f"{j['scd']:>5.2f}")
 PY
