@@ -155,10 +155,9 @@
 //! # Ok::<(), SolveError>(())
 //! ```
 
-use crate::core::matrix::SquareStages;
+use crate::collocation::tableau::{Collocation, EndPoint, NewtonStop, Policy, StepRule, Tableau};
+use crate::collocation::{self, StageSolveKind};
 use crate::core::policy;
-use crate::radau5::collocate;
-use crate::radau5::tableau::Collocation;
 use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 
@@ -215,7 +214,18 @@ impl Solver for Gauss {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        collocate::<SquareStages, GaussLegendre>(problem, options)
+        collocation::integrator::<GaussLegendre>(problem, options, StageSolveKind::Square)
+    }
+}
+
+/// The factor applied to `rtol_i` and `atol_i`: `internal_tolerance(tol)/tol`
+/// for the relative tolerance (the absolute one where it is zero).
+fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
+    let tol = if rtol > 0.0 { rtol } else { atol };
+    if tol > 0.0 {
+        internal_tolerance(tol) / tol
+    } else {
+        1.0
     }
 }
 
@@ -234,57 +244,57 @@ const NU3: f64 = C[0] - 1.0;
 /// `bᵀA⁻¹`: `y_{n+1} = y_n + Σ d_i Z_i`.
 const END: [f64; 3] = [5.0 / 3.0, -4.0 / 3.0, 5.0 / 3.0];
 
-impl Collocation for GaussLegendre {
-    const C: [f64; 3] = C;
-    const AINV: [[f64; 3]; 3] = [
-        [5.0, 1.1639777949432226, -0.1639777949432225],
-        [-5.727486121839514, 2.0, 0.7274861218395141],
-        [10.163977794943223, -9.163977794943223, 5.0],
-    ];
-    /// The real root of `z³ − 12z² + 60z − 120` (the denominator of the
-    /// (3,3) Padé approximation).
-    const GAMMA: f64 = 4.644370709252171;
-    const ALPHA: f64 = 3.6778146453739144;
-    const BETA: f64 = 3.5087619195674433;
-    const T: [[f64; 3]; 3] = [
-        [
-            0.07215185205520017,
-            -0.08224123057363067,
-            -0.0601207386193085,
-        ],
-        [
-            0.11883257874127781,
-            0.053065090742061394,
-            0.3162050511322916,
-        ],
-        [1.0, 1.0, 0.0],
-    ];
-    const TI: [[f64; 3]; 3] = [
-        [5.991698084937801, 1.1392142951557354, 0.43231211378385836],
-        [-5.991698084937801, -1.1392142951557354, 0.5676878862161416],
-        [
-            -1.2462132735862315,
-            2.9255596461923137,
-            -0.25773520127343247,
-        ],
-    ];
-    const DD: [f64; 3] = [-13.121638910345695, 4.0 / 3.0, -0.21169442298763852];
-    const END: Option<[f64; 3]> = Some(END);
-    const QUASI_CONSTANT: bool = true;
-    const MAX_NEWTON: usize = MAX_NEWTON;
-    const THET: f64 = THET;
-    const SLOW_EXIT: bool = false;
-    const NEWTON_ROUND_OFF: Option<f64> = Some(NEWTON_ROUND_OFF);
-    const NEWTON_DRIFT: f64 = NEWTON_DRIFT;
+/// `A⁻¹`.
+const AINV: [[f64; 3]; 3] = [
+    [5.0, 1.1639777949432226, -0.1639777949432225],
+    [-5.727486121839514, 2.0, 0.7274861218395141],
+    [10.163977794943223, -9.163977794943223, 5.0],
+];
 
-    fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
-        let tol = if rtol > 0.0 { rtol } else { atol };
-        if tol > 0.0 {
-            internal_tolerance(tol) / tol
-        } else {
-            1.0
-        }
-    }
+impl Collocation for GaussLegendre {
+    const TABLEAU: Tableau = Tableau {
+        c: C,
+        ainv: AINV,
+        // The real root of `z³ − 12z² + 60z − 120` (the denominator of the
+        // (3,3) Padé approximation).
+        gamma: 4.644370709252171,
+        alpha: 3.6778146453739144,
+        beta: 3.5087619195674433,
+        t: [
+            [
+                0.07215185205520017,
+                -0.08224123057363067,
+                -0.0601207386193085,
+            ],
+            [
+                0.11883257874127781,
+                0.053065090742061394,
+                0.3162050511322916,
+            ],
+            [1.0, 1.0, 0.0],
+        ],
+        ti: [
+            [5.991698084937801, 1.1392142951557354, 0.43231211378385836],
+            [-5.991698084937801, -1.1392142951557354, 0.5676878862161416],
+            [
+                -1.2462132735862315,
+                2.9255596461923137,
+                -0.25773520127343247,
+            ],
+        ],
+        dd: [-13.121638910345695, 4.0 / 3.0, -0.21169442298763852],
+        end: EndPoint::Projected(END),
+    };
+    const POLICY: Policy = Policy {
+        step: StepRule::Held,
+        newton: NewtonStop::RoundOff {
+            units: NEWTON_ROUND_OFF,
+            drift: NEWTON_DRIFT,
+        },
+        max_newton: MAX_NEWTON,
+        thet: THET,
+        tolerance_factor,
+    };
 
     /// On the nodes `0, c₃ − 1, c₂ − 1, c₁ − 1`, with the values `0` and
     /// `Z_i − Σ_j d_j Z_j`.
@@ -315,7 +325,7 @@ impl Collocation for GaussLegendre {
 mod tests {
     use super::*;
 
-    use crate::radau5::tableau::check::{self, M3};
+    use crate::collocation::tableau::check::{self, M3};
 
     fn gauss_a() -> M3 {
         let r = 15f64.sqrt();
@@ -332,7 +342,7 @@ mod tests {
     fn coefficients_are_consistent() {
         let a = gauss_a();
         check::transformation::<G>(&a);
-        let (g, al, be) = (G::GAMMA, G::ALPHA, G::BETA);
+        let (g, al, be) = (G::TABLEAU.gamma, G::TABLEAU.alpha, G::TABLEAU.beta);
         // The eigenvalues are the roots of the Padé denominator.
         let p = |z: f64| ((z - 12.0) * z + 60.0) * z - 120.0;
         assert!(p(g).abs() < 1e-12);
@@ -341,14 +351,14 @@ mod tests {
         // bᵀA⁻¹ is END.
         let b = [5.0 / 18.0, 4.0 / 9.0, 5.0 / 18.0];
         for (i, e) in END.iter().enumerate() {
-            let d: f64 = (0..3).map(|k| b[k] * G::AINV[k][i]).sum();
+            let d: f64 = (0..3).map(|k| b[k] * G::TABLEAU.ainv[k][i]).sum();
             assert!((d - e).abs() < 1e-14);
         }
         // The embedded formula: b̂ = b + (γ₀ d̂ᵀ A) with b̂₀ = γ₀ integrates
         // 1, t, t² exactly on the nodes 0, c₁, c₂, c₃.
         let g0 = 1.0 / g;
         let bh: Vec<f64> = (0..3)
-            .map(|i| b[i] + g0 * (0..3).map(|j| G::DD[j] * a[j][i]).sum::<f64>())
+            .map(|i| b[i] + g0 * (0..3).map(|j| G::TABLEAU.dd[j] * a[j][i]).sum::<f64>())
             .collect();
         for k in 0..3 {
             let q: f64 =

@@ -38,6 +38,7 @@
 #![warn(missing_docs)]
 
 pub mod bdf;
+pub(crate) mod collocation;
 pub mod core;
 pub mod error;
 pub mod gauss;

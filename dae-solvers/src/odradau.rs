@@ -64,8 +64,9 @@
 //! );
 //! ```
 
-use crate::core::matrix::ProjectedStages;
+use crate::collocation::{self, StageSolveKind};
 use crate::core::policy;
+use crate::radau5::tableau::RadauIIA;
 use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 
@@ -91,6 +92,6 @@ impl Solver for OdRadau {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        crate::radau5::integrator::<ProjectedStages>(problem, options)
+        collocation::integrator::<RadauIIA>(problem, options, StageSolveKind::LeastSquares)
     }
 }

@@ -144,21 +144,14 @@
 //! The error norm is the one of `core::weights`, with the index-scaled
 //! weights `h^(k_i−1)/sc_i`.
 
-mod control;
-mod kernels;
-mod stages;
-mod stagger;
-mod step;
 pub(crate) mod tableau;
 
-use crate::core::block::Block;
-use crate::core::matrix::{SquareStages, StageSystems};
+use crate::collocation::{self, StageSolveKind};
 use crate::core::policy;
 use crate::options::Options;
 use crate::{NotApplicable, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
-use step::Integrator;
-use tableau::{Collocation, RadauIIA};
+use tableau::RadauIIA;
 
 /// 3-stage Radau IIA of order 5 (see the [module documentation](self)).
 ///
@@ -199,61 +192,19 @@ impl Solver for Radau5 {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        integrator::<Block<SquareStages>>(problem, options)
+        collocation::integrator::<RadauIIA>(problem, options, StageSolveKind::Square)
     }
 }
 
-/// The stepper of Radau IIA 5, the stage systems solved by `S` (square LU,
-/// or least squares for [`crate::odradau`]); the caller has checked that
-/// the solver accepts the formulation.
-pub(crate) fn integrator<'a, S: StageSystems + 'a>(
-    problem: &Problem<'a>,
-    options: &'a Options,
-) -> Result<crate::Integrator<'a>, SolveError> {
-    collocate::<S, RadauIIA>(problem, options)
-}
-
-/// The stepper of the three-stage collocation method `K` (Radau IIA or
-/// Gauss–Legendre), the stage systems solved by `S`, started at `t₀`.
-pub(crate) fn collocate<'a, S: StageSystems + 'a, K: Collocation>(
-    problem: &Problem<'a>,
-    options: &'a Options,
-) -> Result<crate::Integrator<'a>, SolveError> {
-    problem.check(problem.system.info().unknowns(), options)?;
-    let sys = crate::core::eliminate::algebraic_rows(problem);
-    let mut integrator = Integrator::<S, K>::new(sys, problem, options);
-    integrator.start()?;
-    Ok(crate::Integrator::new(
-        Box::new(integrator),
-        problem,
-        options,
-    ))
-}
-
 // ---------------------------------------------------------------------------
-// Tuning: RADAU5's defaults
+// Tuning: RADAU5's defaults (the engine's own are in `collocation`)
 // ---------------------------------------------------------------------------
 
 /// Maximal Newton iterations per step (`NIT`).
 const NIT: usize = 7;
-/// Maximal Newton iterations per step with a fixed step size, which cannot
-/// be reduced instead.
-const NIT_FIXED: usize = 30;
-/// Safety factor of the step-size controller.
-const SAFE: f64 = 0.9;
 /// Recompute the Jacobian only when the contraction factor exceeded this
 /// (`THET`).
 const THET: f64 = 0.001;
-/// Keep the step size and the factorisation when `h_new/h ∈ [QUOT1, QUOT2]`.
-const QUOT1: f64 = 1.0;
-const QUOT2: f64 = 1.2;
-/// Step ratios are bounded by `1/FACL ≤ h_new/h ≤ 1/FACR`.
-const FACL: f64 = 5.0;
-const FACR: f64 = 0.125;
-/// Unit round-off.
-const UROUND: f64 = f64::EPSILON * 0.5;
-/// Initial step when [`Options::h0`] is not given (RADAU5's default).
-const H0_DEFAULT: f64 = 1e-6;
 
 // ---------------------------------------------------------------------------
 // The tolerance map (see the module documentation)
@@ -268,31 +219,22 @@ const TOL_FLOOR: f64 = 100.0 * f64::EPSILON;
 
 /// From this tolerance down (the smallest relative tolerance, or absolute
 /// where all relative ones are zero) the integration is run for the last
-/// digits: the updates of `t` and `y` are summed with compensation (a
-/// rounding of `u|y|` per step is no longer small against the error after
-/// 10⁵–10⁷ steps), and the Newton iteration stops at [`TIGHT_NEWTON`] times
-/// RADAU5's bound (an iteration stopped at RADAU5's bound leaves an error
-/// of one sign step after step). Measured in BENCHMARKS.md §6b; above it
-/// nothing changes, bit for bit.
-pub const TIGHT_TOL: f64 = 1e-10;
+/// digits: the updates of `t` and `y` are summed with compensation, and
+/// RADAU5's Newton bound is multiplied by [`TIGHT_NEWTON`] (the collocation
+/// engine's rule, shared with [`crate::gauss`] and [`crate::odradau`]).
+/// Measured in BENCHMARKS.md §6b; above it nothing changes, bit for bit.
+///
+/// ```
+/// assert!(dae_solvers::radau5::TIGHT_TOL <= 1e-10);
+/// ```
+pub const TIGHT_TOL: f64 = collocation::TIGHT_TOL;
 
 /// The factor on RADAU5's Newton bound at tight tolerances.
-pub const TIGHT_NEWTON: f64 = 0.01;
-
-/// The smallest relative tolerance, or the smallest absolute one where all
-/// relative tolerances are zero: the one number RADAU5's rules of thumb
-/// (the Newton bound, [`TIGHT_TOL`]) read.
-pub(crate) fn smallest_tolerance(
-    rtol: impl Iterator<Item = f64>,
-    atol: impl Iterator<Item = f64>,
-) -> f64 {
-    let r = rtol.fold(f64::INFINITY, f64::min);
-    if r > 0.0 {
-        r
-    } else {
-        atol.fold(f64::INFINITY, f64::min)
-    }
-}
+///
+/// ```
+/// assert!(dae_solvers::radau5::TIGHT_NEWTON < 1.0);
+/// ```
+pub const TIGHT_NEWTON: f64 = collocation::TIGHT_NEWTON;
 
 /// The tolerance the error test uses for a user tolerance `tol > 0`:
 /// `tol (τ/tol)^(1/5)` above `τ = 10^(−12.5)`, `tol` itself below, and
@@ -309,7 +251,7 @@ pub fn internal_tolerance(tol: f64) -> f64 {
 /// The factor `internal_tolerance(rtol_i)/rtol_i` applied to `rtol_i` and
 /// `atol_i` (as RADAU5 scales `ATOL` with `RTOL`); a purely absolute
 /// tolerance (`rtol_i = 0`) is tightened like a relative one but not floored.
-fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
+pub(crate) fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
     if rtol > 0.0 {
         internal_tolerance(rtol) / rtol
     } else if atol > TOL_ANCHOR {

@@ -1,101 +1,31 @@
-//! The three-stage collocation methods on RADAU5's linear algebra: the
-//! [`Collocation`] trait a tableau implements (its coefficients, the
-//! transformation of `A⁻¹`, the embedded error estimate, the end value and
-//! the collocation polynomial of a step in Newton form, which gives the
-//! dense output and the starting values of the next Newton iteration), and
-//! Radau IIA (s = 3), the tableau of [`crate::radau5`]. The symmetric
-//! Gauss–Legendre tableau of [`crate::gauss`] is the other implementation.
+//! Radau IIA (s = 3), the tableau of [`crate::radau5`] and
+//! [`crate::odradau`], as the collocation engine's values
+//! ([`crate::collocation`]).
 
-/// A three-stage collocation method whose `A⁻¹` has one real eigenvalue `γ`
-/// and a complex pair `α ± iβ`, so that RADAU5's transformed Newton
-/// iteration (one real and one complex system of size `N`) applies.
-///
-/// The collocation polynomial of a step is stored in Newton form on four
-/// nodes `0, ν₁, ν₂, ν₃` of `s = (t − t_{n+1})/h` (the end point first,
-/// where it is `0` relative to the end value), as `cont = [y_{n+1}, d₁, d₂,
-/// d₃]`.
-pub(crate) trait Collocation: 'static {
-    /// Nodes `c_i`.
-    const C: [f64; 3];
-    /// `A⁻¹`: the stage derivatives are `(1/h) A⁻¹ Z`.
-    const AINV: [[f64; 3]; 3];
-    /// Real eigenvalue of `A⁻¹`.
-    const GAMMA: f64;
-    /// Complex pair `α ± iβ` of eigenvalues of `A⁻¹`.
-    const ALPHA: f64;
-    const BETA: f64;
-    /// `T` with `T⁻¹ A⁻¹ T = diag(γ, [[α, −β], [β, α]])`, normalised so
-    /// that `T₃₂ = 1` and `T₃₃ = 0` (the kernels rely on it).
-    const T: [[f64; 3]; 3];
-    /// `T⁻¹`.
-    const TI: [[f64; 3]; 3];
-    /// `d_i = e_i/γ₀` of the embedded error estimate `err = (γ/h E₀ −
-    /// J)⁻¹ [f(t_n, y_n) + E (1/h) Σ d_i Z_i]`, `γ₀ = 1/γ` (HW IV.8
-    /// (8.19)–(8.20)).
-    const DD: [f64; 3];
-    /// `y_{n+1} = y_n + Σ END_i Z_i` (`END = bᵀA⁻¹`); `None` for a stiffly
-    /// accurate method, where it is `y_n + Z_3`.
-    const END: Option<[f64; 3]>;
-    /// The step size is held constant until the error test asks for a
-    /// change (see `control::Hold`); otherwise RADAU5's
-    /// controller proposes every step.
-    const QUASI_CONSTANT: bool;
-    /// Newton iterations allowed per step attempt (RADAU5's `NIT`), also
-    /// the reference of the controller's safety factor.
-    const MAX_NEWTON: usize;
-    /// The Jacobian is kept for the next step while the observed
-    /// contraction factor stays at or below this (RADAU5's `THET`).
-    const THET: f64;
-    /// A slowly converging Newton iteration is abandoned early for a
-    /// shorter step (RADAU5); otherwise it runs to `MAX_NEWTON`.
-    const SLOW_EXIT: bool;
-    /// `None`: RADAU5's Newton bound, relative to the internal tolerance.
-    /// `Some(units)`: the iteration runs towards round-off, its bound
-    /// `units` units of round-off whatever the tolerance (see
-    /// [`crate::gauss`]).
-    const NEWTON_ROUND_OFF: Option<f64>;
-    /// With `NEWTON_ROUND_OFF`: the iteration may stop at `NEWTON_DRIFT ·
-    /// tol · (h/T)²` (`T` the horizon) when that is above round-off.
-    const NEWTON_DRIFT: f64;
-
-    /// The factor applied to `rtol_i` and `atol_i` (the tolerance map).
-    fn tolerance_factor(rtol: f64, atol: f64) -> f64;
-
-    /// Divided differences `d₁, d₂, d₃` of the collocation polynomial
-    /// relative to its end value, from the stage increments.
-    fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3];
-
-    /// The polynomial minus its end value at `s`.
-    fn polynomial_increment(d: &[f64; 3], s: f64) -> f64;
-
-    /// `h y'(t_{n+1})` from the stage increments and the divided
-    /// differences.
-    fn end_slope(z: [f64; 3], d: &[f64; 3]) -> f64;
-}
+use crate::collocation::tableau::{Collocation, EndPoint, NewtonStop, Policy, StepRule, Tableau};
 
 /// Radau IIA of order 5 (RADAU5's coefficients).
 pub(crate) struct RadauIIA;
 
 impl Collocation for RadauIIA {
-    const C: [f64; 3] = C;
-    const AINV: [[f64; 3]; 3] = AINV;
-    const GAMMA: f64 = GAMMA;
-    const ALPHA: f64 = ALPHA;
-    const BETA: f64 = BETA;
-    const T: [[f64; 3]; 3] = T;
-    const TI: [[f64; 3]; 3] = TI;
-    const DD: [f64; 3] = DD;
-    const END: Option<[f64; 3]> = None;
-    const QUASI_CONSTANT: bool = false;
-    const MAX_NEWTON: usize = super::NIT;
-    const THET: f64 = super::THET;
-    const SLOW_EXIT: bool = true;
-    const NEWTON_ROUND_OFF: Option<f64> = None;
-    const NEWTON_DRIFT: f64 = 0.0;
-
-    fn tolerance_factor(rtol: f64, atol: f64) -> f64 {
-        super::tolerance_factor(rtol, atol)
-    }
+    const TABLEAU: Tableau = Tableau {
+        c: C,
+        ainv: AINV,
+        gamma: GAMMA,
+        alpha: ALPHA,
+        beta: BETA,
+        t: T,
+        ti: TI,
+        dd: DD,
+        end: EndPoint::LastStage,
+    };
+    const POLICY: Policy = Policy {
+        step: StepRule::Proposed,
+        newton: NewtonStop::Tolerance,
+        max_newton: super::NIT,
+        thet: super::THET,
+        tolerance_factor: super::tolerance_factor,
+    };
 
     #[inline(always)]
     fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3] {
@@ -161,23 +91,6 @@ const TI: [[f64; 3]; 3] = [
 /// `(−(13 + 7√6)/3, (−13 + 7√6)/3, −1/3)`.
 const DD: [f64; 3] = [-10.048809399827416, 1.382142733160749, -1.0 / 3.0];
 
-/// The collocation polynomial `cont` (`4N`) of the step `[t − h, t]` at
-/// `tau` into `out`.
-pub(super) fn dense<K: Collocation>(
-    n: usize,
-    cont: &[f64],
-    tau: f64,
-    t: f64,
-    h: f64,
-    out: &mut [f64],
-) {
-    let s = (tau - t) / h;
-    for k in 0..n {
-        let d = [cont[n + k], cont[2 * n + k], cont[3 * n + k]];
-        out[k] = cont[k] + K::polynomial_increment(&d, s);
-    }
-}
-
 /// Divided differences `d₁, d₂, d₃` of the collocation polynomial of a step,
 /// relative to its end value, on the nodes `s = 0, c₂ − 1, c₁ − 1, −1` of
 /// `s = (t − t_{n+1})/h`, where it takes the values `0, Z₂ − Z₃, Z₁ − Z₃,
@@ -194,59 +107,6 @@ fn divided_differences(z1: f64, z2: f64, z3: f64) -> [f64; 3] {
 /// its end value.
 fn polynomial_increment(d: &[f64; 3], s: f64) -> f64 {
     s * (d[0] + (s - C2M1) * (d[1] + (s - C1M1) * d[2]))
-}
-
-/// What every tableau's constants must satisfy, for the tests of each.
-#[cfg(test)]
-pub(crate) mod check {
-    use super::Collocation;
-
-    /// A 3 × 3 matrix.
-    pub(crate) type M3 = [[f64; 3]; 3];
-
-    fn mul(a: &M3, b: &M3) -> M3 {
-        let mut c = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-            }
-        }
-        c
-    }
-
-    fn assert_close(a: &M3, b: &M3, tol: f64) {
-        for i in 0..3 {
-            for j in 0..3 {
-                assert!(
-                    (a[i][j] - b[i][j]).abs() < tol,
-                    "({i},{j}): {} vs {}",
-                    a[i][j],
-                    b[i][j]
-                );
-            }
-        }
-    }
-
-    /// `K`'s constants against its matrix `a`: `AINV` inverts it, `T` and
-    /// `TI` are inverses, `T⁻¹ A⁻¹ T = diag(γ, [[α, −β], [β, α]])`, the
-    /// row sums of `a` are the nodes, and `T₃₂ = 1`, `T₃₃ = 0` (the
-    /// kernels' normalisation).
-    pub(crate) fn transformation<K: Collocation>(a: &M3) {
-        let i3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-        assert_close(&mul(a, &K::AINV), &i3, 1e-14);
-        assert_close(&mul(&K::T, &K::TI), &i3, 1e-14);
-        let lambda = mul(&mul(&K::TI, &K::AINV), &K::T);
-        let (g, al, be) = (K::GAMMA, K::ALPHA, K::BETA);
-        assert_close(
-            &lambda,
-            &[[g, 0.0, 0.0], [0.0, al, -be], [0.0, be, al]],
-            1e-13,
-        );
-        for (row, c) in a.iter().zip(K::C) {
-            assert!((row.iter().sum::<f64>() - c).abs() < 1e-15);
-        }
-        assert_eq!((K::T[2][1], K::T[2][2]), (1.0, 0.0));
-    }
 }
 
 #[cfg(test)]
@@ -272,7 +132,7 @@ mod tests {
 
     #[test]
     fn coefficients_are_consistent() {
-        check::transformation::<RadauIIA>(&radau_a());
+        crate::collocation::tableau::check::transformation::<RadauIIA>(&radau_a());
         assert!((C1 - (4.0 - 6f64.sqrt()) / 10.0).abs() < 1e-16);
         assert!((DD[0] + (13.0 + 7.0 * 6f64.sqrt()) / 3.0).abs() < 1e-14);
         assert!((DD[1] - (-13.0 + 7.0 * 6f64.sqrt()) / 3.0).abs() < 1e-14);

@@ -36,12 +36,13 @@
 //! The error estimate is the method's over every component in the test;
 //! with the sensitivities out of it, only the state's part is computed.
 
+use super::solve::StageSolveKind;
 use super::stages::Newton;
 use super::step::Integrator;
-use super::tableau::Collocation;
+use super::tableau::{Collocation, NewtonStop};
 use super::UROUND;
 use crate::core::block::Part;
-use crate::core::matrix::{Matrix, StageSystems};
+use crate::core::matrix::Matrix;
 use crate::core::newton::{Contraction, Verdict};
 use crate::core::weights::Weights;
 use crate::linalg::with_size;
@@ -81,21 +82,22 @@ pub(super) enum Phase {
 
 impl Stagger {
     /// The staggered corrector of `sys` for a method `K` whose stage
-    /// systems `S` are square, when `sys` has blocks, offers its first
+    /// solve is square, when `sys` has blocks, offers its first
     /// block, and has a constant `E`; `None` otherwise (the simultaneous
     /// corrector then runs). The contraction monitor is the caller's to
     /// configure ([`Integrator::new`]).
-    pub(super) fn of<S: StageSystems, K: Collocation>(
+    pub(super) fn of<K: Collocation>(
         sys: &dyn DaeSystem,
         options: &Options,
+        solve: StageSolveKind,
         dense: bool,
     ) -> Option<Self> {
         let info = sys.info();
         let n = info.unknowns();
         let b: Blocks = sys.blocks()?;
         let first = sys.first_block()?;
-        let usable = !S::LEAST_SQUARES
-            && K::END.is_none()
+        let usable = solve == StageSolveKind::Square
+            && !K::TABLEAU.end.projected()
             && dense
             && info.constant_leading
             && b.size > 0
@@ -107,7 +109,8 @@ impl Stagger {
         if !usable {
             return None;
         }
-        let factor = |i: usize| K::tolerance_factor(options.tol.rtol(i), options.tol.atol(i));
+        let factor =
+            |i: usize| (K::POLICY.tolerance_factor)(options.tol.rtol(i), options.tol.atol(i));
         let powers: Vec<i32> = info
             .variables
             .iter()
@@ -131,7 +134,7 @@ impl Stagger {
             lin: std::array::from_fn(|_| DMatrix::zeros(b.size, b.size + b.count - 1)),
             newton: Contraction::new(
                 crate::core::newton::Rule::Radau5 { slow_exit: false },
-                K::MAX_NEWTON,
+                K::POLICY.max_newton,
                 1.0,
                 1.0,
             ),
@@ -154,7 +157,7 @@ impl Stagger {
     }
 }
 
-impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
+impl<K: Collocation> Integrator<'_, K> {
     /// The staggered corrector of one attempt: the state's stages, then
     /// the sensitivities' (see the [module documentation](self)). The
     /// iterations reported are the state's (they steer the step size as
@@ -194,14 +197,14 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     pub(super) fn iterate(&mut self, t: f64, h: f64, may_shorten: bool, phase: Phase) -> Newton {
         let (n, m) = (self.n, self.m);
         let max_iter = if may_shorten {
-            K::MAX_NEWTON
+            K::POLICY.max_newton
         } else {
             super::NIT_FIXED
         };
         let monitor = self.monitor(phase);
         let eta = monitor.eta.max(UROUND).powf(0.8);
-        monitor.restart(max_iter, eta, K::THET);
-        if K::NEWTON_ROUND_OFF.is_some() {
+        monitor.restart(max_iter, eta, K::POLICY.thet);
+        if matches!(K::POLICY.newton, NewtonStop::RoundOff { .. }) {
             self.newton.kappa = self.newton_floor.max(self.newton_drift * h * h);
         }
         let size = self.w.stagger.as_ref().map_or(n, |st| st.size);
@@ -302,7 +305,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
             // with a first block.
             return;
         };
-        for (i, &ci) in K::C.iter().enumerate() {
+        for (i, &ci) in K::TABLEAU.c.iter().enumerate() {
             first.residual(
                 t + ci * h,
                 &w.ys[i * n..i * n + size],
@@ -323,7 +326,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         };
         super::kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
         let size = st.size;
-        for (k, (&ck, lin)) in K::C.iter().zip(&mut st.lin).enumerate() {
+        for (k, (&ck, lin)) in K::TABLEAU.c.iter().zip(&mut st.lin).enumerate() {
             if !self
                 .sys
                 .first_block_linearisation(t + ck * h, &w.ys[k * n..k * n + size], lin)

@@ -5,7 +5,7 @@
 //! stored stage-major (`Z_1, Z_2, Z_3`, `n` apart); transformed
 //! right-hand sides `m` apart.
 
-use super::tableau::Collocation;
+use super::tableau::{Collocation, EndPoint};
 use crate::linalg::{two_sum, with_size};
 
 /// The stage points: `Y_i = y + Z_i` into `ys`, `Y'_i = (1/h) Σ_j A⁻¹_ij
@@ -38,7 +38,7 @@ fn stage_points_n<K: Collocation>(
     n: usize,
 ) {
     let (z1, z2, z3) = (&z[..n], &z[n..2 * n], &z[2 * n..3 * n]);
-    for (i, a) in K::AINV.iter().enumerate() {
+    for (i, a) in K::TABLEAU.ainv.iter().enumerate() {
         let zi = &z[i * n..(i + 1) * n];
         let (ysi, ydi) = (&mut ys[i * n..(i + 1) * n], &mut yd[i * n..(i + 1) * n]);
         for k in 0..n {
@@ -72,9 +72,9 @@ fn transform_residuals_n<K: Collocation>(res: &[f64], dw: &mut [f64], m: usize) 
     for k in 0..m {
         let (g1, g2, g3) = (g1[k], g2[k], g3[k]);
         check += g1 * 0.0 + g2 * 0.0 + g3 * 0.0;
-        r1[k] = -(K::TI[0][0] * g1 + K::TI[0][1] * g2 + K::TI[0][2] * g3);
-        r2[k] = -(K::TI[1][0] * g1 + K::TI[1][1] * g2 + K::TI[1][2] * g3);
-        r3[k] = -(K::TI[2][0] * g1 + K::TI[2][1] * g2 + K::TI[2][2] * g3);
+        r1[k] = -(K::TABLEAU.ti[0][0] * g1 + K::TABLEAU.ti[0][1] * g2 + K::TABLEAU.ti[0][2] * g3);
+        r2[k] = -(K::TABLEAU.ti[1][0] * g1 + K::TABLEAU.ti[1][1] * g2 + K::TABLEAU.ti[1][2] * g3);
+        r3[k] = -(K::TABLEAU.ti[2][0] * g1 + K::TABLEAU.ti[2][1] * g2 + K::TABLEAU.ti[2][2] * g3);
     }
     check == 0.0
 }
@@ -93,9 +93,9 @@ fn add_increments_n<K: Collocation>(dw: &[f64], m: usize, z: &mut [f64], n: usiz
     let (z1, z2, z3) = (&mut z1[..n], &mut z2[..n], &mut z3[..n]);
     for k in 0..n {
         let (a1, a2, a3) = (a1[k], a2[k], a3[k]);
-        z1[k] += K::T[0][0] * a1 + K::T[0][1] * a2 + K::T[0][2] * a3;
-        z2[k] += K::T[1][0] * a1 + K::T[1][1] * a2 + K::T[1][2] * a3;
-        z3[k] += K::T[2][0] * a1 + a2;
+        z1[k] += K::TABLEAU.t[0][0] * a1 + K::TABLEAU.t[0][1] * a2 + K::TABLEAU.t[0][2] * a3;
+        z2[k] += K::TABLEAU.t[1][0] * a1 + K::TABLEAU.t[1][1] * a2 + K::TABLEAU.t[1][2] * a3;
+        z3[k] += K::TABLEAU.t[2][0] * a1 + a2;
     }
 }
 
@@ -113,7 +113,7 @@ pub(super) fn extrapolate<K: Collocation>(cont: &[f64], ratio: f64, z: &mut [f64
 #[inline(always)]
 fn extrapolate_n<K: Collocation>(cont: &[f64], ratio: f64, z: &mut [f64], n: usize) {
     let (d1, d2, d3) = (&cont[n..2 * n], &cont[2 * n..3 * n], &cont[3 * n..4 * n]);
-    for (i, &ci) in K::C.iter().enumerate() {
+    for (i, &ci) in K::TABLEAU.c.iter().enumerate() {
         let s = ci * ratio;
         let zi = &mut z[i * n..(i + 1) * n];
         for k in 0..n {
@@ -136,7 +136,8 @@ pub(super) fn error_combination<K: Collocation>(z: &[f64], h: f64, out: &mut [f6
 fn error_combination_n<K: Collocation>(z: &[f64], h: f64, out: &mut [f64], n: usize) {
     let (z1, z2, z3) = (&z[..n], &z[n..2 * n], &z[2 * n..3 * n]);
     for k in 0..n {
-        out[k] = (K::DD[0] * z1[k] + K::DD[1] * z2[k] + K::DD[2] * z3[k]) / h;
+        out[k] =
+            (K::TABLEAU.dd[0] * z1[k] + K::TABLEAU.dd[1] * z2[k] + K::TABLEAU.dd[2] * z3[k]) / h;
     }
 }
 
@@ -196,9 +197,9 @@ fn advance_n<K: Collocation, const COMPENSATED: bool>(
         let (z1, z2, z3) = (z1[k], z2[k], z3[k]);
         // The increment of the step: `Z_3` for a stiffly accurate method,
         // `Σ END_i Z_i` otherwise.
-        let dy = match K::END {
-            None => z3,
-            Some(e) => e[0] * z1 + e[1] * z2 + e[2] * z3,
+        let dy = match K::TABLEAU.end {
+            EndPoint::LastStage => z3,
+            EndPoint::Projected(e) => e[0] * z1 + e[1] * z2 + e[2] * z3,
         };
         if COMPENSATED {
             (y[k], y_lo[k]) = two_sum(y[k], dy + y_lo[k]);

@@ -3,15 +3,15 @@
 //! retries, and the driver's view of it.
 
 use super::control::{classical_quotient, predictive_quotient, Control, Hold, Next};
+use super::solve::StageSolveKind;
 use super::stages::{Newton, Work};
 use super::stagger::rhs_for_error;
-use super::tableau::{dense, Collocation};
+use super::tableau::{dense, Collocation, NewtonStop, StepRule};
 use super::{smallest_tolerance, H0_DEFAULT, TIGHT_NEWTON, TIGHT_TOL, UROUND};
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
-use crate::core::matrix::StageSystems;
 use crate::core::newton::{Contraction, Rule, Stall};
 use crate::linalg::{all_finite, two_sum};
 use crate::options::Options;
@@ -21,10 +21,10 @@ use crate::{Problem, SolveError, Stats};
 /// units of round-off.
 const ROUND_OFF: f64 = 1e3;
 
-/// The state of one Radau IIA 5 integration: the formulation, the buffers
+/// The state of one collocation integration: the formulation, the buffers
 /// of the step loop, the work counters, the contraction monitor and the
 /// step-size controller.
-pub(super) struct Integrator<'a, S, K> {
+pub(super) struct Integrator<'a, K> {
     /// The formulation.
     pub(super) sys: Formulation<'a>,
     /// The caller's options.
@@ -40,7 +40,7 @@ pub(super) struct Integrator<'a, S, K> {
     /// `E` does not depend on `y`.
     pub(super) constant_leading: bool,
     /// Every buffer of the step loop.
-    pub(super) w: Work<S>,
+    pub(super) w: Work,
     /// Work counters.
     pub(super) stats: Stats,
     /// Contraction monitor; its `η` is carried from step to step and its
@@ -63,7 +63,7 @@ pub(super) struct Integrator<'a, S, K> {
     pub(super) newton_last: (f64, usize),
 }
 
-impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
+impl<K: Collocation> Method for Integrator<'_, K> {
     fn t(&self) -> f64 {
         self.c.t
     }
@@ -82,7 +82,7 @@ impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
     }
     fn output(&self, tau: f64, out: &mut [f64]) {
         self.dense(tau, out);
-        if K::END.is_some() {
+        if K::TABLEAU.end.projected() {
             self.project_output(tau, out);
         }
     }
@@ -103,7 +103,7 @@ impl<S: StageSystems, K: Collocation> Method for Integrator<'_, S, K> {
     }
 }
 
-impl<S: StageSystems, K: Collocation> Attempts for Integrator<'_, S, K> {
+impl<K: Collocation> Attempts for Integrator<'_, K> {
     fn steps(&mut self) -> &mut Steps {
         &mut self.c.steps
     }
@@ -148,14 +148,19 @@ impl<S: StageSystems, K: Collocation> Attempts for Integrator<'_, S, K> {
 /// is not stiffly accurate).
 const PROJECTION_STEPS: usize = 4;
 
-impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
+impl<'a, K: Collocation> Integrator<'a, K> {
     /// The integrator of `problem` on its formulation `sys` (the problem's,
     /// or a presentation of it) at `t₀`, its buffers allocated; nothing is
     /// evaluated before [`Integrator::start`].
-    pub(super) fn new(sys: Formulation<'a>, problem: &Problem<'_>, options: &'a Options) -> Self {
+    pub(super) fn new(
+        sys: Formulation<'a>,
+        problem: &Problem<'_>,
+        options: &'a Options,
+        solve: StageSolveKind,
+    ) -> Self {
         let info = sys.info();
         let (m, n) = (info.equations(), info.unknowns());
-        let mut w = Work::<S>::new::<K>(&*sys, options);
+        let mut w = Work::new::<K>(&*sys, options, solve);
         w.y.copy_from_slice(problem.y0);
         // RADAU5: fnewt = max(10 u / rtol, min(0.03, rtol^(1/2))), here
         // with the smallest relative tolerance (an absolute one where all
@@ -177,34 +182,38 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         // formulation has no differentiation index (`None`) and gets it.
         let tight_newton = compensated && info.d_index.is_none_or(|k| k < 3);
         let span = problem.t_end - problem.t0;
-        let fnewt = match K::NEWTON_ROUND_OFF {
-            None => {
+        let fnewt = match K::POLICY.newton {
+            NewtonStop::Tolerance => {
                 (10.0 * UROUND / r).max(0.03f64.min(r.sqrt()))
                     * if tight_newton { TIGHT_NEWTON } else { 1.0 }
             }
             // Towards round-off, whatever the tolerance.
-            Some(units) => units * UROUND / r,
+            NewtonStop::RoundOff { units, .. } => units * UROUND / r,
         };
         // The drift bound of a method iterating towards round-off: an
         // error of one sign per step, `δ`, grows over `N = T/h` steps into
         // a phase error of order `N² δ`; `δ ≤ DRIFT · tol (h/T)²` keeps it
         // at a fraction of the tolerance.
-        let newton_drift = match K::NEWTON_ROUND_OFF {
-            None => 0.0,
-            Some(_) => K::NEWTON_DRIFT * user / r / (span * span),
+        let newton_drift = match K::POLICY.newton {
+            NewtonStop::Tolerance => 0.0,
+            NewtonStop::RoundOff { drift, .. } => drift * user / r / (span * span),
         };
         let rule = Rule::Radau5 {
-            slow_exit: K::SLOW_EXIT && options.fixed_step.is_none(),
+            slow_exit: K::POLICY.newton.slow_exit() && options.fixed_step.is_none(),
         };
-        let mut newton = Contraction::new(rule, K::MAX_NEWTON, fnewt, 1.0);
+        let mut newton = Contraction::new(rule, K::POLICY.max_newton, fnewt, 1.0);
         if let Some(st) = &mut w.stagger {
             // The sensitivities' iteration: the state's bound, without the
             // early exit (their equations are linear: an iteration that
             // contracts converges, and each costs products only).
-            st.newton =
-                Contraction::new(Rule::Radau5 { slow_exit: false }, K::MAX_NEWTON, fnewt, 1.0);
+            st.newton = Contraction::new(
+                Rule::Radau5 { slow_exit: false },
+                K::POLICY.max_newton,
+                fnewt,
+                1.0,
+            );
         }
-        if K::NEWTON_ROUND_OFF.is_some() {
+        if matches!(K::POLICY.newton, NewtonStop::RoundOff { .. }) {
             // Iterating towards round-off: stagnation counts as convergence
             // only at a few hundred units of round-off.
             newton.floor = ROUND_OFF * UROUND / r;
@@ -358,7 +367,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
         if retry.is_none() && fixed.is_none() {
             err = self.error_norm(t, h, self.c.first || self.c.reject);
             if err.is_finite() {
-                h_new = h / classical_quotient(err, newt, K::MAX_NEWTON);
+                h_new = h / classical_quotient(err, newt, K::POLICY.max_newton);
             } else {
                 non_finite = true;
                 retry = Some(Retry::Policy);
@@ -382,7 +391,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 c.next = Next::Jacobian;
                 retry = Retry::Refresh;
             } else {
-                if K::QUASI_CONSTANT {
+                if matches!(K::POLICY.step, StepRule::Held) {
                     c.hold.rejected();
                 }
                 c.reject = true;
@@ -400,7 +409,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             // ---- rejected by the error test ----
             c.reject = true;
             let h = if c.first { 0.1 * h } else { h_new };
-            if K::QUASI_CONSTANT {
+            if matches!(K::POLICY.step, StepRule::Held) {
                 c.hold.rejected();
             }
             c.next = c.after_failure();
@@ -415,7 +424,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             }
             c.h_acc = h;
             c.err_acc = err.max(1e-2);
-            if K::QUASI_CONSTANT {
+            if matches!(K::POLICY.step, StepRule::Held) {
                 h_new = c.hold.accepted(h, err, h_new);
             }
         }
@@ -438,7 +447,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
                 what: "solution",
             });
         }
-        if K::END.is_some() {
+        if K::TABLEAU.end.projected() {
             // Not stiffly accurate: the end point is made consistent,
             // keeping the differential part of the step just taken:
             // `E(y_n)`, not `E(y_{n+1})`, where the rows a formulation
@@ -468,7 +477,7 @@ impl<'a, S: StageSystems, K: Collocation> Integrator<'a, S, K> {
             self.c.done = true;
             return Ok(Outcome::Accepted);
         }
-        if K::END.is_none() {
+        if !K::TABLEAU.end.projected() {
             self.evaluate_at_step_point(t, false)?;
         }
         self.next_step(h_new);

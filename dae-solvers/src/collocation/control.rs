@@ -6,7 +6,6 @@ use super::step::Integrator;
 use super::tableau::Collocation;
 use super::{FACL, FACR, QUOT1, QUOT2, SAFE};
 use crate::core::attempt::Steps;
-use crate::core::matrix::StageSystems;
 use crate::core::newton::Stall;
 
 /// What the step loop does next (RADAU5's labels 10, 20, 30).
@@ -70,7 +69,7 @@ impl Control {
     }
 }
 
-/// The step-size rule of a symmetric method ([`Collocation::QUASI_CONSTANT`]):
+/// The step-size rule of a symmetric method ([`super::tableau::StepRule::Held`]):
 /// the step is held constant and changed only when it must be.
 ///
 /// A symmetric method on a reversible problem keeps the error of periodic
@@ -178,17 +177,17 @@ impl Hold {
     }
 }
 
-impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
+impl<K: Collocation> Integrator<'_, K> {
     /// Size of the next step after one accepted with proposal `h_new`, and
     /// whether the factorisation (or the Jacobian) can be kept.
     pub(super) fn next_step(&mut self, mut h_new: f64) {
-        let theta = if K::SLOW_EXIT {
+        let theta = if K::POLICY.newton.slow_exit() {
             self.newton.theta
         } else {
             // Iterated towards round-off: the last ratios are noise.
             self.newton.theta_first
         };
-        let small_theta = theta <= K::THET;
+        let small_theta = theta <= K::POLICY.thet;
         let c = &mut self.c;
         let (t, h) = (c.t, c.h);
         if let Some(hf) = c.fixed {

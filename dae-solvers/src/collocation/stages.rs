@@ -5,11 +5,12 @@
 //! accepted step.
 
 use super::kernels;
+use super::solve::{StageSolve, StageSolveKind};
 use super::stagger::{rhs_for_error, Phase, Stagger};
 use super::step::Integrator;
 use super::tableau::Collocation;
 use crate::core::block::{self, Part};
-use crate::core::matrix::{Matrix, Rows, StageSystems, Structure};
+use crate::core::matrix::{Matrix, Rows, Structure};
 use crate::core::weights::Weights;
 use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
 use crate::options::Options;
@@ -29,7 +30,7 @@ const OUTPUT_PROJECTION_FLOOR: f64 = 1e-3;
 
 /// Every buffer the step loop touches, allocated once (`N` unknowns, `M`
 /// equations).
-pub(super) struct Work<S> {
+pub(super) struct Work {
     /// `y_n`.
     pub(super) y: Vec<f64>,
     /// Rounding error of `y_n` (compensated summation at tight
@@ -81,7 +82,7 @@ pub(super) struct Work<S> {
     /// part; unused with a constant `E`).
     pub(super) e_step: DMatrix<f64>,
     /// `γ/h E₀ − J` and `(α + iβ)/h E₀ − J`, factorised.
-    pub(super) stages: S,
+    pub(super) stages: StageSolve,
     /// The algebraic rows (constraint rows whose row of `E` is zero at
     /// `t₀`), for the end-point projection of a method that is not
     /// stiffly accurate; empty when there is none to make.
@@ -113,10 +114,15 @@ pub(super) struct OutputScratch {
     pub(super) residual_evals: usize,
 }
 
-impl<S: StageSystems> Work<S> {
-    /// The buffers for `sys`, with the error weights of `options` (the
-    /// tolerance map, and the index of each unknown for the scaling).
-    pub(super) fn new<K: Collocation>(sys: &dyn DaeSystem, options: &Options) -> Self {
+impl Work {
+    /// The buffers for `sys` with the stage solve `solve`, with the error
+    /// weights of `options` (the tolerance map, and the index of each
+    /// unknown for the scaling).
+    pub(super) fn new<K: Collocation>(
+        sys: &dyn DaeSystem,
+        options: &Options,
+        solve: StageSolveKind,
+    ) -> Self {
         let info = sys.info();
         let blocks = sys.blocks();
         let (m, n) = (info.equations(), info.unknowns());
@@ -125,7 +131,7 @@ impl<S: StageSystems> Work<S> {
         // Compressed `J` and `E` for square stage systems of a stiffly
         // accurate method (the end-point projection of the others, and
         // the least-squares systems, read them dense).
-        let structure = if S::LEAST_SQUARES || K::END.is_some() {
+        let structure = if solve == StageSolveKind::LeastSquares || K::TABLEAU.end.projected() {
             None
         } else {
             Structure::of(sys)
@@ -143,7 +149,7 @@ impl<S: StageSystems> Work<S> {
             yp: v(n),
             weights: Weights::new(
                 &options.tol,
-                |i| K::tolerance_factor(options.tol.rtol(i), options.tol.atol(i)),
+                |i| (K::POLICY.tolerance_factor)(options.tol.rtol(i), options.tol.atol(i)),
                 block::in_error_test(n, blocks),
                 info.variables
                     .iter()
@@ -160,28 +166,31 @@ impl<S: StageSystems> Work<S> {
             ljac: matrix(),
             e_jac: matrix(),
             e_n: matrix(),
-            e_step: if K::END.is_some() {
+            e_step: if K::TABLEAU.end.projected() {
                 mat()
             } else {
                 DMatrix::zeros(0, 0)
             },
-            stages: S::with_blocks(m, n, blocks),
-            stagger: Stagger::of::<S, K>(sys, options, structure.is_none()),
+            stages: StageSolve::new(solve, m, n, blocks),
+            stagger: Stagger::of::<K>(sys, options, solve, structure.is_none()),
             algebraic: Vec::new(),
-            projection: DenseLu::new(if K::END.is_some() { n } else { 0 }, Pivoting::Checked),
+            projection: DenseLu::new(
+                if K::TABLEAU.end.projected() { n } else { 0 },
+                Pivoting::Checked,
+            ),
             algebraic_unknowns: Vec::new(),
             projection_small: DenseLu::new(0, Pivoting::Checked),
-            delta: v(if K::END.is_some() { n } else { 0 }),
+            delta: v(if K::TABLEAU.end.projected() { n } else { 0 }),
             output: RefCell::new(OutputScratch {
-                f: v(if K::END.is_some() { m } else { 0 }),
-                delta: v(if K::END.is_some() { n } else { 0 }),
+                f: v(if K::TABLEAU.end.projected() { m } else { 0 }),
+                delta: v(if K::TABLEAU.end.projected() { n } else { 0 }),
                 residual_evals: 0,
             }),
         }
     }
 }
 
-impl<S> Work<S> {
+impl Work {
     /// Add the end-point correction `d` to `y_k` (with compensation at
     /// tight tolerances); the dense output ends at the corrected value.
     fn correct(&mut self, k: usize, d: f64, compensated: bool) {
@@ -208,7 +217,7 @@ fn check_projection(delta: &[f64], t: f64) -> Result<(), SolveError> {
 
 /// The error estimate's real solve: every block, or one part of them
 /// ([`Integrator::error_part`]).
-fn solve_error<S: StageSystems>(stages: &mut S, err: &mut [f64], part: Option<Part>) {
+fn solve_error(stages: &mut StageSolve, err: &mut [f64], part: Option<Part>) {
     match part {
         None => stages.solve_real(err),
         Some(part) => stages.solve_real_part(err, part),
@@ -227,7 +236,7 @@ pub(super) enum Newton {
     NonFinite(usize),
 }
 
-impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
+impl<K: Collocation> Integrator<'_, K> {
     /// `J = ∂f/∂y − ∂(E z)/∂y` and `E₀` at `(t, y_n)` (`E₀` is `E(t_n, y_n)`
     /// from the step point's evaluation).
     pub(super) fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
@@ -264,12 +273,13 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         } else {
             &w.e_jac
         };
-        if S::LEAST_SQUARES {
+        if w.stages.least_squares() {
             w.weights.update_scaled(&w.y, h);
             w.rows.update(e0.dense(), w.weights.get());
         }
-        w.stages
-            .factor(e0, &w.jac, K::GAMMA / h, K::ALPHA / h, K::BETA / h, &w.rows)
+        let k = &K::TABLEAU;
+        let shifts = [k.gamma / h, k.alpha / h, k.beta / h];
+        w.stages.factor(e0, &w.jac, shifts, &w.rows)
     }
 
     /// Zero on the first step, otherwise the last collocation polynomial
@@ -290,7 +300,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
         let w = &mut self.w;
         let n = self.n;
         kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
-        for (i, &ci) in K::C.iter().enumerate() {
+        for (i, &ci) in K::TABLEAU.c.iter().enumerate() {
             self.sys.residual(
                 t + ci * h,
                 &w.ys[i * n..(i + 1) * n],
@@ -362,7 +372,7 @@ impl<S: StageSystems, K: Collocation> Integrator<'_, S, K> {
     /// ([`NotApplicable::AlgebraicConditionsNotRows`]) rather than failing
     /// at its first step.
     pub(super) fn find_algebraic_rows(&mut self, info: &FormulationInfo) -> Result<(), SolveError> {
-        if K::END.is_none() || S::LEAST_SQUARES {
+        if !K::TABLEAU.end.projected() || self.w.stages.least_squares() {
             return Ok(());
         }
         let e = self.w.e_n.dense();
