@@ -16,9 +16,9 @@
 //!   `d/dt (2xv + 2yw) = 2v² + 2w² + …` are decided by structural equality.
 //!   Larger products stay factored: expansion is bounded and never blows up
 //!   on user input;
-//! * a *linear form* — a sum of at least two terms, each a number or a
-//!   rational multiple of a single symbol, such as `x₂ − x₁` or `x − 1` — is
-//!   never expanded as a factor of a product or as the base of an integer
+//! * a *linear form in the unknowns* — a sum of at least two terms, each a
+//!   rational multiple of one unknown, such as `x₂ − x₁` (not `x − 1` or
+//!   `x − p` with a parameter `p`, which are distributed) — is never expanded as a factor of a product or as the base of an integer
 //!   power: `(x₂ − x₁)²` and `λ (x₂ − x₁)` stay as written (see
 //!   [`is_linear_form`] for why), with the base normalised (content 1, first
 //!   coefficient positive) so that `(x₁ − x₂)²` and `(2x₂ − 2x₁)²/4` are one
@@ -1285,9 +1285,9 @@ fn distribute(a: &[(Q, Expr)], b: &Expr) -> Vec<(Q, Expr)> {
     terms
 }
 
-/// Whether `e` is a linear form: a sum of at least two terms, each a number
-/// or a rational multiple of a single symbol (`x₂ − x₁`, `x − 1`,
-/// `2u − v + 3`).
+/// Whether `e` is a linear form in the unknowns: a sum of at least two
+/// terms, each a rational multiple of one unknown `y_i` (`x₂ − x₁`,
+/// `2u − v`, `λ₁ + λ₃ + λ₅`), with no constant, parameter, time or `der()`.
 ///
 /// Such a sum is kept whole as a factor of a product and as the base of an
 /// integer power, instead of being distributed: the form a model writes,
@@ -1301,13 +1301,25 @@ fn distribute(a: &[(Q, Expr)], b: &Expr) -> Vec<(Q, Expr)> {
 /// `2u₂(x₂ − x₁) − 2u₁(x₂ − x₁) + …`, whose terms are of the size of the
 /// velocities, not of the coordinates times the velocities.
 ///
-/// What this gives up: a polynomial identity that needs a linear form
-/// multiplied out (`(x + 1)(x − 1) = x² − 1`, `λ(x₂ − x₁) = λx₂ − λx₁`) is
-/// no longer decided by structural equality. The identities the derivation
-/// relies on — the cancellations of monomials after substituting a
-/// dynamics, as in the pendulum's `d/dt (2xu + 2yv)` — are still decided:
-/// a product with a sum that is not a linear form is distributed as
-/// before, the linear forms staying factors of every term.
+/// Only unknowns: a sum holding a number, a parameter or time (`x − 1`,
+/// `e − eₐ`, `η + 1`) is distributed as before. The accuracy the factored
+/// form buys is that of a difference of two states that grow together (the
+/// chain's coordinates), and keeping the other sums was measured to cost (BENCHMARKS §14,
+/// "Linear forms kept factored, restricted to the unknowns"): Andrews'
+/// squeezer writes `m₆ u (z_f − f_a) ω̈ sin ω` with parameters `z_f`, `f_a`,
+/// and kept factored there its `mex0` rows stop `radau5` at 1e-10 on a
+/// Newton stall of `ω̈` (`tests/mex0.rs`); and a model mixing `η y₂` with
+/// `(1 + η) y₂`, as Gear–Hsu–Petzold does, no longer cancels `η y₂` in
+/// its hidden constraint.
+///
+/// What this gives up: a polynomial identity that needs a linear form in
+/// the unknowns multiplied out (`(x + y)(x − y) = x² − y²`,
+/// `λ(x₂ − x₁) = λx₂ − λx₁`) is no longer decided by structural equality.
+/// The identities the derivation relies on — the cancellations of
+/// monomials after substituting a dynamics, as in the pendulum's
+/// `d/dt (2xu + 2yv)` — are still decided: a product with a sum that is not
+/// a linear form is distributed as before, the linear forms staying factors
+/// of every term.
 ///
 /// ```
 /// use dae_core::expr::{is_linear_form, mul, pow, sub, Expr};
@@ -1316,13 +1328,20 @@ fn distribute(a: &[(Q, Expr)], b: &Expr) -> Vec<(Q, Expr)> {
 /// // Its square stays a power of the (normalised) difference.
 /// assert!(matches!(pow(&d, &Expr::int(2)), Expr::Prod(_)));
 /// assert!(!is_linear_form(&mul(&d, &Expr::var(2))));
+/// // A sum with a number or a parameter is not one, and is distributed.
+/// assert!(!is_linear_form(&sub(&Expr::var(0), &Expr::int(1))));
+/// assert!(!is_linear_form(&sub(&Expr::var(0), &Expr::param(0))));
+/// assert!(matches!(pow(&sub(&Expr::var(0), &Expr::int(1)), &Expr::int(2)), Expr::Sum(_)));
 /// ```
 pub fn is_linear_form(e: &Expr) -> bool {
     let Expr::Sum(s) = e else {
         return false;
     };
-    s.terms.len() + usize::from(!s.constant.is_zero()) >= 2
-        && s.terms.iter().all(|(t, _)| matches!(t, Expr::Sym(_)))
+    s.constant.is_zero()
+        && s.terms.len() >= 2
+        && s.terms
+            .iter()
+            .all(|(t, _)| matches!(t, Expr::Sym(Sym::Var(_))))
 }
 
 /// A linear form `e` as `c · base`, with `base` of content 1 and its first
@@ -1859,8 +1878,8 @@ mod tests {
         let expanded = sub(&pow(&x(), &Expr::int(3)), &mul(&x(), &y()));
         assert!(sub(&prod, &expanded).is_zero());
         // A linear form times such a sum distributes the sum, keeping the
-        // form as a factor of every term: (x + 1)(x² − y) = x²(x + 1) − y(x + 1).
-        let l = add(&x(), &Expr::one());
+        // form as a factor of every term: (x − y)(x² − y) = x²(x − y) − y(x − y).
+        let l = sub(&x(), &y());
         let prod = mul(&l, &sub(&x2, &y()));
         let kept = sub(&mul(&x2, &l), &mul(&y(), &l));
         assert!(sub(&prod, &kept).is_zero());
@@ -1903,6 +1922,35 @@ mod tests {
             mul(&d, &pow(&sub(&x(), &y()), &Expr::int(-1))),
             Expr::int(-1)
         );
+    }
+
+    #[test]
+    fn sums_with_numbers_or_parameters_are_distributed() {
+        let (e, ea) = (Expr::param(0), Expr::param(1));
+        // A difference of parameters (Andrews' `e − ea`) is expanded, as a
+        // factor and as a square …
+        let d = sub(&e, &ea);
+        assert!(!is_linear_form(&d));
+        assert_eq!(mul(&d, &x()), sub(&mul(&e, &x()), &mul(&ea, &x())));
+        assert_eq!(
+            pow(&d, &Expr::int(2)),
+            add_all([
+                pow(&e, &Expr::int(2)),
+                mul_all([Expr::int(-2), e.clone(), ea.clone()]),
+                pow(&ea, &Expr::int(2)),
+            ])
+        );
+        // … and so are `x − 1` and `x − p`.
+        for b in [sub(&x(), &Expr::one()), sub(&x(), &e)] {
+            assert!(!is_linear_form(&b));
+            assert!(matches!(pow(&b, &Expr::int(2)), Expr::Sum(s) if s.terms.len() >= 2));
+        }
+        // Gear–Hsu–Petzold's hidden constraint: η y₂ − (η + 1) y₂ = −y₂.
+        let (eta, y2) = (Expr::param(2), y());
+        let mixed = sub(&mul(&eta, &y2), &mul(&add(&eta, &Expr::one()), &y2));
+        assert_eq!(mixed, neg(&y2));
+        // A sum of unknowns with a constant is not a linear form either.
+        assert!(!is_linear_form(&add(&sub(&x(), &y()), &Expr::one())));
     }
 
     #[test]
