@@ -18,7 +18,8 @@
 //!   on user input;
 //! * a *linear form in the unknowns* — a sum of at least two terms, each a
 //!   rational multiple of one unknown, such as `x₂ − x₁` (not `x − 1` or
-//!   `x − p` with a parameter `p`, which are distributed) — is never expanded as a factor of a product or as the base of an integer
+//!   `x − p` with a parameter `p`, which are distributed) — is never
+//!   expanded as a factor of a product or as the base of an integer
 //!   power: `(x₂ − x₁)²` and `λ (x₂ − x₁)` stay as written (see
 //!   [`is_linear_form`] for why), with the base normalised (content 1, first
 //!   coefficient positive) so that `(x₁ − x₂)²` and `(2x₂ − 2x₁)²/4` are one
