@@ -15,7 +15,17 @@
 //!   ([`EXPANSION_LIMIT`] terms), so polynomial identities such as
 //!   `d/dt (2xv + 2yw) = 2v² + 2w² + …` are decided by structural equality.
 //!   Larger products stay factored: expansion is bounded and never blows up
-//!   on user input.
+//!   on user input;
+//! * a *linear form in the unknowns* — a sum of at least two terms, each a
+//!   rational multiple of one unknown, such as `x₂ − x₁` (not `x − 1` or
+//!   `x − p` with a parameter `p`, which are distributed) — is never
+//!   expanded as a factor of a product or as the base of an integer
+//!   power: `(x₂ − x₁)²` and `λ (x₂ − x₁)` stay as written (see
+//!   [`is_linear_form`] for why), with the base normalised (content 1, first
+//!   coefficient positive) so that `(x₁ − x₂)²` and `(2x₂ − 2x₁)²/4` are one
+//!   expression. A numeric multiple of a linear form is still a sum
+//!   (`2 (x₂ − x₁)` is `2x₂ − 2x₁`, exact in floating point for a power of
+//!   two and within one rounding of each term otherwise).
 //!
 //! Ordering is the derived structural order, so everything downstream —
 //! printing, code generation, JSON — is deterministic.
@@ -1122,6 +1132,11 @@ impl ProdBuilder {
                 } else if self.factors.contains_key(e) {
                     // (a+b)^k · (a+b) merges exponents instead of expanding.
                     self.push_factor(e.clone(), q(1));
+                } else if is_linear_form(e) {
+                    // Kept as a factor, never distributed (see `is_linear_form`).
+                    let (c, base) = normalise_linear(e);
+                    q_mul_to(&mut self.coef, &c);
+                    self.push_factor(base, q(1));
                 } else {
                     self.sums.push(e.clone());
                 }
@@ -1165,23 +1180,38 @@ impl ProdBuilder {
         if sums.is_empty() {
             return scale(&self.coef, &monomial);
         }
-        // Distribute over the sums while the result stays small.
-        let mut acc = scale(&self.coef, &monomial);
+        // Distribute over the sums while the result stays small. The
+        // monomial is one term even when it is a lone linear form (a sum
+        // node kept as a factor), so `acc` is a list of terms until the end.
+        let mut acc: Vec<(Q, Expr)> = vec![(self.coef, monomial)];
         let mut kept = Vec::new();
         for s in sums {
-            let n_acc = term_count(&acc);
-            let n_s = term_count(&s);
-            if n_acc * n_s <= EXPANSION_LIMIT {
+            if acc.len() * term_count(&s) <= EXPANSION_LIMIT {
                 acc = distribute(&acc, &s);
             } else {
                 kept.push(s);
             }
         }
         if kept.is_empty() {
-            return acc;
+            let mut constant = Q::zero();
+            let mut map = BTreeMap::new();
+            for (c, t) in &acc {
+                add_into(&mut constant, &mut map, t, c);
+            }
+            return make_sum(constant, map);
         }
         // Keep the remaining sums as factors (bounded expansion).
-        let (c, rest) = split_coefficient(&acc);
+        let (c, rest) = match acc.len() {
+            1 => acc.swap_remove(0),
+            _ => {
+                let mut constant = Q::zero();
+                let mut map = BTreeMap::new();
+                for (c, t) in &acc {
+                    add_into(&mut constant, &mut map, t, c);
+                }
+                split_coefficient(&make_sum(constant, map))
+            }
+        };
         let mut factors: BTreeMap<Expr, Q> = BTreeMap::new();
         let mut push = |b: Expr| *factors.entry(b).or_insert_with(Q::zero) += q(1);
         match rest {
@@ -1210,10 +1240,12 @@ fn term_count(e: &Expr) -> usize {
     }
 }
 
-/// Expand `a · b` for two sums (or a sum and a monomial).
-fn distribute(a: &Expr, b: &Expr) -> Expr {
+/// Expand `(Σ c_k t_k) · b` for the terms `a = [(c_k, t_k)]` (each `t_k` one
+/// monomial, possibly a lone linear form) and a sum `b`; the collected terms
+/// of the product, its constant as a term `(c, 1)`.
+fn distribute(a: &[(Q, Expr)], b: &Expr) -> Vec<(Q, Expr)> {
     if exhausted() {
-        return Expr::zero();
+        return Vec::new();
     }
     let parts = |e: &Expr| -> Vec<(Q, Expr)> {
         match e {
@@ -1234,17 +1266,100 @@ fn distribute(a: &Expr, b: &Expr) -> Expr {
             }
         }
     };
-    let pa = parts(a);
     let pb = parts(b);
     let mut constant = Q::zero();
     let mut map = BTreeMap::new();
-    for (ca, ta) in &pa {
+    for (ca, ta) in a {
         for (cb, tb) in &pb {
             let prod = mul_monomials(ta, tb);
             add_into(&mut constant, &mut map, &prod, &q_mul(ca, cb));
         }
     }
-    make_sum(constant, map)
+    let mut terms: Vec<(Q, Expr)> = map
+        .into_iter()
+        .filter(|(_, c)| !c.is_zero())
+        .map(|(t, c)| (c, t))
+        .collect();
+    if !constant.is_zero() {
+        terms.push((constant, Expr::one()));
+    }
+    terms
+}
+
+/// Whether `e` is a linear form in the unknowns: a sum of at least two
+/// terms, each a rational multiple of one unknown `y_i` (`x₂ − x₁`,
+/// `2u − v`, `λ₁ + λ₃ + λ₅`), with no constant, parameter, time or `der()`.
+///
+/// Such a sum is kept whole as a factor of a product and as the base of an
+/// integer power, instead of being distributed: the form a model writes,
+/// `(x₂ − x₁)² + (y₂ − y₁)² − l²`, is then evaluated as written. Expanded,
+/// it is `x₂² + x₁² − 2x₁x₂ + …`, whose terms are of the size of the
+/// coordinates squared and cancel to `l²`: with coordinates of 400 and links
+/// of 1, the residual cannot be evaluated below about 2⁻³⁴, and a
+/// constrained solver amplifies that floor into its multipliers (BENCHMARKS
+/// §14, "Why radau5(ggl1) fails at N = 400"). Derivatives keep the form too:
+/// `∂/∂x₂ (x₂ − x₁)² = 2x₂ − 2x₁` and the hidden constraint is
+/// `2u₂(x₂ − x₁) − 2u₁(x₂ − x₁) + …`, whose terms are of the size of the
+/// velocities, not of the coordinates times the velocities.
+///
+/// Only unknowns: a sum holding a number, a parameter or time (`x − 1`,
+/// `e − eₐ`, `η + 1`) is distributed as before. The accuracy the factored
+/// form buys is that of a difference of two states that grow together (the
+/// chain's coordinates), and keeping the other sums was measured to cost (BENCHMARKS §14,
+/// "Linear forms kept factored, restricted to the unknowns"): Andrews'
+/// squeezer writes `m₆ u (z_f − f_a) ω̈ sin ω` with parameters `z_f`, `f_a`,
+/// and kept factored there its `mex0` rows stop `radau5` at 1e-10 on a
+/// Newton stall of `ω̈` (`tests/mex0.rs`); and a model mixing `η y₂` with
+/// `(1 + η) y₂`, as Gear–Hsu–Petzold does, no longer cancels `η y₂` in
+/// its hidden constraint.
+///
+/// What this gives up: a polynomial identity that needs a linear form in
+/// the unknowns multiplied out (`(x + y)(x − y) = x² − y²`,
+/// `λ(x₂ − x₁) = λx₂ − λx₁`) is no longer decided by structural equality.
+/// The identities the derivation relies on — the cancellations of
+/// monomials after substituting a dynamics, as in the pendulum's
+/// `d/dt (2xu + 2yv)` — are still decided: a product with a sum that is not
+/// a linear form is distributed as before, the linear forms staying factors
+/// of every term.
+///
+/// ```
+/// use dae_core::expr::{is_linear_form, mul, pow, sub, Expr};
+/// let d = sub(&Expr::var(1), &Expr::var(0));
+/// assert!(is_linear_form(&d));
+/// // Its square stays a power of the (normalised) difference.
+/// assert!(matches!(pow(&d, &Expr::int(2)), Expr::Prod(_)));
+/// assert!(!is_linear_form(&mul(&d, &Expr::var(2))));
+/// // A sum with a number or a parameter is not one, and is distributed.
+/// assert!(!is_linear_form(&sub(&Expr::var(0), &Expr::int(1))));
+/// assert!(!is_linear_form(&sub(&Expr::var(0), &Expr::param(0))));
+/// assert!(matches!(pow(&sub(&Expr::var(0), &Expr::int(1)), &Expr::int(2)), Expr::Sum(_)));
+/// ```
+pub fn is_linear_form(e: &Expr) -> bool {
+    let Expr::Sum(s) = e else {
+        return false;
+    };
+    s.constant.is_zero()
+        && s.terms.len() >= 2
+        && s.terms
+            .iter()
+            .all(|(t, _)| matches!(t, Expr::Sym(Sym::Var(_))))
+}
+
+/// A linear form `e` as `c · base`, with `base` of content 1 and its first
+/// term's coefficient positive, so that every multiple of one form is a
+/// multiple of the same `base`.
+fn normalise_linear(e: &Expr) -> (Q, Expr) {
+    let Expr::Sum(s) = e else {
+        return (q(1), e.clone());
+    };
+    let mut c = content(e);
+    if s.terms.first().is_some_and(|(_, k)| k.is_negative()) {
+        c = -c;
+    }
+    if c.is_one() {
+        return (c, e.clone());
+    }
+    (c.clone(), scale(&c.recip(), e))
 }
 
 /// Product of two non-sum expressions.
@@ -1361,6 +1476,14 @@ pub fn pow_rational(base: &Expr, x: &Q) -> Expr {
                 let k = x.numer().to_i64().unwrap_or(i64::MAX);
                 if let Some(ck) = pow_q(&c, k) {
                     return scale(&ck, &pow_rational(&rest, x));
+                }
+            }
+            if integer && is_linear_form(base) {
+                // An integer power of a linear form stays factored (see
+                // `is_linear_form`), on the normalised base.
+                let (c, b) = normalise_linear(base);
+                if let Some(ck) = x.numer().to_i64().and_then(|k| pow_q(&c, k)) {
+                    return scale(&ck, &make_prod(vec![(b, x.clone())]));
                 }
             }
             if integer {
@@ -1740,19 +1863,95 @@ mod tests {
 
     #[test]
     fn expansion_decides_polynomial_identities() {
-        let s = add(&x(), &y());
+        // Sums that are not linear forms are expanded: (x² + y)² …
+        let x2 = pow(&x(), &Expr::int(2));
+        let s = add(&x2, &y());
         let lhs = pow(&s, &Expr::int(2));
         let rhs = add_all([
-            pow(&x(), &Expr::int(2)),
-            mul_all([Expr::int(2), x(), y()]),
+            pow(&x(), &Expr::int(4)),
+            mul_all([Expr::int(2), x2.clone(), y()]),
             pow(&y(), &Expr::int(2)),
         ]);
         assert_eq!(lhs, rhs);
-        assert!(sub(
-            &mul(&add(&x(), &Expr::one()), &sub(&x(), &Expr::one())),
-            &sub(&pow(&x(), &Expr::int(2)), &Expr::one())
-        )
-        .is_zero());
+        // … and so is a product of a monomial with one:
+        // x (x² − y) = x³ − xy.
+        let prod = mul(&x(), &sub(&x2, &y()));
+        let expanded = sub(&pow(&x(), &Expr::int(3)), &mul(&x(), &y()));
+        assert!(sub(&prod, &expanded).is_zero());
+        // A linear form times such a sum distributes the sum, keeping the
+        // form as a factor of every term: (x − y)(x² − y) = x²(x − y) − y(x − y).
+        let l = sub(&x(), &y());
+        let prod = mul(&l, &sub(&x2, &y()));
+        let kept = sub(&mul(&x2, &l), &mul(&y(), &l));
+        assert!(sub(&prod, &kept).is_zero());
+    }
+
+    #[test]
+    fn linear_forms_stay_factored_and_normalised() {
+        let d = sub(&y(), &x());
+        assert!(is_linear_form(&d));
+        // (y − x)² is one power of the normalised base, however it is built.
+        let sq = pow(&d, &Expr::int(2));
+        assert!(matches!(&sq, Expr::Prod(p) if p.factors.len() == 1));
+        assert_eq!(sq, pow(&sub(&x(), &y()), &Expr::int(2)));
+        assert_eq!(sq, mul(&d, &d));
+        let twice = scale(&q(2), &d);
+        assert_eq!(sq, mul(&Expr::num(qr(1, 4)), &pow(&twice, &Expr::int(2))));
+        // Odd powers keep the sign in the coefficient.
+        assert_eq!(
+            pow(&d, &Expr::int(3)),
+            neg(&pow(&sub(&x(), &y()), &Expr::int(3)))
+        );
+        // A symbol times a linear form is a product, a number times one a sum.
+        let p = Expr::param(0);
+        assert!(matches!(mul(&p, &sub(&x(), &y())), Expr::Prod(_)));
+        assert!(matches!(&twice, Expr::Sum(s) if s.terms.len() == 2));
+        // The derivative of the square is a multiple of the form.
+        assert_eq!(diff(&sq, Sym::Var(1)), twice);
+        // Evaluated as written: at x = 400.1, y = 401.3 the square is the
+        // square of the rounded difference to a few ulps, where the
+        // expanded x² − 2xy + y² would cancel terms of 1.6e5 to about 1.44.
+        let env = |s: Sym| match s {
+            Sym::Var(0) => 400.1,
+            Sym::Var(1) => 401.3,
+            _ => 1.0,
+        };
+        let dv = 401.3f64 - 400.1;
+        assert!((sq.eval(&env) - dv * dv).abs() <= 4.0 * f64::EPSILON * dv * dv);
+        // A quotient by a linear form cancels against it.
+        assert_eq!(
+            mul(&d, &pow(&sub(&x(), &y()), &Expr::int(-1))),
+            Expr::int(-1)
+        );
+    }
+
+    #[test]
+    fn sums_with_numbers_or_parameters_are_distributed() {
+        let (e, ea) = (Expr::param(0), Expr::param(1));
+        // A difference of parameters (Andrews' `e − ea`) is expanded, as a
+        // factor and as a square …
+        let d = sub(&e, &ea);
+        assert!(!is_linear_form(&d));
+        assert_eq!(mul(&d, &x()), sub(&mul(&e, &x()), &mul(&ea, &x())));
+        assert_eq!(
+            pow(&d, &Expr::int(2)),
+            add_all([
+                pow(&e, &Expr::int(2)),
+                mul_all([Expr::int(-2), e.clone(), ea.clone()]),
+                pow(&ea, &Expr::int(2)),
+            ])
+        );
+        // … and so are `x − 1` and `x − p`.
+        for b in [sub(&x(), &Expr::one()), sub(&x(), &e)] {
+            assert!(!is_linear_form(&b));
+            assert!(matches!(pow(&b, &Expr::int(2)), Expr::Sum(s) if s.terms.len() >= 2));
+        }
+        // Gear–Hsu–Petzold's hidden constraint: η y₂ − (η + 1) y₂ = −y₂.
+        let (eta, y2) = (Expr::param(2), y());
+        let mixed = sub(&mul(&eta, &y2), &mul(&add(&eta, &Expr::one()), &y2));
+        assert_eq!(mixed, neg(&y2));
+        // A sum of unknowns with a constant is not a linear form either.
+        assert!(!is_linear_form(&add(&sub(&x(), &y()), &Expr::one())));
     }
 
     #[test]
