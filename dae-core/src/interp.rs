@@ -274,7 +274,6 @@ impl Model for InterpretedModel {
         // the old ones if any would not be finite.
         let mut base = self.params[..self.n_base].to_vec();
         base[k] = value;
-        let mut scratch = vec![0.0; self.derived.nodes.len()];
         let inputs = Inputs {
             t: 0.0,
             y: &[],
@@ -282,10 +281,11 @@ impl Model for InterpretedModel {
             p: &base,
             z: &[],
         };
-        self.derived.eval(&inputs, &mut scratch);
-        let mut derived = Vec::with_capacity(self.derived.outputs.len());
-        for j in 0..self.derived.outputs.len() {
-            let v = self.derived.output(&scratch, j);
+        let mut values = Vec::with_capacity(self.derived.outputs.len());
+        self.derived
+            .eval_outputs(&inputs, &mut Vec::new(), |_, v| values.push(v));
+        let mut derived = Vec::with_capacity(values.len());
+        for (j, v) in values.into_iter().enumerate() {
             if !v.is_finite() {
                 return Err(ParameterError::DerivedNotFinite {
                     name: name.to_string(),
@@ -407,10 +407,8 @@ impl InterpretedSystem {
     /// The outputs of `sp` into `values` at positions `at`.
     fn values(&self, sp: &Sparse, at: &[usize], inputs: Inputs<'_>, values: &mut [f64]) {
         let mut s = self.scratch.borrow_mut();
-        sp.tape.eval(&inputs, &mut s);
-        for (k, &pos) in at.iter().enumerate() {
-            values[pos] = sp.tape.output(&s, k);
-        }
+        sp.tape
+            .eval_outputs(&inputs, &mut s, |k, v| values[at[k]] = v);
     }
 
     /// The tapes this system evaluates.
@@ -431,19 +429,16 @@ impl InterpretedSystem {
 
     fn dense(&self, tape: &Tape, inputs: Inputs<'_>, out: &mut [f64]) {
         let mut s = self.scratch.borrow_mut();
-        tape.eval(&inputs, &mut s);
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = tape.output(&s, k);
-        }
+        tape.eval_outputs(&inputs, &mut s, |k, v| out[k] = v);
     }
 
     fn sparse(&self, sp: &Sparse, inputs: Inputs<'_>, out: &mut DMatrix<f64>) {
         out.fill(0.0);
         let mut s = self.scratch.borrow_mut();
-        sp.tape.eval(&inputs, &mut s);
-        for (k, &(i, j)) in sp.entries.iter().enumerate() {
-            out[(i as usize, j as usize)] = sp.tape.output(&s, k);
-        }
+        sp.tape.eval_outputs(&inputs, &mut s, |k, v| {
+            let (i, j) = sp.entries[k];
+            out[(i as usize, j as usize)] = v;
+        });
     }
 
     fn inputs<'a>(&'a self, t: f64, y: &'a [f64], yp: &'a [f64], z: &'a [f64]) -> Inputs<'a> {
