@@ -403,3 +403,18 @@ fn bdf_refuses_a_time_dependent_leading_matrix_at_index_2() {
     assert_eq!(r.status, "ok", "{:?}", r.error);
     assert!(r.scd.is_some_and(|d| d >= 4.0), "{:?}", r.scd);
 }
+
+/// Andrews' squeezer in `rcd1` with `mebdf` at 1e-8: once stopped with
+/// `step_size_too_small` at t ≈ 0.02 (h ≈ 1e-17, as at 1e-7 and 1e-9),
+/// its order-6 estimate not falling with the step while every step was
+/// accepted at its third attempt; now the order falls to one after three
+/// such steps in a row and the run reaches the published values
+/// (scd ≥ −log₁₀(tol) − 2; 6.4 digits in 541 steps, EXTREMES.md §5).
+#[test]
+fn mebdf_reaches_andrews_in_rcd1() {
+    let scene = Scene::load(scenes_dir().join("andrews.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "mebdf", "rcd1", 1e-8)).unwrap();
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    assert!(r.scd.is_some_and(|d| d >= 6.0), "{:?}", r.scd);
+}
