@@ -315,3 +315,106 @@ fn gauss_refuses_algebraic_conditions_that_are_not_rows() {
         assert_eq!(r.stats.steps, 0, "{name}: refused before a step");
     }
 }
+
+/// The BDF family leaves index-2/3 unknowns out of its error test, which
+/// its theory allows on the Hessenberg forms only (the constraints' lower
+/// levels hold differential unknowns only, the algebraic ones enter at the
+/// top level, as a mechanical system's multipliers at the acceleration
+/// level). Pantelides' reactor `C = u(t)` holds the algebraic rate `R`
+/// already in its first derivative: `bdf` and `mebdf` refuse its `ori2`
+/// and `rcd1` before a step, naming the level and the unknown (issue 26:
+/// they "finished" with errors up to 10⁶⁸). Its index-1 `rcd0` is still
+/// taken, and so are the mechanical index-2/3 forms (the car axis,
+/// Andrews' squeezer; the pendulum is in the solver harness).
+#[test]
+fn bdf_family_refuses_index_2_forms_that_are_not_hessenberg() {
+    let run = |name: &str, solver: &str, f: &str, max_steps: Option<usize>| {
+        let scene = Scene::load(scenes_dir().join(format!("{name}.toml"))).unwrap();
+        let inputs = inputs(&scene).unwrap();
+        let spec = runner::RunSpec {
+            max_steps,
+            ..inputs.spec(&scene, solver, f, 1e-6)
+        };
+        runner::run(&spec).unwrap_or_else(|e| panic!("{name} {solver}({f}): {e}"))
+    };
+    for solver in ["bdf", "mebdf"] {
+        for (name, f, unknown) in [("cstr", "ori2", "R"), ("cstr", "rcd1", "R")] {
+            let r = run(name, solver, f, None);
+            let error = r
+                .error
+                .unwrap_or_else(|| panic!("{name}: {solver}({f}) ran"));
+            assert_eq!(error.kind, "not_applicable", "{name}: {}", error.message);
+            assert!(
+                error.message.contains("not in Hessenberg form")
+                    && error.message.contains(&format!("`{unknown}`")),
+                "{name}: {}",
+                error.message
+            );
+            assert_eq!(r.stats.steps, 0, "{name}: refused before a step");
+        }
+        // Index 1: taken (and accurate at this tolerance).
+        let r = run("cstr", solver, "rcd0", None);
+        assert_eq!(r.status, "ok", "cstr {solver}(rcd0): {:?}", r.error);
+        assert!(
+            r.scd.is_some_and(|d| d >= 4.0),
+            "cstr {solver}(rcd0): {:?}",
+            r.scd
+        );
+    }
+    // The mechanical index-3 and index-2 forms are Hessenberg: not refused
+    // (a few steps suffice to show it).
+    for (name, f) in [
+        ("caraxis", "ori2"),
+        ("caraxis", "rcd1"),
+        ("caraxis", "ggl1"),
+        ("andrews", "ori2"),
+        ("andrews", "rcd1"),
+        ("jay_index2", "ori2"),
+        ("mna_cv_loop", "ori2"),
+    ] {
+        let r = run(name, "bdf", f, Some(20));
+        if let Some(e) = &r.error {
+            assert_ne!(e.kind, "not_applicable", "{name} bdf({f}): {}", e.message);
+        }
+        assert!(r.stats.steps > 0, "{name} bdf({f}) took no step");
+    }
+}
+
+/// Gear–Hsu–Petzold's `ori2` keeps `ηt` on `y2'`: `bdf` refuses an
+/// index-2 formulation whose `E` depends on `t` before a step (issue 26:
+/// its Newton iteration failed at every tolerance, the step shrunk to
+/// 1e-17) and takes the index-1 `rcd0` (accurate).
+#[test]
+fn bdf_refuses_a_time_dependent_leading_matrix_at_index_2() {
+    let scene = Scene::load(scenes_dir().join("gear_hsu_petzold.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "bdf", "ori2", 1e-6)).unwrap();
+    let error = r.error.expect("bdf(ori2) ran");
+    assert_eq!(error.kind, "not_applicable", "{}", error.message);
+    assert!(
+        error
+            .message
+            .contains("E depends on t in this index-2 formulation"),
+        "{}",
+        error.message
+    );
+    assert_eq!(r.stats.steps, 0, "refused before a step");
+    let r = runner::run(&inputs.spec(&scene, "bdf", "rcd0", 1e-6)).unwrap();
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    assert!(r.scd.is_some_and(|d| d >= 4.0), "{:?}", r.scd);
+}
+
+/// Andrews' squeezer in `rcd1` with `mebdf` at 1e-8: once stopped with
+/// `step_size_too_small` at t ≈ 0.02 (h ≈ 1e-17, as at 1e-7 and 1e-9),
+/// its order-6 estimate not falling with the step while every step was
+/// accepted at its third attempt; now the order falls to one after three
+/// such steps in a row and the run reaches the published values
+/// (scd ≥ −log₁₀(tol) − 2; 6.4 digits in 541 steps, EXTREMES.md §5).
+#[test]
+fn mebdf_reaches_andrews_in_rcd1() {
+    let scene = Scene::load(scenes_dir().join("andrews.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "mebdf", "rcd1", 1e-8)).unwrap();
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    assert!(r.scd.is_some_and(|d| d >= 6.0), "{:?}", r.scd);
+}

@@ -528,6 +528,36 @@ pub enum NotApplicable {
         /// `m − rank E`.
         conditions: usize,
     },
+    /// A formulation of index 2 or 3 whose constraints are not in
+    /// Hessenberg form, for a method that leaves unknowns of index ≥ 2 out
+    /// of its error test (the BDF family): a level of a constraint below
+    /// its top one already depends on an algebraic unknown (see
+    /// [`crate::core::policy::hessenberg`]). The unknowns left out of the
+    /// test are then states that nothing controls.
+    #[error(
+        "constraint {constraint} at level {level} (below its top level {top}) depends on the algebraic unknown `{unknown}`: this index-{d_index} formulation is not in Hessenberg form, outside BDF's convergence theory, and the unknowns its error test leaves out would be controlled by nothing; use an index-1 formulation (rcd0) or radau5"
+    )]
+    NotHessenberg {
+        /// 0-based index of the model's constraint.
+        constraint: u16,
+        /// The level (number of differentiations) that depends on it.
+        level: u8,
+        /// The chain's top level.
+        top: u8,
+        /// The algebraic unknown.
+        unknown: String,
+        /// The formulation's largest index.
+        d_index: u8,
+    },
+    /// `bdf` on a formulation of index 2 or 3 whose leading matrix `E`
+    /// depends on `t` (see [`crate::core::policy::leading_constant_in_time`]).
+    #[error(
+        "E depends on t in this index-{d_index} formulation, where bdf's Newton iteration fails (Gear, Hsu & Petzold's y1' + ηt y2': at every tolerance, the step shrinking to round-off); use an index-1 formulation (rcd0)"
+    )]
+    TimeDependentLeading {
+        /// The formulation's largest index.
+        d_index: u8,
+    },
     /// An unknown has a higher index than the method integrates.
     #[error("index {index}: solver takes unknowns of index at most {max}")]
     IndexTooHigh {

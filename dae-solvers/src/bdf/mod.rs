@@ -210,6 +210,9 @@ impl Solver for Bdf {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
+        policy::hessenberg(problem.system, problem.t0, problem.y0, options)?;
+        let span = problem.t_end - problem.t0;
+        policy::leading_constant_in_time(problem.system, problem.t0, span, problem.y0)?;
         integrator::<Block<SquareLu>>(problem, options)
     }
 }

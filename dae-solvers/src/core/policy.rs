@@ -19,7 +19,8 @@
 
 use crate::error::NotApplicable;
 use crate::Options;
-use dae_core::system::FormulationInfo;
+use dae_core::system::{DaeSystem, FormulationInfo, VarKind};
+use nalgebra::DMatrix;
 
 /// Components in the error test of a BDF-type method: all, except the
 /// unknowns of index ≥ 2 unless [`Options::index2_in_error_test`] is
@@ -100,6 +101,146 @@ pub fn constant_leading_once_eliminated(info: &FormulationInfo) -> Result<(), No
         Ok(())
     } else {
         Err(NotApplicable::LeadingMatrixNotConstant)
+    }
+}
+
+/// A BDF-type method (its error test leaves unknowns of index ≥ 2 out, see
+/// [`bdf_error_test`]) on a formulation of index 2 or 3: refused unless its
+/// constraints have the Hessenberg structure that rule was made for — in
+/// every chain of the model's constraints, the levels below the top one
+/// (the one that determines the chain's algebraic unknowns, as the
+/// acceleration level determines a mechanical system's multipliers) depend
+/// on differential unknowns only. Refused with
+/// [`NotApplicable::NotHessenberg`], naming the first constraint level and
+/// the algebraic unknown that break it. Index-1 formulations, and a caller
+/// that keeps the index-2 unknowns in the test
+/// ([`Options::index2_in_error_test`] `= Some(true)`), pass.
+///
+/// BDF's convergence results for index 2 and 3 (Brenan, Campbell &
+/// Petzold 1996, §3.2) are for the Hessenberg forms, `y' = f(y, z)`,
+/// `0 = g(y)` (and its index-3 analogue), where the unknowns the test keeps
+/// carry the dynamics. In a chain whose lower levels already fix an
+/// algebraic unknown, the unknowns left out are states that nothing
+/// controls. The dependence is read from `∂g/∂y` of the chain at `(t, y)`
+/// ([`DaeSystem::constraints_jacobian`]); an entry that happens to vanish
+/// there lets the formulation pass.
+///
+/// Measured (EXTREMES.md §5, session 8): `bdf` and `mebdf` on Pantelides'
+/// reactor (`cstr`: `C = u(t)`, whose first derivative already holds the
+/// rate `R`) in `ori2` and `rcd1` "finished" with errors up to 10⁶⁸, the
+/// temperature (left out of the test) drifting away.
+///
+/// ```
+/// use dae::dae_solvers::core::policy::hessenberg;
+/// use dae::dae_solvers::Options;
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// // The pendulum's position constraint: positions at level 0, velocities
+/// // at level 1, the multiplier only at level 2.
+/// let sys = Pendulum::default().ori2();
+/// let y = [1.0, 0.0, 0.0, 0.0, 0.0];
+/// assert!(hessenberg(&sys, 0.0, &y, &Options::default()).is_ok());
+/// ```
+pub fn hessenberg(
+    sys: &dyn DaeSystem,
+    t: f64,
+    y: &[f64],
+    options: &Options,
+) -> Result<(), NotApplicable> {
+    // A state with its sensitivities: the state's structure.
+    let sys = match (sys.blocks(), sys.first_block()) {
+        (None, _) => sys,
+        (Some(_), Some(state)) => state,
+        (Some(_), None) => return Ok(()),
+    };
+    let info = sys.info();
+    let (k, n) = (info.constraints.len(), info.unknowns());
+    if info.max_index() < 2 || options.index2_in_error_test == Some(true) || k == 0 || y.len() < n {
+        // (A wrong length of `y` is the caller's error, which
+        // `Problem::check` reports.)
+        return Ok(());
+    }
+    let mut jac = DMatrix::zeros(k, n);
+    sys.constraints_jacobian(t, &y[..n], &mut jac);
+    let top = |source: u16| {
+        info.constraints
+            .iter()
+            .filter(|c| c.source == source)
+            .map(|c| c.level)
+            .max()
+            .unwrap_or(0)
+    };
+    for (row, c) in info.constraints.iter().enumerate() {
+        if c.level >= top(c.source) {
+            continue;
+        }
+        for (col, v) in info.variables.iter().enumerate() {
+            if v.kind == VarKind::Algebraic && jac[(row, col)].abs() > 0.0 {
+                return Err(NotApplicable::NotHessenberg {
+                    constraint: c.source,
+                    level: c.level,
+                    top: top(c.source),
+                    unknown: v.name.clone(),
+                    d_index: info.max_index(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `bdf` on a formulation of index 2 or 3 whose leading matrix `E`
+/// depends on `t` (probed at `t` and `t + span/2`, at `y`): refused with
+/// [`NotApplicable::TimeDependentLeading`]. Index-1 formulations, a
+/// constant `E` and an `E(y)` that does not depend on `t` pass.
+///
+/// Measured (EXTREMES.md §5, session 8): on Gear, Hsu & Petzold's
+/// `y1 + ηt y2 = f1`, `y1' + ηt y2' + (1 + η) y2 = f2` (η = 1, a regular
+/// pencil) in `ori2`, bdf's modified Newton iteration failed at every
+/// tolerance 1e-4 … 1e-10, the step shrunk to 1e-15 … 1e-18 — also with
+/// the iteration matrix formed afresh at every change of `c_J` (tried,
+/// not kept: the failures moved, t = 0.14 → 1.19 at 1e-4, and stayed).
+/// The iteration matrix `[[1, ηt], [c_J, c_J ηt + 1 + η]]` has entries
+/// `O(1/h)` and determinant `1 + η`: its inverse multiplies the residual
+/// of the first row by `c_J ηt/(1 + η)`, so the round-off of the residual
+/// reaches `y1` magnified by `t/h`. Not verified as the cause. `mebdf` and
+/// `idec` refuse every `E` that is not constant already.
+///
+/// ```
+/// use dae::dae_solvers::core::policy::leading_constant_in_time;
+/// use dae::dae_solvers::Options;
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().ori2();
+/// let y = [1.0, 0.0, 0.0, 0.0, 0.0];
+/// assert!(leading_constant_in_time(&sys, 0.0, 1.0, &y).is_ok());
+/// ```
+pub fn leading_constant_in_time(
+    sys: &dyn DaeSystem,
+    t: f64,
+    span: f64,
+    y: &[f64],
+) -> Result<(), NotApplicable> {
+    let sys = match (sys.blocks(), sys.first_block()) {
+        (None, _) => sys,
+        (Some(_), Some(state)) => state,
+        (Some(_), None) => return Ok(()),
+    };
+    let info = sys.info();
+    let (m, n) = (info.equations(), info.unknowns());
+    let d_index = info.max_index();
+    if info.constant_leading || d_index < 2 || y.len() < n {
+        return Ok(());
+    }
+    let (mut e0, mut e1) = (DMatrix::zeros(m, n), DMatrix::zeros(m, n));
+    sys.leading(t, &y[..n], &mut e0);
+    sys.leading(t + 0.5 * span, &y[..n], &mut e1);
+    if e0 == e1 {
+        Ok(())
+    } else {
+        Err(NotApplicable::TimeDependentLeading { d_index })
     }
 }
 

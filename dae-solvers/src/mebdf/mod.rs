@@ -167,6 +167,7 @@ impl Solver for Mebdf {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
+        policy::hessenberg(problem.system, problem.t0, problem.y0, options)?;
         let method = start(problem, options)?;
         Ok(crate::Integrator::new(method, problem, options))
     }
