@@ -59,6 +59,9 @@ impl StageSolve {
         rows: &Rows,
     ) -> Result<(), Singular> {
         match self {
+            // The plain square systems directly: no call through the block
+            // wrapper once per factorisation.
+            StageSolve::Square(Block::Plain(s)) => s.factor(e, j, g, a, b, rows),
             StageSolve::Square(s) => s.factor(e, j, g, a, b, rows),
             StageSolve::LeastSquares(s) => s.factor(e, j, g, a, b, rows),
         }

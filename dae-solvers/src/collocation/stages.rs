@@ -295,13 +295,16 @@ impl<K: Collocation> Integrator<'_, K> {
     }
 
     /// Stage residuals `G_i(Z) = E(Y_i) Y'_i − f(t + c_i h, Y_i)` into `res`.
+    #[inline]
     pub(super) fn stage_residuals(&mut self, t: f64, h: f64) {
         let m = self.m;
         let w = &mut self.w;
         let n = self.n;
         kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
+        // The formulation resolved once, not at each of the three calls.
+        let sys: &dyn DaeSystem = &*self.sys;
         for (i, &ci) in K::TABLEAU.c.iter().enumerate() {
-            self.sys.residual(
+            sys.residual(
                 t + ci * h,
                 &w.ys[i * n..(i + 1) * n],
                 &w.yd[i * n..(i + 1) * n],

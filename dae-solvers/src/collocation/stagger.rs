@@ -194,6 +194,10 @@ impl<K: Collocation> Integrator<'_, K> {
     /// (RADAU5's loop at label 40). `may_shorten` allows the early exit on
     /// slow convergence; without it (fixed-step mode) up to `NIT_FIXED`
     /// iterations are made.
+    ///
+    /// Inlined into its three callers, each with its `phase` a constant:
+    /// the plain run's loop carries no dispatch on the phase.
+    #[inline(always)]
     pub(super) fn iterate(&mut self, t: f64, h: f64, may_shorten: bool, phase: Phase) -> Newton {
         let (n, m) = (self.n, self.m);
         let max_iter = if may_shorten {
@@ -402,12 +406,13 @@ pub(super) fn rhs_for_error(
     y: &[f64],
     f: &mut [f64],
 ) {
-    match (stagger, sys.first_block()) {
-        (Some(st), Some(first)) if !st.error_control => {
-            first.rhs(t, &y[..st.size], &mut f[..st.size])
+    // The stagger first: a plain run makes no `first_block` call.
+    if let Some(st) = stagger.filter(|st| !st.error_control) {
+        if let Some(first) = sys.first_block() {
+            return first.rhs(t, &y[..st.size], &mut f[..st.size]);
         }
-        _ => sys.rhs(t, y, f),
     }
+    sys.rhs(t, y, f)
 }
 
 /// One sensitivity's stage residual `r = E₀ s' − J s − ∂f/∂pᵢ` at the

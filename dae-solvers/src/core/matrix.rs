@@ -246,6 +246,7 @@ impl Matrix {
     }
 
     /// `∂f/∂y` at `(t, y)`.
+    #[inline]
     pub(crate) fn rhs_jacobian(&mut self, sys: &dyn DaeSystem, t: f64, y: &[f64]) {
         match self {
             Matrix::Dense(d) => sys.rhs_jacobian(t, y, d),
@@ -278,6 +279,7 @@ impl Matrix {
     }
 
     /// `out ← A x` (`x` length `N`, `out` length `M`).
+    #[inline]
     pub(crate) fn mat_vec(&self, x: &[f64], out: &mut [f64]) {
         match self {
             Matrix::Dense(d) => mat_vec(d, x, out),
@@ -665,6 +667,36 @@ impl SquareStages {
     }
 }
 
+impl SquareStages {
+    /// The dense LUs of `g E − J` and `(a + ib) E − J` (`E` and `J`
+    /// column-major `N × N`, like the factors).
+    #[inline]
+    fn factor_dense(
+        &mut self,
+        e: &DMatrix<f64>,
+        j: &DMatrix<f64>,
+        g: f64,
+        a: f64,
+        b: f64,
+    ) -> Result<(), Singular> {
+        let (e, j) = (e.as_slice(), j.as_slice());
+        let len = e.len();
+        let (e, j) = (&e[..len], &j[..len]);
+        let x = &mut self.real.matrix_mut().as_mut_slice()[..len];
+        for i in 0..len {
+            x[i] = g * e[i] - j[i];
+        }
+        self.real.factor()?;
+        let (re, im) = self.complex.parts_mut();
+        let (re, im) = (&mut re[..len], &mut im[..len]);
+        for i in 0..len {
+            re[i] = a * e[i] - j[i];
+            im[i] = b * e[i];
+        }
+        self.complex.factor()
+    }
+}
+
 impl StageSystems for SquareStages {
     const LEAST_SQUARES: bool = false;
     fn new(m: usize, n: usize) -> Self {
@@ -693,6 +725,13 @@ impl StageSystems for SquareStages {
         b: f64,
         _rows: &Rows,
     ) -> Result<(), Singular> {
+        if self.sparse.is_none() {
+            // The dense path first: no test of the sparse forms per
+            // factorisation of a small system.
+            if let (Matrix::Dense(e), Matrix::Dense(j)) = (e, j) {
+                return self.factor_dense(e, j, g, a, b);
+            }
+        }
         if let (Some(s), Matrix::Compressed { structure, .. }) = (&mut self.sparse, e) {
             // Compressed: both matrices on the run's pattern, analysed once.
             if s.pattern.is_none() {
@@ -729,22 +768,7 @@ impl StageSystems for SquareStages {
                 Complex::new(a * e - j, b * e)
             });
         }
-        // E and J are column-major N × N, like the factors.
-        let (e, j) = (e.as_slice(), j.as_slice());
-        let len = e.len();
-        let (e, j) = (&e[..len], &j[..len]);
-        let x = &mut self.real.matrix_mut().as_mut_slice()[..len];
-        for i in 0..len {
-            x[i] = g * e[i] - j[i];
-        }
-        self.real.factor()?;
-        let (re, im) = self.complex.parts_mut();
-        let (re, im) = (&mut re[..len], &mut im[..len]);
-        for i in 0..len {
-            re[i] = a * e[i] - j[i];
-            im[i] = b * e[i];
-        }
-        self.complex.factor()
+        self.factor_dense(e, j, g, a, b)
     }
     #[inline]
     fn solve_real(&mut self, x: &mut [f64]) {
