@@ -380,25 +380,32 @@ fn bdf_family_refuses_index_2_forms_that_are_not_hessenberg() {
     }
 }
 
-/// Gear–Hsu–Petzold's `ori2` keeps `ηt` on `y2'`: `bdf` refuses an
-/// index-2 formulation whose `E` depends on `t` before a step (issue 26:
-/// its Newton iteration failed at every tolerance, the step shrunk to
-/// 1e-17) and takes the index-1 `rcd0` (accurate).
+/// Gear–Hsu–Petzold's `ori2` keeps `ηt` on `y2'`: `bdf`, `radau5` and
+/// `odradau` refuse an index-2 formulation whose `E` depends on `t` before
+/// a step (issue 26: their simplified Newton iterations failed at every
+/// tolerance — bdf's with the step shrunk to 1e-17, radau5's and
+/// odradau's after 3–4 steps) and `bdf` takes the index-1 `rcd0`
+/// (accurate).
 #[test]
-fn bdf_refuses_a_time_dependent_leading_matrix_at_index_2() {
+fn a_time_dependent_leading_matrix_at_index_2_is_refused() {
     let scene = Scene::load(scenes_dir().join("gear_hsu_petzold.toml")).unwrap();
     let inputs = inputs(&scene).unwrap();
-    let r = runner::run(&inputs.spec(&scene, "bdf", "ori2", 1e-6)).unwrap();
-    let error = r.error.expect("bdf(ori2) ran");
-    assert_eq!(error.kind, "not_applicable", "{}", error.message);
-    assert!(
-        error
-            .message
-            .contains("E depends on t in this index-2 formulation"),
-        "{}",
-        error.message
-    );
-    assert_eq!(r.stats.steps, 0, "refused before a step");
+    // radau5 and odradau fail the same way (their frozen stage matrix,
+    // `core::policy::leading_constant_in_time`) and refuse it likewise.
+    for solver in ["bdf", "radau5", "odradau"] {
+        let r = runner::run(&inputs.spec(&scene, solver, "ori2", 1e-6)).unwrap();
+        let error = r.error.expect("ori2 ran");
+        assert_eq!(error.kind, "not_applicable", "{solver}: {}", error.message);
+        assert!(
+            error
+                .message
+                .contains("E depends on t in this index-2 formulation")
+                && error.message.contains(solver),
+            "{solver}: {}",
+            error.message
+        );
+        assert_eq!(r.stats.steps, 0, "{solver}: refused before a step");
+    }
     let r = runner::run(&inputs.spec(&scene, "bdf", "rcd0", 1e-6)).unwrap();
     assert_eq!(r.status, "ok", "{:?}", r.error);
     assert!(r.scd.is_some_and(|d| d >= 4.0), "{:?}", r.scd);

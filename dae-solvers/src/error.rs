@@ -549,12 +549,15 @@ pub enum NotApplicable {
         /// The formulation's largest index.
         d_index: u8,
     },
-    /// `bdf` on a formulation of index 2 or 3 whose leading matrix `E`
-    /// depends on `t` (see [`crate::core::policy::leading_constant_in_time`]).
+    /// `bdf`, `radau5` or `odradau` on a formulation of index 2 or 3 whose
+    /// leading matrix `E` depends on `t` (see
+    /// [`crate::core::policy::leading_constant_in_time`]).
     #[error(
-        "E depends on t in this index-{d_index} formulation, where bdf's Newton iteration fails (Gear, Hsu & Petzold's y1' + ηt y2': at every tolerance, the step shrinking to round-off); use an index-1 formulation (rcd0)"
+        "E depends on t in this index-{d_index} formulation, where {solver}'s simplified Newton iteration, its matrix taken at one time for a whole step or several, does not converge (Gear, Hsu & Petzold's y1' + ηt y2': failures at every tolerance); use an index-1 formulation (rcd0)"
     )]
     TimeDependentLeading {
+        /// The solver that refuses.
+        solver: &'static str,
         /// The formulation's largest index.
         d_index: u8,
     },

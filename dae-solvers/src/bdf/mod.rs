@@ -212,7 +212,13 @@ impl Solver for Bdf {
         self.accepts(problem.system.info())?;
         policy::hessenberg(problem.system, problem.t0, problem.y0, options)?;
         let span = problem.t_end - problem.t0;
-        policy::leading_constant_in_time(problem.system, problem.t0, span, problem.y0)?;
+        policy::leading_constant_in_time(
+            self.name(),
+            problem.system,
+            problem.t0,
+            span,
+            problem.y0,
+        )?;
         integrator::<Block<SquareLu>>(problem, options)
     }
 }
