@@ -92,14 +92,7 @@ impl Solver for OdRadau {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        let span = problem.t_end - problem.t0;
-        policy::leading_constant_in_time(
-            self.name(),
-            problem.system,
-            problem.t0,
-            span,
-            problem.y0,
-        )?;
+        policy::leading_constant_in_time(self.name(), problem)?;
         collocation::integrator::<RadauIIA>(problem, options, StageSolveKind::LeastSquares)
     }
 }

@@ -211,14 +211,7 @@ impl Solver for Bdf {
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
         policy::hessenberg(problem.system, problem.t0, problem.y0, options)?;
-        let span = problem.t_end - problem.t0;
-        policy::leading_constant_in_time(
-            self.name(),
-            problem.system,
-            problem.t0,
-            span,
-            problem.y0,
-        )?;
+        policy::leading_constant_in_time(self.name(), problem)?;
         integrator::<Block<SquareLu>>(problem, options)
     }
 }

@@ -18,7 +18,7 @@
 //!   [`preferred_formulations`], the order `dae run` tries.
 
 use crate::error::NotApplicable;
-use crate::Options;
+use crate::{Options, Problem};
 use dae_core::system::{DaeSystem, FormulationInfo, VarKind};
 use nalgebra::DMatrix;
 
@@ -104,6 +104,16 @@ pub fn constant_leading_once_eliminated(info: &FormulationInfo) -> Result<(), No
     }
 }
 
+/// The system whose structure a policy reads: `sys` itself, or for a
+/// state with its sensitivities the state's own formulation; `None` when a
+/// block system does not offer its state alone.
+fn state_of(sys: &dyn DaeSystem) -> Option<&dyn DaeSystem> {
+    match (sys.blocks(), sys.first_block()) {
+        (None, _) => Some(sys),
+        (Some(_), state) => state,
+    }
+}
+
 /// A BDF-type method (its error test leaves unknowns of index ≥ 2 out, see
 /// [`bdf_error_test`]) on a formulation of index 2 or 3: refused unless its
 /// constraints have the Hessenberg structure that rule was made for — in
@@ -148,11 +158,8 @@ pub fn hessenberg(
     y: &[f64],
     options: &Options,
 ) -> Result<(), NotApplicable> {
-    // A state with its sensitivities: the state's structure.
-    let sys = match (sys.blocks(), sys.first_block()) {
-        (None, _) => sys,
-        (Some(_), Some(state)) => state,
-        (Some(_), None) => return Ok(()),
+    let Some(sys) = state_of(sys) else {
+        return Ok(());
     };
     let info = sys.info();
     let (k, n) = (info.constraints.len(), info.unknowns());
@@ -219,25 +226,22 @@ pub fn hessenberg(
 ///
 /// ```
 /// use dae::dae_solvers::core::policy::leading_constant_in_time;
-/// use dae::dae_solvers::Options;
+/// use dae::dae_solvers::Problem;
 /// use dae::models::builtin::Pendulum;
 /// use dae::prelude::*;
 ///
 /// let sys = Pendulum::default().ori2();
 /// let y = [1.0, 0.0, 0.0, 0.0, 0.0];
-/// assert!(leading_constant_in_time("bdf", &sys, 0.0, 1.0, &y).is_ok());
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &y, t_end: 1.0 };
+/// assert!(leading_constant_in_time("bdf", &problem).is_ok());
 /// ```
 pub fn leading_constant_in_time(
     solver: &'static str,
-    sys: &dyn DaeSystem,
-    t: f64,
-    span: f64,
-    y: &[f64],
+    problem: &Problem<'_>,
 ) -> Result<(), NotApplicable> {
-    let sys = match (sys.blocks(), sys.first_block()) {
-        (None, _) => sys,
-        (Some(_), Some(state)) => state,
-        (Some(_), None) => return Ok(()),
+    let (t, span, y) = (problem.t0, problem.t_end - problem.t0, problem.y0);
+    let Some(sys) = state_of(problem.system) else {
+        return Ok(());
     };
     let info = sys.info();
     let (m, n) = (info.equations(), info.unknowns());

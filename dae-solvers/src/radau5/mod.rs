@@ -192,14 +192,7 @@ impl Solver for Radau5 {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        let span = problem.t_end - problem.t0;
-        policy::leading_constant_in_time(
-            self.name(),
-            problem.system,
-            problem.t0,
-            span,
-            problem.y0,
-        )?;
+        policy::leading_constant_in_time(self.name(), problem)?;
         collocation::integrator::<RadauIIA>(problem, options, StageSolveKind::Square)
     }
 }
