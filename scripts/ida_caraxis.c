@@ -44,6 +44,9 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#define IDA_DRIVER "ida_caraxis"
+#include "ida_common.h"
+
 static const double EPS = 0.01, MASS = 10.0, L = 1.0, L0 = 0.5, R = 0.1, W = 10.0, G = 1.0;
 
 /* The Test Set's reference at t = 3 (`carsoln` in caraxis.f): positions
@@ -52,11 +55,6 @@ static const double REF[8] = {0.4934557842755629e-001, 0.4969894602303324e+000,
                               0.1041742524885400e+001, 0.3739110272652214e+000,
                               -0.7705836840321485e-001, 0.7446866596327776e-002,
                               0.1755681574942899e-001, 0.7703410437794031e+000};
-
-static void fail(const char *what, long flag) {
-  fprintf(stderr, "ida_caraxis: %s failed (flag %ld)\n", what, flag);
-  exit(1);
-}
 
 /* The four right-hand sides f5..f8 of the dynamics rows at (t, y). */
 static void forces(double t, const double *y, double *f) {
@@ -110,13 +108,8 @@ int main(int argc, char **argv) {
   const double y0[10] = {0.0, L0, L, L0, -L0 / L, 0.0, -L0 / L, 0.0, 0.0, 0.0};
   for (int i = 0; i < 10; i++) y[i] = y0[i], p[i] = 0.0, d[i] = i < 8 ? 1.0 : 0.0;
   for (int i = 0; i < 4; i++) p[i] = y[4 + i];
-  void *mem = IDACreate(ctx);
-  if (!mem) fail("IDACreate", 0);
+  void *mem = ida_start(ctx, res_fn, yy, yp, tol, t_end);
   long flag;
-  if ((flag = IDAInit(mem, res_fn, 0.0, yy, yp))) fail("IDAInit", flag);
-  if ((flag = IDASStolerances(mem, tol, tol))) fail("IDASStolerances", flag);
-  if ((flag = IDASetMaxNumSteps(mem, 10000000))) fail("IDASetMaxNumSteps", flag);
-  if ((flag = IDASetStopTime(mem, t_end))) fail("IDASetStopTime", flag);
   if ((flag = IDASetId(mem, id))) fail("IDASetId", flag);
   SUNMatrix A = SUNDenseMatrix(10, 10, ctx);
   SUNLinearSolver LS = SUNLinSol_Dense(yy, A, ctx);
@@ -125,48 +118,18 @@ int main(int argc, char **argv) {
   if ((flag = IDAGetConsistentIC(mem, yy, yp))) fail("IDAGetConsistentIC", flag);
   double lam0[2] = {y[8], y[9]};
 
-  long hist[6] = {0};
-  long nst_prev = 0;
-  double tret = 0.0;
-  while (tret < t_end) {
-    flag = IDASolve(mem, t_end, &tret, yy, yp, IDA_ONE_STEP);
-    if (flag < 0) fail("IDASolve", flag);
-    long nst;
-    int kused;
-    IDAGetNumSteps(mem, &nst);
-    if (nst > nst_prev) {
-      IDAGetLastOrder(mem, &kused);
-      hist[kused] += nst - nst_prev;
-      nst_prev = nst;
-    }
-    if (flag == IDA_TSTOP_RETURN) break;
-  }
-  long nst, nre, nje, nsetups, netf, ncfn, nni, nreLS;
-  IDAGetNumSteps(mem, &nst);
-  IDAGetNumResEvals(mem, &nre);
-  IDAGetNumJacEvals(mem, &nje);
-  IDAGetNumLinResEvals(mem, &nreLS);
-  IDAGetNumLinSolvSetups(mem, &nsetups);
-  IDAGetNumErrTestFails(mem, &netf);
-  IDAGetNumNonlinSolvConvFails(mem, &ncfn);
-  IDAGetNumNonlinSolvIters(mem, &nni);
+  struct ida_run run;
+  ida_steps(mem, t_end, yy, yp, &run);
+  struct ida_counts counts = ida_counts(mem);
   double worst = 0.0;
   for (int i = 0; i < 8; i++) {
     double e = fabs((y[i] - REF[i]) / REF[i]);
     if (e > worst) worst = e;
   }
-  printf("{\"tol\": %g, \"t_end\": %.17g, \"steps\": %ld, \"error_test_failures\": %ld, "
-         "\"newton_failures\": %ld, \"residual_evals\": %ld, \"jacobian_evals\": %ld, "
-         "\"factorizations\": %ld, \"newton_iterations\": %ld, "
-         "\"orders\": [%ld, %ld, %ld, %ld, %ld], \"lambda0\": [%.6e, %.6e], \"scd\": %.2f}\n",
-         tol, tret, nst, netf, ncfn, nre + nreLS, nje, nsetups, nni, hist[1], hist[2], hist[3],
-         hist[4], hist[5], lam0[0], lam0[1], -log10(worst));
-  IDAFree(&mem);
-  SUNLinSolFree(LS);
-  SUNMatDestroy(A);
-  N_VDestroy(yy);
-  N_VDestroy(yp);
+  printf("{\"tol\": %g, \"t_end\": %.17g, ", tol, run.tret);
+  ida_print_counts(&counts, &run);
+  printf(", \"lambda0\": [%.6e, %.6e], \"scd\": %.2f}\n", lam0[0], lam0[1], -log10(worst));
   N_VDestroy(id);
-  SUNContext_Free(&ctx);
+  ida_finish(mem, LS, A, yy, yp, ctx);
   return 0;
 }

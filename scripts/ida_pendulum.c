@@ -41,14 +41,12 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#define IDA_DRIVER "ida_pendulum"
+#include "ida_common.h"
+
 #define M_MASS 1.0
 #define L_LEN 1.0
 #define G_ACC 13.7503716373294544
-
-static void fail(const char *what, long flag) {
-  fprintf(stderr, "ida_pendulum: %s failed (flag %ld)\n", what, flag);
-  exit(1);
-}
 
 static int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *data) {
   (void)t;
@@ -117,14 +115,9 @@ int main(int argc, char **argv) {
   for (int i = 0; i < 5; i++) y[i] = p[i] = 0.0;
   y[0] = L_LEN;
   p[3] = -G_ACC;
-  void *mem = IDACreate(ctx);
-  if (!mem) fail("IDACreate", 0);
+  void *mem = ida_start(ctx, res_fn, yy, yp, tol, t_end);
   long flag;
-  if ((flag = IDAInit(mem, res_fn, 0.0, yy, yp))) fail("IDAInit", flag);
-  if ((flag = IDASStolerances(mem, tol, tol))) fail("IDASStolerances", flag);
-  if ((flag = IDASetMaxNumSteps(mem, 10000000))) fail("IDASetMaxNumSteps", flag);
   if ((flag = IDASetMaxOrd(mem, max_order))) fail("IDASetMaxOrd", flag);
-  if ((flag = IDASetStopTime(mem, t_end))) fail("IDASetStopTime", flag);
   if ((flag = IDARootInit(mem, 1, root_fn))) fail("IDARootInit", flag);
   SUNMatrix A = SUNDenseMatrix(5, 5, ctx);
   SUNLinearSolver LS = SUNLinSol_Dense(yy, A, ctx);
@@ -132,43 +125,17 @@ int main(int argc, char **argv) {
   if ((flag = IDASetJacFn(mem, jac_fn))) fail("IDASetJacFn", flag);
 
   double T = period();
-  long hist[6] = {0};
-  double roots[64];
-  int nroots = 0;
-  long nst_prev = 0;
-  double tret = 0.0;
-  while (tret < t_end) {
-    flag = IDASolve(mem, t_end, &tret, yy, yp, IDA_ONE_STEP);
-    if (flag < 0) fail("IDASolve", flag);
-    long nst;
-    int kused;
-    IDAGetNumSteps(mem, &nst);
-    if (nst > nst_prev) {
-      IDAGetLastOrder(mem, &kused);
-      hist[kused] += nst - nst_prev;
-      nst_prev = nst;
-    }
-    if (flag == IDA_ROOT_RETURN && nroots < 64) roots[nroots++] = tret;
-    if (flag == IDA_TSTOP_RETURN) break;
-  }
-
-  long nst, nre, nje, nsetups, netf, ncfn, nni;
-  IDAGetNumSteps(mem, &nst);
-  IDAGetNumResEvals(mem, &nre);
-  IDAGetNumJacEvals(mem, &nje);
-  IDAGetNumLinSolvSetups(mem, &nsetups);
-  IDAGetNumErrTestFails(mem, &netf);
-  IDAGetNumNonlinSolvConvFails(mem, &ncfn);
-  IDAGetNumNonlinSolvIters(mem, &nni);
-  printf("{\"tol\": %g, \"t_end\": %.17g, \"max_order\": %d, \"period\": %.17g, \"steps\": %ld, "
-         "\"error_test_failures\": %ld, \"newton_failures\": %ld, \"residual_evals\": %ld, "
-         "\"jacobian_evals\": %ld, \"factorizations\": %ld, \"newton_iterations\": %ld, "
-         "\"orders\": [%ld, %ld, %ld, %ld, %ld], \"crossings\": [",
-         tol, tret, max_order, T, nst, netf, ncfn, nre, nje, nsetups, nni, hist[1], hist[2],
-         hist[3], hist[4], hist[5]);
+  struct ida_run run;
+  ida_steps(mem, t_end, yy, yp, &run);
+  struct ida_counts counts = ida_counts(mem);
+  double tret = run.tret;
+  printf("{\"tol\": %g, \"t_end\": %.17g, \"max_order\": %d, \"period\": %.17g, ", tol, tret,
+         max_order, T);
+  ida_print_counts(&counts, &run);
+  printf(", \"crossings\": [");
   double worst = 0.0;
-  for (int k = 0; k < nroots; k++) {
-    double err = roots[k] - (2 * k + 1) * T / 4.0;
+  for (int k = 0; k < run.nroots; k++) {
+    double err = run.roots[k] - (2 * k + 1) * T / 4.0;
     if (fabs(err) > worst) worst = fabs(err);
     printf("%s%.3e", k ? ", " : "", err);
   }
@@ -187,11 +154,6 @@ int main(int argc, char **argv) {
   }
   printf("}\n");
 
-  IDAFree(&mem);
-  SUNLinSolFree(LS);
-  SUNMatDestroy(A);
-  N_VDestroy(yy);
-  N_VDestroy(yp);
-  SUNContext_Free(&ctx);
+  ida_finish(mem, LS, A, yy, yp, ctx);
   return 0;
 }

@@ -32,6 +32,9 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#define IDA_DRIVER "ida_transamp"
+#include "ida_common.h"
+
 static const double UB = 6.0, UF = 0.026, ALPHA = 0.99, BETA = 1e-6, R0 = 1000.0, RK = 9000.0,
                     C1 = 1e-6, C2 = 2e-6, C3 = 3e-6, C4 = 4e-6, C5 = 5e-6;
 static const double PI = 3.1415926535897931;
@@ -41,11 +44,6 @@ static const double REF[8] = {
     -0.5562145012262709e-002, 0.3006522471903042e+001, 0.2849958788608128e+001,
     0.2926422536206241e+001,  0.2704617865010554e+001, 0.2761837778393145e+001,
     0.4770927631616772e+001,  0.1236995868091548e+001};
-
-static void fail(const char *what, long flag) {
-  fprintf(stderr, "ida_transamp: %s failed (flag %ld)\n", what, flag);
-  exit(1);
-}
 
 static int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *data) {
   (void)data;
@@ -110,60 +108,26 @@ int main(int argc, char **argv) {
   const double y0[8] = {0.0, 3.0, 3.0, 6.0, 3.0, 3.0, 6.0, 0.0};
   for (int i = 0; i < 8; i++) y[i] = y0[i];
   consistent_yp(y, p);
-  void *mem = IDACreate(ctx);
-  if (!mem) fail("IDACreate", 0);
+  void *mem = ida_start(ctx, res_fn, yy, yp, tol, t_end);
   long flag;
-  if ((flag = IDAInit(mem, res_fn, 0.0, yy, yp))) fail("IDAInit", flag);
-  if ((flag = IDASStolerances(mem, tol, tol))) fail("IDASStolerances", flag);
-  if ((flag = IDASetMaxNumSteps(mem, 10000000))) fail("IDASetMaxNumSteps", flag);
   if ((flag = IDASetMaxOrd(mem, max_order))) fail("IDASetMaxOrd", flag);
-  if ((flag = IDASetStopTime(mem, t_end))) fail("IDASetStopTime", flag);
   if ((flag = IDASetNonlinConvCoef(mem, conv_coef))) fail("IDASetNonlinConvCoef", flag);
   SUNMatrix A = SUNDenseMatrix(8, 8, ctx);
   SUNLinearSolver LS = SUNLinSol_Dense(yy, A, ctx);
   if ((flag = IDASetLinearSolver(mem, LS, A))) fail("IDASetLinearSolver", flag);
 
-  long hist[6] = {0};
-  long nst_prev = 0;
-  double tret = 0.0;
-  while (tret < t_end) {
-    flag = IDASolve(mem, t_end, &tret, yy, yp, IDA_ONE_STEP);
-    if (flag < 0) fail("IDASolve", flag);
-    long nst;
-    int kused;
-    IDAGetNumSteps(mem, &nst);
-    if (nst > nst_prev) {
-      IDAGetLastOrder(mem, &kused);
-      hist[kused] += nst - nst_prev;
-      nst_prev = nst;
-    }
-    if (flag == IDA_TSTOP_RETURN) break;
-  }
-  long nst, nre, nje, nsetups, netf, ncfn, nni, nreLS;
-  IDAGetNumSteps(mem, &nst);
-  IDAGetNumResEvals(mem, &nre);
-  IDAGetNumJacEvals(mem, &nje);
-  IDAGetNumLinResEvals(mem, &nreLS);
-  IDAGetNumLinSolvSetups(mem, &nsetups);
-  IDAGetNumErrTestFails(mem, &netf);
-  IDAGetNumNonlinSolvConvFails(mem, &ncfn);
-  IDAGetNumNonlinSolvIters(mem, &nni);
+  struct ida_run run;
+  ida_steps(mem, t_end, yy, yp, &run);
+  struct ida_counts counts = ida_counts(mem);
   double worst = 0.0;
   for (int i = 0; i < 8; i++) {
     double e = fabs((y[i] - REF[i]) / REF[i]);
     if (e > worst) worst = e;
   }
-  printf("{\"tol\": %g, \"t_end\": %.17g, \"max_order\": %d, \"conv_coef\": %g, \"steps\": %ld, "
-         "\"error_test_failures\": %ld, \"newton_failures\": %ld, \"residual_evals\": %ld, "
-         "\"jacobian_evals\": %ld, \"factorizations\": %ld, \"newton_iterations\": %ld, "
-         "\"orders\": [%ld, %ld, %ld, %ld, %ld], \"scd\": %.2f}\n",
-         tol, tret, max_order, conv_coef, nst, netf, ncfn, nre + nreLS, nje, nsetups, nni, hist[1], hist[2],
-         hist[3], hist[4], hist[5], -log10(worst));
-  IDAFree(&mem);
-  SUNLinSolFree(LS);
-  SUNMatDestroy(A);
-  N_VDestroy(yy);
-  N_VDestroy(yp);
-  SUNContext_Free(&ctx);
+  printf("{\"tol\": %g, \"t_end\": %.17g, \"max_order\": %d, \"conv_coef\": %g, ", tol,
+         run.tret, max_order, conv_coef);
+  ida_print_counts(&counts, &run);
+  printf(", \"scd\": %.2f}\n", -log10(worst));
+  ida_finish(mem, LS, A, yy, yp, ctx);
   return 0;
 }
