@@ -1054,6 +1054,16 @@ fn add_into(constant: &mut Q, map: &mut BTreeMap<Expr, Q>, e: &Expr, scale: &Q) 
     }
 }
 
+/// `Σ c_k t_k` for the terms `[(c_k, t_k)]`, collected.
+fn sum_of_terms(terms: &[(Q, Expr)]) -> Expr {
+    let mut constant = Q::zero();
+    let mut map = BTreeMap::new();
+    for (c, t) in terms {
+        add_into(&mut constant, &mut map, t, c);
+    }
+    make_sum(constant, map)
+}
+
 /// `Σ items`.
 pub fn add_all<I: IntoIterator<Item = Expr>>(items: I) -> Expr {
     let mut constant = Q::zero();
@@ -1193,24 +1203,12 @@ impl ProdBuilder {
             }
         }
         if kept.is_empty() {
-            let mut constant = Q::zero();
-            let mut map = BTreeMap::new();
-            for (c, t) in &acc {
-                add_into(&mut constant, &mut map, t, c);
-            }
-            return make_sum(constant, map);
+            return sum_of_terms(&acc);
         }
         // Keep the remaining sums as factors (bounded expansion).
         let (c, rest) = match acc.len() {
             1 => acc.swap_remove(0),
-            _ => {
-                let mut constant = Q::zero();
-                let mut map = BTreeMap::new();
-                for (c, t) in &acc {
-                    add_into(&mut constant, &mut map, t, c);
-                }
-                split_coefficient(&make_sum(constant, map))
-            }
+            _ => split_coefficient(&sum_of_terms(&acc)),
         };
         let mut factors: BTreeMap<Expr, Q> = BTreeMap::new();
         let mut push = |b: Expr| *factors.entry(b).or_insert_with(Q::zero) += q(1);
