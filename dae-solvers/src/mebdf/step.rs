@@ -344,7 +344,8 @@ impl<'a> Integrator<'a> {
         if self.error_failures == 1 {
             self.first_rejection = Some((self.h, err));
         }
-        if stalled && !self.stalled_this_step {
+        if stalled {
+            // Once per step: the second rejection comes once.
             self.stalled_this_step = true;
             self.stalls += 1;
         }
