@@ -291,6 +291,22 @@ fn transamp_inconsistent_start_is_projected_or_refused() {
 
 // ------------------------------------------------------------------ refusals
 
+/// `r` was refused before its first step (`not_applicable`) with a message
+/// holding every one of `needles`; `label` names the run in a failure.
+fn assert_refused(label: &str, r: &runner::RunRecord, needles: &[&str]) {
+    let error = r
+        .error
+        .as_ref()
+        .unwrap_or_else(|| panic!("{label}: ran, not refused"));
+    assert_eq!(error.kind, "not_applicable", "{label}: {}", error.message);
+    assert!(
+        needles.iter().all(|n| error.message.contains(n)),
+        "{label}: {}",
+        error.message
+    );
+    assert_eq!(r.stats.steps, 0, "{label}: refused before a step");
+}
+
 /// `gauss` makes its end point consistent on the rows of `E` that are
 /// zero; the CV loop's source current and the amplifier's node equations
 /// are fixed by combinations of rows holding derivatives, so it refuses
@@ -303,16 +319,10 @@ fn gauss_refuses_algebraic_conditions_that_are_not_rows() {
         let scene = Scene::load(scenes_dir().join(format!("{name}.toml"))).unwrap();
         let inputs = inputs(&scene).unwrap();
         let r = runner::run(&inputs.spec(&scene, "gauss", "rcd0", 1e-6)).unwrap();
-        let error = r.error.unwrap_or_else(|| panic!("{name}: gauss ran"));
-        assert_eq!(error.kind, "not_applicable", "{name}: {}", error.message);
-        assert!(
-            error.message.contains(&format!(
-                "E has {conditions} null directions (algebraic conditions) but only {zero_rows} zero rows"
-            )),
-            "{name}: {}",
-            error.message
+        let reason = format!(
+            "E has {conditions} null directions (algebraic conditions) but only {zero_rows} zero rows"
         );
-        assert_eq!(r.stats.steps, 0, "{name}: refused before a step");
+        assert_refused(&format!("{name} gauss"), &r, &[&reason]);
     }
 }
 
@@ -340,17 +350,12 @@ fn bdf_family_refuses_index_2_forms_that_are_not_hessenberg() {
     for solver in ["bdf", "mebdf"] {
         for (name, f, unknown) in [("cstr", "ori2", "R"), ("cstr", "rcd1", "R")] {
             let r = run(name, solver, f, None);
-            let error = r
-                .error
-                .unwrap_or_else(|| panic!("{name}: {solver}({f}) ran"));
-            assert_eq!(error.kind, "not_applicable", "{name}: {}", error.message);
-            assert!(
-                error.message.contains("not in Hessenberg form")
-                    && error.message.contains(&format!("`{unknown}`")),
-                "{name}: {}",
-                error.message
+            let label = format!("{name} {solver}({f})");
+            assert_refused(
+                &label,
+                &r,
+                &["not in Hessenberg form", &format!("`{unknown}`")],
             );
-            assert_eq!(r.stats.steps, 0, "{name}: refused before a step");
         }
         // Index 1: taken (and accurate at this tolerance).
         let r = run("cstr", solver, "rcd0", None);
@@ -394,17 +399,8 @@ fn a_time_dependent_leading_matrix_at_index_2_is_refused() {
     // `core::policy::leading_constant_in_time`) and refuse it likewise.
     for solver in ["bdf", "radau5", "odradau"] {
         let r = runner::run(&inputs.spec(&scene, solver, "ori2", 1e-6)).unwrap();
-        let error = r.error.expect("ori2 ran");
-        assert_eq!(error.kind, "not_applicable", "{solver}: {}", error.message);
-        assert!(
-            error
-                .message
-                .contains("E depends on t in this index-2 formulation")
-                && error.message.contains(solver),
-            "{solver}: {}",
-            error.message
-        );
-        assert_eq!(r.stats.steps, 0, "{solver}: refused before a step");
+        let reason = "E depends on t in this index-2 formulation";
+        assert_refused(&format!("{solver}(ori2)"), &r, &[reason, solver]);
     }
     let r = runner::run(&inputs.spec(&scene, "bdf", "rcd0", 1e-6)).unwrap();
     assert_eq!(r.status, "ok", "{:?}", r.error);
