@@ -11,7 +11,7 @@ use super::step::Integrator;
 use super::tableau::Collocation;
 use crate::core::block::{self, Part};
 use crate::core::matrix::{Matrix, Rows, Structure};
-use crate::core::weights::Weights;
+use crate::core::weights::{Plain, Weights};
 use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
 use crate::options::Options;
 use crate::NotApplicable;
@@ -52,7 +52,7 @@ pub(super) struct Work {
     /// `y'(t_n)` from the last collocation polynomial (for `∂(E z)/∂y`).
     pub(super) yp: Vec<f64>,
     /// Error weights, index-scaled.
-    pub(super) weights: Weights,
+    pub(super) weights: Weights<Plain>,
     /// Row classes of the least-squares systems.
     pub(super) rows: Rows,
     /// Collocation polynomial of the last accepted step (`4N`).

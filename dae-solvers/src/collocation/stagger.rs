@@ -44,7 +44,7 @@ use super::UROUND;
 use crate::core::block::Part;
 use crate::core::matrix::Matrix;
 use crate::core::newton::{Contraction, Verdict};
-use crate::core::weights::Weights;
+use crate::core::weights::{Plain, Weights};
 use crate::linalg::with_size;
 use crate::options::Options;
 use dae_core::system::{Blocks, DaeSystem};
@@ -57,9 +57,9 @@ pub(super) struct Stagger {
     /// Whether the sensitivities are in the error test.
     pub(super) error_control: bool,
     /// The state's Newton weights (`N`, all in the norm).
-    state_weights: Weights,
+    state_weights: Weights<Plain>,
     /// The sensitivities' Newton weights (all unknowns, the state's out).
-    sens_weights: Weights,
+    sens_weights: Weights<Plain>,
     /// The state's Jacobian (`N × N`).
     jac: DMatrix<f64>,
     /// `[∂f/∂y | ∂f/∂p]` of the state's rows at the three stage points
