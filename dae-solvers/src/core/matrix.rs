@@ -61,19 +61,19 @@
 //!
 //! # Algebraic conditions among the differential rows
 //!
-//! Rows that hold derivatives may combine into one that holds none: a
-//! dynamic equation beside the derivative of a constraint with the same
-//! row of `E` (Gear–Hsu–Petzold's `ovd0`: `y1' + ηt y2' + (1 + η) y2 = f2`
-//! and `y1' + ηt y2' + η y2 = f1'`), or the acceleration level
-//! `G v' + … = 0` beside the dynamics `M v' = …`. Their combination `V`
-//! with `Vᵀ E_D = 0` is a condition on `y` alone — with the constraint rows,
-//! the hidden constraint that makes the overdetermined form index one. In
-//! the least-squares test it is mixed with the rows' derivatives (on
-//! Gear–Hsu–Petzold the test direction is `η` times the one row plus
-//! `1 + η` times the other, whose `y'` do not cancel), and the collocation
-//! conditions left are those of an index-2 system with a time-dependent
-//! `E`, which Radau IIA's simplified Newton iteration with `E(t_n)` does
-//! not solve to its order (EXTREMES.md §5, lit9: 2.2 digits at 1e-8).
+//! Rows that hold derivatives may combine into one that holds none: in a
+//! circuit's loop of capacitors and a voltage source (`mna_cv_loop`'s
+//! `ovd0`), the loop's rows `(c1 + c2) e2' − c1 e1' = …`,
+//! `c1 e1' − c1 e2' = −jv` and the source's derivative `e1' = …` hold
+//! derivatives of `e1`, `e2` only, and one combination of the three fixes
+//! the loop's current `jv`; likewise a dynamic row beside the derivative of
+//! a constraint with the same row of `E`. Such a combination `V` with
+//! `Vᵀ E_D = 0` is a condition on `y` alone. In the least-squares test it is
+//! mixed with the rows' derivatives, and the unknown it fixes is then
+//! determined as in a system of higher index: `odradau(ovd0)` on the CV
+//! loop took 5 018 steps at 1e-10 (EXTREMES.md §5, lit9), 654 with it held.
+//! (`core::eliminate` forms such rows for a mass-matrix model with a
+//! state-dependent `E`; a constant `E` is left as it is there.)
 //! [`ProjectedStages`] therefore holds `Vᵀ D` exactly, with `C`, and tests
 //! the differential rows only on the null space of both (`V` from an SVD
 //! of `E_D` with its rows scaled to largest entry one, found again only
@@ -977,13 +977,8 @@ impl ProjectedStages {
     /// changed since the last call.
     ///
     /// Such a combination is a condition on `y` alone hidden among rows
-    /// that hold derivatives: a dynamic equation and the derivative of a
-    /// constraint with the same leading row (Gear–Hsu–Petzold's `ovd0`),
-    /// or the acceleration level `G v' + … = 0` against the dynamics
-    /// `M v' = …` of a mechanical system. Tested in a least-squares sense
-    /// it would be mixed with the rows' derivatives; the collocation
-    /// conditions that remain are then those of a system of higher index,
-    /// which the method does not solve to its order.
+    /// that hold derivatives (see the [module documentation](self),
+    /// "Algebraic conditions among the differential rows").
     fn algebraic(&mut self, e: &DMatrix<f64>) -> Result<usize, Singular> {
         let (n, q) = (self.n, self.q);
         let rows = &self.diff_rows[..q];
@@ -1371,9 +1366,11 @@ mod tests {
     #[test]
     fn algebraic_combinations_of_differential_rows_are_held_exactly() {
         let mut next = rng(5);
-        // Gear–Hsu–Petzold's ovd0 at t = 0.7, η = 1: the constraint, its
-        // derivative and the dynamic equation; then a 5 × 4 system with a
-        // dependent pair of rows beside two independent ones.
+        // Gear–Hsu–Petzold at t = 0.7, η = 1, with the constraint's
+        // derivative kept as a row holding derivatives (the derivation's
+        // ovd0 substitutes it): the constraint, that row and the dynamic
+        // equation; then a 5 × 4 system with a dependent pair of rows
+        // beside two independent ones.
         let ghp_e = DMatrix::from_row_slice(3, 2, &[0.0, 0.0, 1.0, 0.7, 1.0, 0.7]);
         let ghp_j = DMatrix::from_row_slice(3, 2, &[-1.0, -0.7, 0.0, -1.0, 0.0, -2.0]);
         let mut e5 = DMatrix::from_fn(5, 4, |_, _| next());
