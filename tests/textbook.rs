@@ -407,6 +407,48 @@ fn a_time_dependent_leading_matrix_at_index_2_is_refused() {
     assert!(r.scd.is_some_and(|d| d >= 4.0), "{:?}", r.scd);
 }
 
+/// Gear–Hsu–Petzold's `ovd0` holds the constraint and the hidden
+/// `y2 = f2 − f1'`: they fix both unknowns, and `odradau`'s error estimate
+/// (the differential rows on the directions the constraints leave free)
+/// has nothing to measure. It refuses before a step (issue 26: it finished
+/// with 2.2 digits at 1e-8 and 6.0, 6.7 at 1e-9, 1e-10 — step points exact
+/// to round-off, the dense output between them uncontrolled, EXTREMES.md
+/// §5, lit9); `odradau(rcd0)` and `odbdf(ovd0)` take the problem.
+#[test]
+fn odradau_refuses_an_overdetermined_form_with_no_free_direction() {
+    let scene = Scene::load(scenes_dir().join("gear_hsu_petzold.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "odradau", "ovd0", 1e-8)).unwrap();
+    let reason = "2 constraint rows and 0 algebraic combinations of the rows holding derivatives fix all 2 unknowns";
+    assert_refused("odradau(ovd0)", &r, &[reason, "odradau"]);
+    for (solver, form) in [("odradau", "rcd0"), ("odbdf", "ovd0")] {
+        let r = runner::run(&inputs.spec(&scene, solver, form, 1e-8)).unwrap();
+        assert_eq!(r.status, "ok", "{solver}({form}): {:?}", r.error);
+        assert!(
+            r.scd.is_some_and(|d| d >= 6.0),
+            "{solver}({form}): {:?}",
+            r.scd
+        );
+    }
+}
+
+/// The CV loop's `ovd0`: the loop's two rows and the source's derivative
+/// `e1' = v0 w cos wt` hold derivatives of `e1`, `e2` only, and one
+/// combination of the three holds none — the condition that fixes the
+/// source current `jv`. `odradau` holds it exactly beside the constraint
+/// rows (`core::matrix::algebraic_combinations`); tested in the least
+/// squares with the rows' derivatives it took 1 473 steps at 1e-8 (8.8
+/// digits), now 263 (8.0).
+#[test]
+fn odradau_holds_the_cv_loops_hidden_condition() {
+    let scene = Scene::load(scenes_dir().join("mna_cv_loop.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "odradau", "ovd0", 1e-8)).unwrap();
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    assert!(r.scd.is_some_and(|d| d >= 6.0), "{:?}", r.scd);
+    assert!(r.stats.steps < 400, "{} steps", r.stats.steps);
+}
+
 /// Andrews' squeezer in `rcd1` with `mebdf` at 1e-8: once stopped with
 /// `step_size_too_small` at t ≈ 0.02 (h ≈ 1e-17, as at 1e-7 and 1e-9),
 /// its order-6 estimate not falling with the step while every step was

@@ -561,6 +561,24 @@ pub enum NotApplicable {
         /// The formulation's largest index.
         d_index: u8,
     },
+    /// An overdetermined formulation whose constraint rows and the
+    /// algebraic combinations of its rows holding derivatives fix every
+    /// unknown, for a least-squares method whose error estimate measures
+    /// the differential rows on the directions the constraints leave free
+    /// (`odradau`, see [`crate::core::policy::free_directions`]).
+    #[error(
+        "the {constraints} constraint rows and {combinations} algebraic combinations of the rows holding derivatives fix all {unknowns} unknowns: no direction is left free, so {solver}'s error estimate (the differential rows measured on the free directions) sees nothing and neither the step size nor the solution between steps is controlled (Gear, Hsu & Petzold's ovd0: 2.2 digits at 1e-8); use an index-1 formulation (rcd0)"
+    )]
+    NoFreeDirection {
+        /// The solver that refuses.
+        solver: &'static str,
+        /// Constraint rows with a zero row of `E`.
+        constraints: usize,
+        /// Algebraic combinations of the other rows.
+        combinations: usize,
+        /// Unknowns `N`.
+        unknowns: usize,
+    },
     /// An unknown has a higher index than the method integrates.
     #[error("index {index}: solver takes unknowns of index at most {max}")]
     IndexTooHigh {

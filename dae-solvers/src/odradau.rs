@@ -42,6 +42,18 @@
 //! `ggl1`, `psi1`, `psi0`, `rcd1`, `rcd0`. `ori2` (c-level 2) is refused
 //! with [`NotApplicable::ConstraintLevel`]; `radau5` integrates it.
 //!
+//! Rows holding derivatives whose combination holds none (a dynamic row
+//! beside the derivative of a constraint with the same row of `E`, as in a
+//! circuit's loop of capacitors and a voltage source) are a condition on
+//! the unknowns: the stage solve holds it exactly with the constraint rows
+//! (`core::matrix`, "Algebraic conditions among the differential rows").
+//! When those conditions and the constraint rows fix every unknown, no
+//! direction is left for the differential rows, and the error estimate —
+//! the same projected solve — has nothing to measure: such a formulation
+//! is refused with [`NotApplicable::NoFreeDirection`] (see
+//! [`policy::free_directions`]; Gear–Hsu–Petzold's and Pantelides'
+//! reactor's `ovd0`).
+//!
 //! # Example
 //!
 //! ```
@@ -93,6 +105,7 @@ impl Solver for OdRadau {
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
         policy::leading_constant_in_time(self.name(), problem)?;
+        policy::free_directions(self.name(), problem)?;
         collocation::integrator::<RadauIIA>(problem, options, StageSolveKind::LeastSquares)
     }
 }

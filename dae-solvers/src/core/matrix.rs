@@ -58,6 +58,27 @@
 //! constraint rows defeat partial pivoting (the Newton iteration then
 //! diverged on the first step). For a square nonsingular system the
 //! projection is the exact solve.
+//!
+//! # Algebraic conditions among the differential rows
+//!
+//! Rows that hold derivatives may combine into one that holds none: in a
+//! circuit's loop of capacitors and a voltage source (`mna_cv_loop`'s
+//! `ovd0`), the loop's rows `(c1 + c2) e2' − c1 e1' = …`,
+//! `c1 e1' − c1 e2' = −jv` and the source's derivative `e1' = …` hold
+//! derivatives of `e1`, `e2` only, and one combination of the three fixes
+//! the loop's current `jv`; likewise a dynamic row beside the derivative of
+//! a constraint with the same row of `E`. Such a combination `V` with
+//! `Vᵀ E_D = 0` is a condition on `y` alone. In the least-squares test it is
+//! mixed with the rows' derivatives, and the unknown it fixes is then
+//! determined as in a system of higher index: `odradau(ovd0)` on the CV
+//! loop took 5 018 steps at 1e-10 (EXTREMES.md §5, lit9), 654 with it held.
+//! (`core::eliminate` forms such rows for a mass-matrix model with a
+//! state-dependent `E`; a constant `E` is left as it is there.)
+//! [`ProjectedStages`] therefore holds `Vᵀ D` exactly, with `C`, and tests
+//! the differential rows only on the null space of both (`V` from an SVD
+//! of `E_D` with its rows scaled to largest entry one, found again only
+//! when `E_D` changes). When `M = N`, or when `E_D` has full row rank
+//! (`ovd1`), `V` is empty and nothing changes.
 
 use super::block::Part;
 use crate::linalg::lstsq::{null_space, split_rows};
@@ -798,6 +819,53 @@ impl StageSystems for SquareStages {
     }
 }
 
+/// The algebraic combinations of `q` rows holding derivatives, `e_d` their
+/// rows of `E` (`q × n`, row-major): an orthonormal basis of the left null
+/// space of `e_d` with each row scaled to largest entry one (a zero row is
+/// one of them), found by an SVD and written to `out` in the rows' own
+/// scale (`vᵀ e_d = 0`, `r × q` row-major); returns their number `r`. A
+/// singular value counts as zero below `10³ ε max(n, q)`, the tolerance of
+/// the rank of `E` elsewhere (`gauss`'s end-point projection).
+pub(crate) fn algebraic_combinations(e_d: &[f64], n: usize, q: usize, out: &mut Vec<f64>) -> usize {
+    out.clear();
+    if q == 0 {
+        return 0;
+    }
+    let scale: Vec<f64> = e_d
+        .chunks_exact(n.max(1))
+        .map(|row| {
+            let big = row.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            if big > 0.0 {
+                1.0 / big
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    // Transposed and padded with zero rows to at least q × q, so that the
+    // SVD's Vᵀ is q × q.
+    let b = DMatrix::from_fn(n.max(q), q, |c, s| {
+        if c < n {
+            e_d[s * n + c] * scale[s]
+        } else {
+            0.0
+        }
+    });
+    let svd = b.svd(false, true);
+    let Some(v_t) = svd.v_t else {
+        return 0;
+    };
+    let tol = 1e3 * f64::EPSILON * n.max(q) as f64;
+    let mut r = 0;
+    for (i, &sigma) in svd.singular_values.iter().enumerate() {
+        if sigma <= tol {
+            out.extend((0..q).map(|s| v_t[(i, s)] * scale[s]));
+            r += 1;
+        }
+    }
+    r
+}
+
 /// Radau's stage systems for `M ≥ N`, projected onto one square system per
 /// factorisation (see the [module documentation](self)): the constraint
 /// rows as they are, and the differential rows tested against the weighted
@@ -831,6 +899,15 @@ pub(crate) struct ProjectedStages {
     /// The projected complex right-hand side, split (real, imaginary).
     cre: Vec<f64>,
     cim: Vec<f64>,
+    /// The algebraic combinations of the differential rows (see
+    /// [`algebraic_combinations`]): their number `r` and the combinations
+    /// (`r × q`, row-major), with the `E` (column-major) and the row
+    /// indices they were found for — reused while both stay the same (a
+    /// constant `E`).
+    alg: usize,
+    alg_v: Vec<f64>,
+    alg_e: Vec<f64>,
+    alg_rows: Vec<usize>,
 }
 
 impl ProjectedStages {
@@ -854,6 +931,77 @@ impl ProjectedStages {
             }
             *o = sum;
         }
+    }
+}
+
+impl ProjectedStages {
+    /// The algebraic combinations `V` of the differential rows (see
+    /// [`ProjectedStages::algebraic`]), held exactly: the rows `Vᵀ (g E_D −
+    /// J_D)` of the real matrix written to `ct` after the `p` constraint
+    /// rows, and `Vᵀ` to the first rows of `wt`; returns their number `r`.
+    /// Out of line: called only when there are more differential rows than
+    /// test directions, and then found afresh only when `E` changes.
+    #[inline(never)]
+    fn combinations(
+        &mut self,
+        e: &DMatrix<f64>,
+        j: &DMatrix<f64>,
+        g: f64,
+    ) -> Result<usize, Singular> {
+        let (n, p, q) = (self.n, self.p, self.q);
+        let r = self.algebraic(e)?;
+        if r > n - p {
+            return Err(Singular);
+        }
+        for (col, v) in self.ct[p * n..(p + r) * n]
+            .chunks_exact_mut(n)
+            .zip(self.alg_v.chunks_exact(q))
+        {
+            for (c, x) in col.iter_mut().enumerate() {
+                *x = v
+                    .iter()
+                    .zip(&self.diff_rows[..q])
+                    .map(|(&v, &i)| v * (g * e[(i, c)] - j[(i, c)]))
+                    .sum();
+            }
+        }
+        self.wt[..r * q].copy_from_slice(&self.alg_v[..r * q]);
+        Ok(r)
+    }
+
+    /// The algebraic combinations of the differential rows of `e` (the
+    /// rows `diff_rows[..q]`): an orthonormal basis `V` of the left null
+    /// space of `E_D` with each row of `E_D` scaled to largest entry one,
+    /// written to `alg_v` in the original rows' scale (`vᵀ E_D = 0`);
+    /// returns their number `r`. Found afresh only when `E_D` or its rows
+    /// changed since the last call.
+    ///
+    /// Such a combination is a condition on `y` alone hidden among rows
+    /// that hold derivatives (see the [module documentation](self),
+    /// "Algebraic conditions among the differential rows").
+    fn algebraic(&mut self, e: &DMatrix<f64>) -> Result<usize, Singular> {
+        let (n, q) = (self.n, self.q);
+        let rows = &self.diff_rows[..q];
+        // The whole of `E` is kept (column-major): one comparison of two
+        // slices per factorisation while it stays the same.
+        if self.alg_rows.as_slice() == rows && self.alg_e.as_slice() == e.as_slice() {
+            return Ok(self.alg);
+        }
+        self.alg_rows.clear();
+        self.alg_rows.extend_from_slice(rows);
+        self.alg_e.clear();
+        self.alg_e.extend_from_slice(e.as_slice());
+        let mut e_d = Vec::with_capacity(q * n);
+        for &i in rows {
+            e_d.extend((0..n).map(|c| e[(i, c)]));
+        }
+        if !all_finite(&e_d) {
+            self.alg_rows.clear();
+            return Err(Singular);
+        }
+        let r = algebraic_combinations(&e_d, n, q, &mut self.alg_v);
+        self.alg = r;
+        Ok(r)
     }
 }
 
@@ -881,6 +1029,10 @@ impl StageSystems for ProjectedStages {
             cbuf: vec![Complex::new(0.0, 0.0); n],
             cre: vec![0.0; n],
             cim: vec![0.0; n],
+            alg: 0,
+            alg_v: Vec::new(),
+            alg_e: Vec::new(),
+            alg_rows: Vec::new(),
         }
     }
     fn factor(
@@ -906,8 +1058,18 @@ impl StageSystems for ProjectedStages {
         (self.p, self.q) = (p, q);
         let k = n - p;
         let real = |r: usize, c: usize| g * e[(r, c)] - j[(r, c)];
+        // The algebraic combinations of the differential rows (more of them
+        // than test directions only: a square system is solved exactly
+        // whatever its rows), held exactly beside the constraint rows.
+        let r = if q > k {
+            self.combinations(e, j, g)?
+        } else {
+            0
+        };
 
-        // Z: the null space of the real matrix's constraint rows C.
+        // Z: the null space of the real matrix's constraint rows C and of
+        // the algebraic combinations V of its differential rows (written
+        // after C by `combinations`).
         for (col, &i) in self.ct.chunks_exact_mut(n).zip(&self.exact_rows[..p]) {
             for (c, v) in col.iter_mut().enumerate() {
                 *v = real(i, c);
@@ -916,21 +1078,23 @@ impl StageSystems for ProjectedStages {
         null_space(
             &mut self.ct,
             n,
-            p,
+            p + r,
             &mut self.tau,
             &mut self.norms,
             &mut self.z,
         )?;
 
-        // Wᵀ = (S D Z)ᵀ S (k × q, row-major): entry (l, r) is s_r (D Z)_rl s_r.
-        for (l, zl) in self.z[..n * k].chunks_exact(n).enumerate() {
+        // After the r rows V (written by `combinations`), Wᵀ = (S D Z)ᵀ S
+        // ((k − r) × q, row-major): entry (l, r) is s_r (D Z)_rl s_r.
+        let wt = &mut self.wt[r * q..];
+        for (l, zl) in self.z[..n * (k - r)].chunks_exact(n).enumerate() {
             for (r, (&i, &s)) in self.diff_rows[..q]
                 .iter()
                 .zip(&self.weight[..q])
                 .enumerate()
             {
                 let dz: f64 = zl.iter().enumerate().map(|(c, &zc)| real(i, c) * zc).sum();
-                self.wt[l * q + r] = (s * dz) * s;
+                wt[l * q + r] = (s * dz) * s;
             }
         }
         // Each test vector scaled so that its row of the real matrix has
@@ -1189,6 +1353,89 @@ mod tests {
                 assert!(
                     (u - v).abs() <= 1e-12 * (1.0 + v.abs()),
                     "{m}x{n}: {x:?} vs {want:?}"
+                );
+            }
+        }
+    }
+
+    /// Rows holding derivatives whose combination holds none (two rows
+    /// with one row of `E`, as a dynamic equation beside the derivative of
+    /// a constraint) make a condition on the unknowns alone: the projected
+    /// systems hold it exactly, as they hold the constraint rows, and test
+    /// only what is left in the least-squares sense.
+    #[test]
+    fn algebraic_combinations_of_differential_rows_are_held_exactly() {
+        let mut next = rng(5);
+        // Gear–Hsu–Petzold at t = 0.7, η = 1, with the constraint's
+        // derivative kept as a row holding derivatives (the derivation's
+        // ovd0 substitutes it): the constraint, that row and the dynamic
+        // equation; then a 5 × 4 system with a dependent pair of rows
+        // beside two independent ones.
+        let ghp_e = DMatrix::from_row_slice(3, 2, &[0.0, 0.0, 1.0, 0.7, 1.0, 0.7]);
+        let ghp_j = DMatrix::from_row_slice(3, 2, &[-1.0, -0.7, 0.0, -1.0, 0.0, -2.0]);
+        let mut e5 = DMatrix::from_fn(5, 4, |_, _| next());
+        for c in 0..4 {
+            e5[(0, c)] = 0.0;
+            e5[(4, c)] = -2.5 * e5[(2, c)];
+        }
+        let j5 = DMatrix::from_fn(5, 4, |_, _| next());
+        for (e, j, exact, combination) in [
+            (ghp_e, ghp_j, vec![true, false, false], vec![0.0, 1.0, -1.0]),
+            (
+                e5,
+                j5,
+                vec![true, false, false, false, false],
+                vec![0.0, 0.0, 2.5, 0.0, 1.0],
+            ),
+        ] {
+            let (m, n) = e.shape();
+            let rows = rows(&exact, &mut next);
+            let (g, a, b) = (3.7, 2.5, 1.5);
+            let mut ps = ProjectedStages::new(m, n);
+            ps.factor(
+                &Matrix::Dense(e.clone()),
+                &Matrix::Dense(j.clone()),
+                g,
+                a,
+                b,
+                &rows,
+            )
+            .expect("nonsingular");
+            assert_eq!(ps.alg, 1, "{m}x{n}");
+            let rhs: Vec<f64> = (0..2 * m).map(|_| next()).collect();
+            // The constraint row and the combination hold exactly in the
+            // real system and in the complex one.
+            let held = |x: &[f64], xi: &[f64], c: f64, d: f64| {
+                let row = |w: &[f64], x: &[f64], xi: &[f64], r: &[f64]| {
+                    let (mut re, mut im, mut want) = (0.0, 0.0, 0.0);
+                    for (i, &wi) in w.iter().enumerate() {
+                        for k in 0..n {
+                            let (ar, ai) = (c * e[(i, k)] - j[(i, k)], d * e[(i, k)]);
+                            re += wi * (ar * x[k] - ai * xi[k]);
+                            im += wi * (ar * xi[k] + ai * x[k]);
+                        }
+                        want += wi * r[i];
+                    }
+                    (re - want, im)
+                };
+                let mut first = vec![0.0; m];
+                first[0] = 1.0;
+                [
+                    row(&first, x, xi, &rhs[..m]),
+                    row(&combination, x, xi, &rhs[..m]),
+                ]
+            };
+            let mut x = rhs[..m].to_vec();
+            ps.solve_real(&mut x);
+            for (re, im) in held(&x[..n], &vec![0.0; n], g, 0.0) {
+                assert!(re.abs() < 1e-12 && im == 0.0, "{m}x{n} real: {re}");
+            }
+            let (mut re, mut im) = (rhs[..m].to_vec(), vec![0.0; m]);
+            ps.solve_complex(&mut re, &mut im);
+            for (r, i) in held(&re[..n], &im[..n], a, b) {
+                assert!(
+                    r.abs() < 1e-12 && i.abs() < 1e-12,
+                    "{m}x{n} complex: {r} {i}"
                 );
             }
         }

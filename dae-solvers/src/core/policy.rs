@@ -17,9 +17,10 @@
 //! - **Which formulation a solver is given when the user names none**:
 //!   [`preferred_formulations`], the order `dae run` tries.
 
+use crate::core::matrix::algebraic_combinations;
 use crate::error::NotApplicable;
 use crate::{Options, Problem};
-use dae_core::system::{DaeSystem, FormulationInfo, VarKind};
+use dae_core::system::{DaeSystem, FormulationInfo, RowKind, VarKind};
 use nalgebra::DMatrix;
 
 /// Components in the error test of a BDF-type method: all, except the
@@ -256,6 +257,66 @@ pub fn leading_constant_in_time(
         Ok(())
     } else {
         Err(NotApplicable::TimeDependentLeading { solver, d_index })
+    }
+}
+
+/// A least-squares method (`odradau`) on an overdetermined formulation
+/// (`M > N`) with a direction left free: refused with
+/// [`NotApplicable::NoFreeDirection`] when, at `t₀`, the constraint rows
+/// whose row of `E` is zero and the algebraic combinations of the other
+/// rows (`core::matrix::algebraic_combinations`) number `N` or more.
+///
+/// Its stage solve holds both exactly and tests the differential rows on
+/// what they leave free, and its error estimate is that solve's: with
+/// nothing free, the estimate is the residual of the constraints at `y_n`,
+/// round-off, whatever the step. The step points are then exact (each is
+/// an algebraic solve) but the step grows unchecked, and the collocation
+/// polynomial between the points, the dense output, is not controlled:
+/// Gear–Hsu–Petzold's `ovd0` (its constraint and the hidden
+/// `y2 = f2 − f1'` fix `y1` and `y2`) had step points exact to 10⁻¹⁶ and
+/// errors of 10⁻⁶ … 10⁻³ at the check times between them (EXTREMES.md §5,
+/// lit9). Square formulations and those with a free direction pass.
+///
+/// ```
+/// use dae::dae_solvers::core::policy::free_directions;
+/// use dae::dae_solvers::Problem;
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let sys = Pendulum::default().ovd0();
+/// let y = [1.0, 0.0, 0.0, 0.0, 0.0];
+/// let problem = Problem { system: &sys, t0: 0.0, y0: &y, t_end: 1.0 };
+/// assert!(free_directions("odradau", &problem).is_ok());
+/// ```
+pub fn free_directions(solver: &'static str, problem: &Problem<'_>) -> Result<(), NotApplicable> {
+    let Some(sys) = state_of(problem.system) else {
+        return Ok(());
+    };
+    let info = sys.info();
+    let (m, n) = (info.equations(), info.unknowns());
+    if m <= n || problem.y0.len() < n {
+        return Ok(());
+    }
+    let mut e = DMatrix::zeros(m, n);
+    sys.leading(problem.t0, &problem.y0[..n], &mut e);
+    let (exact, rows): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| {
+        matches!(info.rows[i].kind, RowKind::Constraint { .. }) && (0..n).all(|c| e[(i, c)] == 0.0)
+    });
+    let e_d: Vec<f64> = rows
+        .iter()
+        .flat_map(|&i| (0..n).map(move |c| (i, c)))
+        .map(|(i, c)| e[(i, c)])
+        .collect();
+    let combinations = algebraic_combinations(&e_d, n, rows.len(), &mut Vec::new());
+    if exact.len() + combinations >= n {
+        Err(NotApplicable::NoFreeDirection {
+            solver,
+            constraints: exact.len(),
+            combinations,
+            unknowns: n,
+        })
+    } else {
+        Ok(())
     }
 }
 

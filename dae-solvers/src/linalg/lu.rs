@@ -89,6 +89,9 @@ impl DenseLu {
     }
 
     /// Overwrite the matrix with `entry(i, j)` and factorise it.
+    // Inlined: the entries are formed where the caller's closure is (the
+    // projected stage systems' rows, `core::matrix`).
+    #[inline]
     pub(crate) fn factor_from(
         &mut self,
         mut entry: impl FnMut(usize, usize) -> f64,
