@@ -80,6 +80,7 @@ impl<L: Corrector> Iteration for Integrator<'_, L> {
     fn ms(&mut self) -> &mut Common {
         &mut self.ms
     }
+    #[inline(always)]
     fn update(&mut self) -> f64 {
         if self.cj != self.cjold {
             // A matrix formed with another `c_J`: the update damped by
@@ -93,6 +94,7 @@ impl<L: Corrector> Iteration for Integrator<'_, L> {
         small::correct(&mut self.y, &mut self.yp, &mut self.e, &self.delta, self.cj);
         self.ms.weights.norm(&self.delta)
     }
+    #[inline(always)]
     fn residual(&mut self) -> bool {
         self.evaluate_residual().is_ok()
     }
@@ -146,6 +148,7 @@ impl<L: Corrector> Integrator<'_, L> {
     }
 
     /// Modified Newton iteration on the corrector from the predictor.
+    #[inline(always)]
     fn newton(&mut self) -> Result<(), Fail> {
         self.predict();
         let pnorm = self.ms.weights.norm(&self.y);

@@ -44,6 +44,7 @@ impl<L: Corrector> Integrator<'_, L> {
     /// Block 1: the history's coefficients for the step and `φ → φ*`;
     /// `c_J = −α_s/h`, `C_k = max(|α_{k+1} + α_s − α⁰|, α_{k+1})`, and a
     /// new iteration matrix when `c_J` has moved too far.
+    #[inline(always)]
     pub(super) fn set_coefficients(&mut self) {
         let k = self.k;
         let h = self.ms.h;

@@ -83,6 +83,7 @@ impl<L: Corrector> Family for Integrator<'_, L> {
             self.hist.rescale_first_step(h_before, self.ms.h);
         }
     }
+    #[inline(always)]
     fn attempt_once(&mut self) -> Result<Outcome, SolveError> {
         Ok(self.attempt())
     }

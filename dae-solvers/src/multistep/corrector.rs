@@ -56,6 +56,7 @@ impl Reuse {
 /// [`JacState::Fresh`]); a failure with a matrix from an earlier step is
 /// retried once with a fresh one. After success the matrix is one from an
 /// earlier step for the next attempt.
+#[inline(always)]
 pub(crate) fn solve_reusing<F: Family + ?Sized>(
     family: &mut F,
     reuse: Reuse,
@@ -102,6 +103,7 @@ pub(crate) trait Iteration {
 /// judged by `monitor` with DASSL's round-off bound `tiny` (`100 ε ‖y⁽⁰⁾‖`):
 /// the rate it measures is carried in [`Common::rate`]; a non-finite
 /// residual at an iterate (not at the predictor) is divergence.
+#[inline(always)]
 pub(crate) fn iterate<I: Iteration + ?Sized>(
     it: &mut I,
     mut monitor: Contraction,

@@ -126,6 +126,7 @@ impl<const NCOL: usize> Divided<NCOL> {
     /// and `φ → φ*`. They are recomputed unless `h` and `k` have been
     /// constant for `k+1` steps. Returns `α_s = −Σ_{j=1}^{k} 1/j` and
     /// `α⁰ = −Σ_{i=1}^{k} α_i`.
+    #[inline(always)]
     pub(crate) fn set_coefficients(&mut self, h: f64, k: usize) -> (f64, f64) {
         if h != self.hold || k != self.kold {
             self.ns = 0;
@@ -185,6 +186,7 @@ impl<const NCOL: usize> Divided<NCOL> {
     /// After a step of order `k` accepted with corrections `e`: the
     /// differences at `t_{n+1}` (`φ_{k+2} = e` for the order-raise test
     /// when `k < max_order`).
+    #[inline(always)]
     pub(crate) fn update(&mut self, k: usize, e: &[f64], max_order: usize) {
         let n = self.n;
         // φ_{k+2} = e, φ_{k+1} += e, then φ_i += φ_{i+1} for i = k … 1.

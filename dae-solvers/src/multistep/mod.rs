@@ -246,6 +246,7 @@ impl<F: Family> Attempts for F {
         ms.last = last;
         self.step_changed(h_before);
     }
+    #[inline(always)]
     fn attempt(&mut self) -> Result<Outcome, SolveError> {
         self.attempt_once()
     }
