@@ -47,6 +47,7 @@ pub mod init;
 pub mod integrator;
 mod linalg;
 pub mod mebdf;
+pub(crate) mod multistep;
 pub mod odbdf;
 pub mod odradau;
 pub mod options;

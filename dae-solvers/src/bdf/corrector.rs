@@ -5,25 +5,21 @@
 use super::step::Integrator;
 use super::EPS;
 use crate::core::control::Failure as Fail;
-use crate::core::matrix::Corrector;
-use crate::core::newton::{Contraction, Rule, Verdict};
+use crate::core::matrix::{Corrector, JacState};
+use crate::core::newton::{Contraction, Rule};
 use crate::linalg::{all_finite, small};
+use crate::multistep::corrector::{self, Iteration, Reuse};
+use crate::multistep::{Common, UNKNOWN_RATE};
 use dae_core::system::{FormulationInfo, RowKind};
 
 /// Newton iterations per attempt (DASSL's `MAXIT`).
 const MAX_NEWTON_ITERATIONS: usize = 4;
-/// Newton iterations per step in fixed-step mode, where a failure cannot be
-/// cured by a smaller step: the modified Newton iteration converges only
-/// linearly, and convergence studies ask for tight tolerances.
-const MAX_NEWTON_ITERATIONS_FIXED_STEP: usize = 20;
 /// Convergence test `ρ/(1−ρ)·‖δ‖ ≤ NEWTON_TOL` (DASSL's and ODASSL's 0.33).
 const NEWTON_TOL: f64 = 0.33;
 /// The same for a least-squares corrector on a formulation without the
 /// position constraint (`odbdf` on `rcd0`), ten times tighter, with the rate
 /// carried from step to step (see [`Convergence::Carried`]).
 const NEWTON_TOL_LEAST_SQUARES: f64 = 0.033;
-/// `ρ/(1−ρ)` before a rate has been measured.
-pub(super) const UNKNOWN_RATE: f64 = 100.0;
 
 /// How the corrector decides that it has converged.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,14 +76,36 @@ impl Convergence {
     }
 }
 
-pub(super) use crate::core::matrix::JacState;
+impl<L: Corrector> Iteration for Integrator<'_, L> {
+    fn ms(&mut self) -> &mut Common {
+        &mut self.ms
+    }
+    #[inline(always)]
+    fn update(&mut self) -> f64 {
+        if self.cj != self.cjold {
+            // A matrix formed with another `c_J`: the update damped by
+            // `2/(1 + c_J/c_J^old)`.
+            let damping = 2.0 / (1.0 + self.cj / self.cjold);
+            for d in &mut self.delta {
+                *d *= damping;
+            }
+        }
+        self.lu.solve(&mut self.delta);
+        small::correct(&mut self.y, &mut self.yp, &mut self.e, &self.delta, self.cj);
+        self.ms.weights.norm(&self.delta)
+    }
+    #[inline(always)]
+    fn residual(&mut self) -> bool {
+        self.evaluate_residual().is_ok()
+    }
+}
 
 impl<L: Corrector> Integrator<'_, L> {
     /// `δ = F(t, y, y')`.
-    fn residual(&mut self) -> Result<(), Fail> {
+    fn evaluate_residual(&mut self) -> Result<(), Fail> {
         self.sys
-            .residual(self.t, &self.y, &self.yp, &mut self.delta);
-        self.stats.residual_evals += 1;
+            .residual(self.ms.t, &self.y, &self.yp, &mut self.delta);
+        self.ms.stats.residual_evals += 1;
         if all_finite(&self.delta) {
             Ok(())
         } else {
@@ -99,102 +117,53 @@ impl<L: Corrector> Integrator<'_, L> {
     /// factor it in place.
     fn form_iteration_matrix(&mut self) -> Result<(), Fail> {
         let sys = &*self.sys;
-        self.rhs_jac.rhs_jacobian(sys, self.t, &self.y);
-        self.lead.leading(sys, self.t, &self.y);
+        let t = self.ms.t;
+        self.rhs_jac.rhs_jacobian(sys, t, &self.y);
+        self.lead.leading(sys, t, &self.y);
         let lead_jac = if self.constant_leading {
             None
         } else {
-            self.lead_jac
-                .leading_jacobian(sys, self.t, &self.y, &self.yp);
+            self.lead_jac.leading_jacobian(sys, t, &self.y, &self.yp);
             Some(&self.lead_jac)
         };
-        self.stats.jacobian_evals += 1;
+        self.ms.stats.jacobian_evals += 1;
         let cj = self.cj;
         if !self.lu.assemble(cj, &self.lead, &self.rhs_jac, lead_jac) {
             return Err(Fail::NonFinite("iteration matrix"));
         }
         self.cjold = cj;
-        self.s = UNKNOWN_RATE;
-        self.jac = JacState::Fresh;
-        self.stats.factorizations += 1;
+        self.ms.rate = UNKNOWN_RATE;
+        self.ms.jac = JacState::Fresh;
+        self.ms.stats.factorizations += 1;
         if L::LEAST_SQUARES {
-            self.rows.update(self.lead.dense(), self.weights.get());
+            self.rows.update(self.lead.dense(), self.ms.weights.get());
         }
         self.lu.factor(&self.rows).map_err(|_| Fail::Singular)
     }
 
     /// Block 3: solve the corrector, re-evaluating the iteration matrix once
-    /// if an old one fails.
+    /// if an old one fails (DASSL's reuse).
     pub(super) fn corrector(&mut self) -> Result<(), Fail> {
-        loop {
-            let stale = self.jac == JacState::Stale;
-            match self.newton() {
-                Ok(()) => {
-                    self.jac = JacState::Stale;
-                    return Ok(());
-                }
-                Err(Fail::Singular) => {
-                    self.jac = JacState::Needed;
-                    return Err(Fail::Singular);
-                }
-                Err(_) if stale => self.jac = JacState::Needed,
-                Err(fail) => {
-                    if self.jac == JacState::Fresh {
-                        self.jac = JacState::Stale;
-                    }
-                    return Err(fail);
-                }
-            }
-        }
+        corrector::solve_reusing(self, Reuse::DASSL, Self::newton)
     }
 
     /// Modified Newton iteration on the corrector from the predictor.
+    #[inline(always)]
     fn newton(&mut self) -> Result<(), Fail> {
         self.predict();
-        let pnorm = self.norm(&self.y);
+        let pnorm = self.ms.weights.norm(&self.y);
         self.e.fill(0.0);
-        self.last_iterations = 0;
-        self.residual()?;
-        if self.jac == JacState::Needed {
+        self.ms.last_iterations = 0;
+        self.evaluate_residual()?;
+        if self.ms.jac == JacState::Needed {
             self.form_iteration_matrix()?;
         }
-        let damping = if self.cj != self.cjold {
-            2.0 / (1.0 + self.cj / self.cjold)
-        } else {
-            1.0
-        };
-        let maxit = if self.cfg.fixed_step {
-            MAX_NEWTON_ITERATIONS_FIXED_STEP
-        } else {
-            MAX_NEWTON_ITERATIONS
-        };
+        let maxit = corrector::max_iterations(&self.ms, MAX_NEWTON_ITERATIONS);
         let (kappa, s) = match self.convergence {
-            Convergence::Carried { kappa } => (kappa, self.s),
+            Convergence::Carried { kappa } => (kappa, self.ms.rate),
             Convergence::Restarted => (NEWTON_TOL, UNKNOWN_RATE),
         };
-        let mut monitor = Contraction::new(Rule::Dassl, maxit, kappa, s);
-        loop {
-            if damping != 1.0 {
-                for d in &mut self.delta {
-                    *d *= damping;
-                }
-            }
-            self.lu.solve(&mut self.delta);
-            self.stats.newton_iterations += 1;
-            self.last_iterations += 1;
-            small::correct(&mut self.y, &mut self.yp, &mut self.e, &self.delta, self.cj);
-            // An overflowing update is a diverging iteration, not a fault of
-            // the problem: the step is retried smaller.
-            let delnrm = self.norm(&self.delta);
-            let verdict = monitor.observe(delnrm, 100.0 * EPS * pnorm);
-            self.s = monitor.eta;
-            match verdict {
-                Verdict::Converged => return Ok(()),
-                Verdict::Diverged | Verdict::TooSlow { .. } => return Err(Fail::Newton),
-                Verdict::Continue => {}
-            }
-            // Non-finite at an iterate (not at the predictor): divergence.
-            self.residual().map_err(|_| Fail::Newton)?;
-        }
+        let monitor = Contraction::new(Rule::Dassl, maxit, kappa, s);
+        corrector::iterate(self, monitor, 100.0 * EPS * pnorm)
     }
 }

@@ -18,22 +18,10 @@
 //! # The method (BCP ch. 5, basic formulas)
 //!
 //! At step `n+1` of size `h = t_{n+1} − t_n` and order `k` the solution is
-//! represented by the *modified divided differences*
-//!
-//! ```text
-//!     φ_1(n) = y_n,   φ_{i+1}(n) = ψ_1(n)⋯ψ_i(n) · y[t_n, …, t_{n−i}],
-//!     ψ_i(n+1) = t_{n+1} − t_{n+1−i},
-//! ```
-//!
-//! rescaled for the new step to `φ*_i(n) = β_i(n+1) φ_i(n)` with
-//! `β_i(n+1) = Π_{j<i} ψ_j(n+1)/ψ_j(n)`.
-//!
-//! *Predictor*: the polynomial through the last `k+1` solution values,
-//!
-//! ```text
-//!     y⁽⁰⁾ = Σ_{i=1}^{k+1} φ*_i(n),      y'⁽⁰⁾ = Σ_{i=2}^{k+1} γ_i(n+1) φ*_i(n),
-//!     γ_1 = 0,  γ_i = γ_{i−1} + α_{i−1}/h,   α_i = h/ψ_i(n+1).
-//! ```
+//! represented by the *modified divided differences* `φ_i` of the engine
+//! (`multistep::divided`, which also gives the predictor `y⁽⁰⁾`,
+//! `y'⁽⁰⁾` — the polynomial through the last `k+1` solution values — and
+//! the coefficients `ψ_i, α_i, β_i, γ_i, σ_i` below).
 //!
 //! *Corrector* (fixed leading coefficient): the polynomial that interpolates
 //! the predictor at the `k` points `t_{n+1} − jh`, `j = 1..k` (equally
@@ -117,60 +105,27 @@
 //! higher-index systems in DASSL); kept in the test it drives the step
 //! size to zero (DASPK's `INFO(16)`; the paper's DASSL/DASPK runs show it).
 //!
-//! # Initial derivative
+//! # Initial derivative, fixed step size, resources
 //!
-//! `y'₀` is computed as by [`crate::init::initial_derivative`]: the
-//! minimum-norm least-squares solution of `E(y₀) y' = f(t₀, y₀)` (by SVD, so
-//! the derivatives of purely algebraic unknowns are zero), completed in the
-//! null space of `E(y₀)` by the time derivatives of the model's constraint
-//! chain, `G_y(t₀,y₀) y' + ∂g/∂t = 0` — again in the least-squares
-//! minimum-norm sense and without changing `E y'`. For the projected
-//! formulations this recovers the derivatives that `E` leaves undetermined,
-//! so the first predictor is right. Two choices differ from that function:
-//! the rank of `E` is the numerical rank at round-off (`σ ≤ N ε σ_max` counts
-//! as zero), so that every nonsingular `E` is inverted however badly it is
-//! scaled, and a constraint chain that cannot be differentiated at `t₀` (not
-//! finite) leaves the null-space components at zero instead of failing. The
-//! initial values are then checked: a row whose residual exceeds what a
-//! perturbation of every unknown by its tolerance could cause gives
-//! [`SolveError::InconsistentInitialValues`].
-//!
-//! # Fixed step size (convergence studies)
-//!
-//! With [`Options::fixed_step`] the grid is `t₀ + jh` with
-//! `h = (t_end − t₀)/⌈(t_end − t₀)/fixed_step⌉`, the order is
-//! [`Options::fixed_order`] (else [`Options::max_order`]) and there is no
-//! error test. A `k`-step method needs `k` starting values: `y(t₀ + jh)`,
-//! `j = 1 … k−1`, are computed by this solver in adaptive mode with the
-//! caller's tolerances (choose them well below the discretisation error to
-//! observe the order) and interpolated onto the grid; from then on every
-//! step is the classical constant-step BDF-`k` formula. Starting with lower
-//! orders at the given step would cap the observed order at two. The work
-//! counters include the start-up run; [`Options::record_steps`] lists the
-//! grid points. The corrector may take up to 20 Newton iterations (no
-//! smaller step can rescue it) and a failure is final.
-//!
-//! # Resources
-//!
-//! All buffers — history, iteration matrix and its in-place LU
-//! factorisation, output rows — are allocated before the step loop; the loop
-//! itself does not allocate, except to record every step when
-//! [`Options::record_steps`] asks for it and to keep the dense output when
-//! [`Options::dense_output`] does.
+//! As every multistep family: the engine's (`multistep`) initial
+//! derivative and consistency check, constant-step run with its adaptive
+//! start-up, and buffers allocated before the step loop. With a constant
+//! step the order is `k` ([`Options::fixed_order`], else
+//! [`Options::max_order`]) and every step after the start-up is the
+//! classical constant-step BDF-`k` formula.
 
 mod corrector;
 mod history;
 mod order;
-mod run;
 mod step;
 
 use crate::core::block::Block;
 use crate::core::matrix::{Corrector, SquareLu};
 use crate::core::policy;
-use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
-use crate::{NotApplicable, Options, Problem, SolveError, Solver, Stats};
+use crate::multistep::run::{self, Orders, Setup};
+use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
-use run::Run;
+use step::Integrator;
 
 /// Variable-order (1–5), variable-step BDF in fixed-leading-coefficient form
 /// (DASSL/DASPK). See the [module documentation](self).
@@ -234,30 +189,19 @@ pub(crate) fn integrator<'a, L: Corrector + 'a>(
     options.check_orders(MAX_ORDER, "the BDF methods (bdf, odbdf)")?;
     let sys = crate::core::eliminate::algebraic_rows(problem);
     let info = sys.info();
-    let t0 = problem.t0;
 
     // Components in the error test and the Newton norm.
     let mut in_test = policy::bdf_error_test(info, options);
     crate::core::block::restrict_error_test(&mut in_test, sys.blocks());
 
-    let mut spent = Stats::default();
-    let yp0 = initial_derivative_with(&*sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
-    spent.residual_evals += 1; // its f(t0, y0)
-    check_residuals(&*sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
-
-    let run = Run {
-        sys,
-        options,
-        in_test,
-        t0,
-        t_end: problem.t_end,
-        y0: problem.y0,
-        yp0,
-        spent,
+    let setup = Setup::new(&*sys, problem, options)?;
+    let orders = Orders {
+        of_option: |k| k,
+        formula_steps: |k| k,
+        startup: MAX_ORDER,
     };
-    let method = match options.fixed_step {
-        Some(h) => run.fixed::<L>(h)?,
-        None => run.adaptive::<L>(),
-    };
+    let method = run::integrate(setup, orders, move |cfg| {
+        Integrator::<L>::new(sys.clone(), &options.tol, &in_test, cfg)
+    })?;
     Ok(crate::Integrator::new(method, problem, options))
 }

@@ -1,77 +1,43 @@
-//! The integrator and its step loop (DASSL's `DDASTP`): the settings of a
-//! run, the state and workspace of the step, the driver's view of it, and
-//! one accepted step with its retries after failed attempts (block 6).
+//! The integrator (DASSL's `DDASTP`): the state and workspace of the step
+//! beyond the engine's ([`Common`]), the engine's view of it
+//! ([`Family`]), and one attempt with the order and step of its retry after
+//! a rejected error test (block 6).
 
-use super::corrector::JacState;
+use super::corrector::Convergence;
 use super::NCOL;
-use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
-use crate::core::driver::Method;
+use crate::core::attempt::{Outcome, Policy, Retry};
 use crate::core::eliminate::Formulation;
-use crate::core::matrix::{Corrector, Matrix, Rows, Structure};
+use crate::core::matrix::{Corrector, JacState, Matrix, Rows, Structure};
 use crate::core::weights::Weights;
+use crate::multistep::divided::Divided;
+use crate::multistep::{Common, Config, Family};
 use crate::options::Tolerances;
-use crate::{SolveError, Stats};
-
-/// Settings of one integrator (the order in this method's count).
-pub(super) use crate::core::control::StepConfig as Config;
+use crate::SolveError;
 
 /// State and workspace of the DASSL step (`N` unknowns, `M ≥ N` rows).
 pub(super) struct Integrator<'a, L> {
+    /// The engine's state: settings, weights (zero for components out of
+    /// the test), step point and step, counters, budgets, the iteration
+    /// matrix's state and the carried rate `ρ/(1−ρ)`.
+    pub(super) ms: Common,
     /// The formulation.
     pub(super) sys: Formulation<'a>,
-    /// Settings of this run.
-    pub(super) cfg: Config,
-    /// Unknowns `N`.
-    pub(super) n: usize,
     /// `E` does not depend on `y`.
     pub(super) constant_leading: bool,
-    /// Error weights (zero for components out of the test).
-    pub(super) weights: Weights,
 
-    /// Current time `t_n` (after a step: `t_{n+1}`).
-    pub(super) t: f64,
-    /// Step size of the next attempt.
-    pub(super) h: f64,
-    /// Step size of the last accepted step.
-    pub(super) hold: f64,
     /// Order of the next attempt.
     pub(super) k: usize,
-    /// Order of the last accepted step (0 before the first).
-    pub(super) kold: usize,
-    /// Number of steps taken with the current `h` and `k` (capped).
-    pub(super) ns: usize,
-    /// Initial phase: raise order and double `h` after every step.
-    pub(super) ramp: bool,
-    /// The current step reaches `t_end`: snap `t` to it.
-    pub(super) last: bool,
-
-    /// `ψ_i = t_{n+1} − t_{n+1−i}`.
-    pub(super) psi: [f64; NCOL],
-    /// `α_i = h/ψ_i`.
-    pub(super) alpha: [f64; NCOL],
-    /// `β_i = Π_{j<i} ψ_j(n+1)/ψ_j(n)`, the rescaling `φ → φ*`.
-    pub(super) beta: [f64; NCOL],
-    /// `γ_i` of the predicted derivative.
-    pub(super) gamma: [f64; NCOL],
-    /// `σ_i` of the error terms.
-    pub(super) sigma: [f64; NCOL],
+    /// The history: modified divided differences and their coefficients.
+    pub(super) hist: Divided<NCOL>,
     /// Leading coefficient `c_J = −α_s/h`.
     pub(super) cj: f64,
     /// `c_J` with which the iteration matrix was formed.
     pub(super) cjold: f64,
     /// Error constant `C_k`.
     pub(super) ck: f64,
-    /// Newton rate factor `ρ/(1−ρ)` ([`super::corrector::UNKNOWN_RATE`] when unknown).
-    pub(super) s: f64,
-    /// The corrector's convergence rule (see [`super::corrector::Convergence`]).
-    pub(super) convergence: super::corrector::Convergence,
-    /// Whether the iteration matrix is current.
-    pub(super) jac: JacState,
-    /// Newton iterations of the last attempt.
-    pub(super) last_iterations: usize,
+    /// The corrector's convergence rule (see [`Convergence`]).
+    pub(super) convergence: Convergence,
 
-    /// History `φ_1 … φ_{NCOL}`, column `j` at `phi[j n .. (j+1) n]`.
-    pub(super) phi: Vec<f64>,
     /// The corrector's iterate `y` (the predictor `y⁽⁰⁾` at first).
     pub(super) y: Vec<f64>,
     /// Its derivative `y'⁽⁰⁾ + c_J (y − y⁽⁰⁾)`.
@@ -92,64 +58,40 @@ pub(super) struct Integrator<'a, L> {
     pub(super) rhs_jac: Matrix,
     /// `∂(E(y) y')/∂y`.
     pub(super) lead_jac: Matrix,
-
-    /// Work counters (of this run, and of the work before it that it was
-    /// started with).
-    pub(super) stats: Stats,
-    /// The attempt loop's state: budgets, limits, the end rule.
-    pub(super) steps: Steps,
-    /// Error-test failures on this step.
-    pub(super) error_failures: usize,
 }
 
-impl<L: Corrector> Method for Integrator<'_, L> {
-    fn t(&self) -> f64 {
-        self.t
+impl<L: Corrector> Family for Integrator<'_, L> {
+    fn ms(&self) -> &Common {
+        &self.ms
     }
-    fn y(&self) -> &[f64] {
-        &self.phi[..self.n]
+    fn ms_mut(&mut self) -> &mut Common {
+        &mut self.ms
     }
-    fn dense(&self, tau: f64, out: &mut [f64]) {
-        self.interpolate(tau, out)
+    fn value(&self) -> &[f64] {
+        self.hist.col(0)
     }
-    fn dense_degree(&self) -> usize {
+    fn dense_at(&self, tau: f64, out: &mut [f64]) {
         // DDATRP's polynomial through the last `kold + 1` values.
-        self.cfg.max_order
+        self.hist.interpolate(self.ms.t, tau, out)
     }
-    fn finished(&self) -> bool {
-        self.t >= self.cfg.t_end
+    fn begin_step(&mut self) {
+        self.ms.weights.update(self.hist.col(0));
     }
-    fn step(&mut self) -> Result<(), SolveError> {
-        self.weights.update(&self.phi[..self.n]);
-        self.error_failures = 0;
-        attempt::step(self)
-    }
-    fn stats(&self) -> Stats {
-        self.stats
-    }
-}
-
-impl<L: Corrector> Attempts for Integrator<'_, L> {
-    fn steps(&mut self) -> &mut Steps {
-        &mut self.steps
-    }
-    fn stats_mut(&mut self) -> &mut Stats {
-        &mut self.stats
-    }
-    fn point(&self) -> (f64, f64) {
-        (self.t, self.h)
-    }
-    fn set_step(&mut self, h: f64, last: bool) {
-        let h_before = self.h;
-        self.h = h;
-        self.last = last;
+    fn step_changed(&mut self, h_before: f64) {
         // Before the first step `φ_2 = h y'₀` follows the step.
-        if self.kold == 0 && h != h_before {
-            self.rescale_first_step(h_before);
+        if self.hist.kold == 0 && self.ms.h != h_before {
+            self.hist.rescale_first_step(h_before, self.ms.h);
         }
     }
-    fn attempt(&mut self) -> Result<Outcome, SolveError> {
-        Ok(Integrator::attempt(self))
+    #[inline(always)]
+    fn attempt_once(&mut self) -> Result<Outcome, SolveError> {
+        Ok(self.attempt())
+    }
+    fn start(&mut self, t0: f64, y0: &[f64], yp0: &[f64], h: f64) {
+        Integrator::start(self, t0, y0, yp0, h)
+    }
+    fn start_from_history(&mut self, t: f64, values: &[&[f64]], h: f64) {
+        Integrator::start_from_history(self, t, values, h)
     }
 }
 
@@ -169,33 +111,17 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             Structure::of(&*sys)
         };
         let matrix = || Matrix::new(m, n, structure.as_ref());
+        let weights = Weights::new(tol, |_| 1.0, in_test.to_vec(), vec![0; n]);
         Integrator {
+            ms: Common::new(cfg, n, weights, Policy::DASSL),
             sys: sys.clone(),
-            cfg,
-            n,
             constant_leading: info.constant_leading,
-            weights: Weights::new(tol, |_| 1.0, in_test.to_vec(), vec![0; n]),
-            t: 0.0,
-            h: 0.0,
-            hold: 0.0,
             k: 1,
-            kold: 0,
-            ns: 0,
-            ramp: true,
-            last: false,
-            psi: [0.0; NCOL],
-            alpha: [0.0; NCOL],
-            beta: [0.0; NCOL],
-            gamma: [0.0; NCOL],
-            sigma: [0.0; NCOL],
+            hist: Divided::new(n),
             cj: 0.0,
             cjold: 0.0,
             ck: 0.0,
-            s: super::corrector::UNKNOWN_RATE,
-            convergence: super::corrector::Convergence::of::<L>(info),
-            jac: JacState::Needed,
-            last_iterations: 0,
-            phi: vec![0.0; n * NCOL],
+            convergence: Convergence::of::<L>(info),
             y: vec![0.0; n],
             yp: vec![0.0; n],
             delta: vec![0.0; m],
@@ -205,55 +131,24 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             lead: matrix(),
             rhs_jac: matrix(),
             lead_jac: matrix(),
-            stats: Stats::default(),
-            steps: Steps::new(
-                Policy::DASSL,
-                cfg.max_steps,
-                cfg.t_end,
-                cfg.span,
-                cfg.hmax,
-                cfg.fixed_step,
-            ),
-            error_failures: 0,
         }
-    }
-
-    /// DASSL's initial step: `0.001·(t_end − t₀)`, reduced so that
-    /// `h ‖y'₀‖ ≤ 0.5`, and at most `h_max`.
-    pub(super) fn initial_step(&mut self, y0: &[f64], yp0: &[f64]) -> f64 {
-        self.weights.update(y0);
-        let mut h = 0.001 * self.cfg.span;
-        let ypnorm = self.norm(yp0);
-        if ypnorm > 0.5 / h {
-            h = 0.5 / ypnorm;
-        }
-        h.min(self.cfg.hmax)
-    }
-
-    /// The weighted RMS norm over the components in the test.
-    pub(super) fn norm(&self, v: &[f64]) -> f64 {
-        self.weights.norm(v)
     }
 
     /// One attempt from `t` with `h` and order `k` (DDASTP's blocks 1–5;
     /// block 6 after a failure: the order and step of the retry).
     fn attempt(&mut self) -> Outcome {
-        let t_old = self.t;
+        let t_old = self.ms.t;
         self.set_coefficients();
-        self.t = if self.last {
-            self.cfg.t_end
-        } else {
-            t_old + self.h
-        };
+        self.ms.t = self.ms.t_next();
         let failure = match self.corrector() {
-            Ok(()) if self.cfg.fixed_step => {
+            Ok(()) if self.ms.cfg.fixed_step => {
                 self.accept(None);
                 if L::LEAST_SQUARES {
                     // The point a least-squares corrector converges to
                     // depends on its matrix: with constant steps a matrix
                     // kept for many steps would bias every step the same
                     // way. A fresh one each step.
-                    self.jac = JacState::Needed;
+                    self.ms.jac = JacState::Needed;
                 }
                 return Outcome::Accepted;
             }
@@ -269,21 +164,22 @@ impl<'a, L: Corrector> Integrator<'a, L> {
         };
 
         // Block 6: the step failed.
-        self.restore(t_old);
-        self.ramp = false;
+        self.ms.t = t_old;
+        self.hist.restore(self.ms.h, self.k);
+        self.ms.ramp = false;
         match failure {
             Ok(failure) => Outcome::Failed {
                 failure,
                 retry: Retry::Policy,
-                iterations: self.last_iterations,
+                iterations: self.ms.last_iterations,
             },
             Err(test) => {
-                self.error_failures += 1;
-                let nef = self.error_failures;
+                self.ms.error_failures += 1;
+                let nef = self.ms.error_failures;
                 let h = if nef == 1 {
                     self.k = test.knew;
                     let r: f64 = 0.9 * (2.0 * test.est + 1e-4).powf(-1.0 / (self.k + 1) as f64);
-                    self.h * r.clamp(0.25, 0.9)
+                    self.ms.h * r.clamp(0.25, 0.9)
                 } else {
                     // From the third failure on, order one, as DASSL: at
                     // higher orders an algebraic component left off its
@@ -291,7 +187,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                     // estimate that does not shrink with h. With a fixed
                     // order it is raised again after the step.
                     self.k = if nef == 2 { test.knew } else { 1 };
-                    0.25 * self.h
+                    0.25 * self.ms.h
                 };
                 Outcome::ErrorTest { h }
             }

@@ -241,7 +241,14 @@ impl Contraction {
                 if k == 1 {
                     self.reference = norm;
                 } else {
-                    self.theta = (norm / self.reference).powf(1.0 / (k - 1) as f64);
+                    let q = norm / self.reference;
+                    // `x^1 = x` exactly: no power at the second increment,
+                    // the usual last one.
+                    self.theta = if k == 2 {
+                        q
+                    } else {
+                        q.powf(1.0 / (k - 1) as f64)
+                    };
                     if self.theta > 0.9 {
                         return if norm <= self.floor {
                             Verdict::Converged

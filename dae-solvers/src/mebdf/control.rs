@@ -48,7 +48,7 @@ impl Integrator<'_> {
                 *di = 0.0;
             }
         }
-        let est = self.coef.error_constant[q] * self.estimate_scale * self.weights.norm(&d);
+        let est = self.coef.error_constant[q] * self.estimate_scale * self.ms.weights.norm(&d);
         self.delta = d;
         if est.is_nan() {
             f64::INFINITY
@@ -66,12 +66,12 @@ impl Integrator<'_> {
     pub(super) fn propose(&mut self, err: f64) -> (usize, f64) {
         let p = self.p;
         self.same += 1;
-        let max_order = self.cfg.max_order;
+        let max_order = self.ms.cfg.max_order;
         let r_same = ratio(err, p, 1.2);
         let (mut p_new, mut r) = (p, 1.0);
         if self.same > p {
             r = r_same;
-            if self.cfg.fixed_order {
+            if self.ms.cfg.fixed_order {
                 if p < max_order {
                     let r_up = ratio(self.estimate_at(p + 1), p + 1, 1.4);
                     p_new = p + 1;
@@ -95,10 +95,10 @@ impl Integrator<'_> {
                 r = 1.0;
             }
         }
-        let r_max = if self.ramp { 10.0 } else { 2.0 };
+        let r_max = if self.ms.ramp { 10.0 } else { 2.0 };
         r = r.clamp(0.2, r_max);
-        if r > 1.0 && self.h * r > self.cfg.hmax {
-            r = (self.cfg.hmax / self.h).max(1.0);
+        if r > 1.0 && self.ms.h * r > self.ms.cfg.hmax {
+            r = (self.ms.cfg.hmax / self.ms.h).max(1.0);
         }
         (p_new, r)
     }
@@ -109,17 +109,17 @@ impl Integrator<'_> {
         let p = self.p;
         if failures >= 3 {
             self.p = 1;
-            self.h *= 0.25;
+            self.ms.h *= 0.25;
             return;
         }
         let mut r = ratio(err, p, 1.2).clamp(0.1, 0.9);
-        if p > 1 && !self.cfg.fixed_order {
+        if p > 1 && !self.ms.cfg.fixed_order {
             let r_down = ratio(self.estimate_at(p - 1), p - 1, 1.3).clamp(0.1, 0.9);
             if r_down > r {
                 self.p = p - 1;
                 r = r_down;
             }
         }
-        self.h *= r;
+        self.ms.h *= r;
     }
 }

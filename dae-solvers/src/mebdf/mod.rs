@@ -128,24 +128,23 @@
 //! # }
 //! ```
 //!
-//! # Resources
+//! # Initial derivative, fixed step size, resources
 //!
-//! Every buffer is allocated before the step loop; the loop does not
-//! allocate, except to record steps when [`Options::record_steps`] asks
-//! and to keep the dense output when [`Options::dense_output`] does.
+//! As every multistep family: the engine's (`multistep`) initial
+//! derivative and consistency check, constant-step run with its adaptive
+//! start-up, and buffers allocated before the step loop.
 
 mod coeffs;
 mod control;
-mod history;
 mod stages;
 mod step;
 
 use crate::core::driver::Method;
-use crate::core::{policy, startup};
-use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
-use crate::{NotApplicable, Options, Problem, SolveError, Solver, Stats};
+use crate::core::policy;
+use crate::multistep::run::{self, Orders, Setup};
+use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
-use step::{Config, Integrator};
+use step::Integrator;
 
 /// Cash's modified extended BDF, orders 1–8, variable step by
 /// interpolation. See the [module documentation](self).
@@ -185,89 +184,14 @@ fn start<'a>(
         coeffs::MAX_ORDER - 1,
         "mebdf (the step number k, order k + 1)",
     )?;
-    let (t0, t_end) = (problem.t0, problem.t_end);
-    let span = t_end - t0;
-
-    let mut spent = Stats::default();
-    let yp0 = initial_derivative_with(&*sys, t0, problem.y0, &DerivativeRule::SOLVER)?;
-    spent.residual_evals += 1;
-    check_residuals(&*sys, &options.tol, t0, problem.y0, &yp0, &mut spent)?;
-
-    let steps = options.fixed_order.unwrap_or(options.max_order);
-    let order = (steps + 1).min(coeffs::MAX_ORDER);
-    let cfg = Config {
-        max_order: order,
-        fixed_order: options.fixed_order.is_some(),
-        fixed_step: false,
-        hmax: options.h_max.unwrap_or(span),
-        max_steps: options.max_steps,
-        t_end,
-        span,
+    let setup = Setup::new(&*sys, problem, options)?;
+    let orders = Orders {
+        // The options count steps k: order k + 1.
+        of_option: |k| (k + 1).min(coeffs::MAX_ORDER),
+        formula_steps: Integrator::steps_of,
+        startup: coeffs::MAX_ORDER.min(6),
     };
-    let integrator = move |cfg: Config, stats: Stats| {
-        let mut integ = Integrator::new(sys.clone(), &options.tol, cfg);
-        integ.stats = stats;
-        integ
-    };
-    let Some(h_request) = options.fixed_step else {
-        let mut integ = integrator(cfg, spent);
-        let h0 = match options.h0 {
-            Some(h) => h.min(cfg.hmax).min(span),
-            None => integ.initial_step(problem.y0, &yp0),
-        };
-        integ.start(t0, problem.y0, &yp0, h0);
-        return Ok(Box::new(integ));
-    };
-
-    // Constant step: k − 1 starting values from an adaptive run.
-    let k = order - 1;
-    let constant = move |spent: Stats, h: f64| Config {
-        max_order: order,
-        fixed_order: true,
-        fixed_step: true,
-        hmax: h,
-        max_steps: options
-            .max_steps
-            .saturating_sub(spent.steps + spent.rejected),
-        ..cfg
-    };
-    let (y0, yp0) = (problem.y0, &yp0);
-    let from_start = |h: f64| {
-        let mut integ = integrator(constant(spent, h), spent);
-        integ.start(t0, y0, yp0, h);
-        integ.p = order;
-        integ
-    };
-    let startup = |t_end: f64, h: f64| {
-        let cfg = Config {
-            max_order: coeffs::MAX_ORDER.min(6),
-            fixed_order: false,
-            t_end,
-            ..cfg
-        };
-        let mut startup = integrator(cfg, spent);
-        let h0 = startup.initial_step(y0, yp0).min(h);
-        startup.start(t0, y0, yp0, h0);
-        startup
-    };
-    let make = integrator.clone();
-    let from_history = move |startup: &Integrator<'a>, t: f64, history: &[&[f64]], h: f64| {
-        let mut integ = make(constant(startup.stats, h), Stats::default());
-        integ.start_from_values(t, history, h, order);
-        integ
-    };
-    // Both runs' dense output is of degree at most the order bound.
-    let degree = order.max(coeffs::MAX_ORDER.min(6));
-    startup::constant_step(
-        t0,
-        t_end,
-        h_request,
-        options.max_steps,
-        k - 1,
-        y0,
-        from_start,
-        startup,
-        from_history,
-        degree,
-    )
+    run::integrate(setup, orders, move |cfg| {
+        Integrator::new(sys.clone(), &options.tol, cfg)
+    })
 }

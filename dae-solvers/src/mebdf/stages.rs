@@ -22,15 +22,14 @@
 
 use super::step::Integrator;
 use crate::core::control::Failure;
-use crate::core::matrix::{Corrector, Rows};
-use crate::core::newton::{Contraction, Rule, Verdict};
+use crate::core::matrix::{Corrector, JacState, Rows};
+use crate::core::newton::{Contraction, Rule};
 use crate::linalg::all_finite;
+use crate::multistep::corrector::{self, Iteration, Reuse};
+use crate::multistep::{Common, UNKNOWN_RATE};
 
 /// Newton iterations per stage.
 const MAX_ITER: usize = 5;
-/// Newton iterations per stage with a constant step (no smaller step can
-/// rescue a failure).
-const MAX_ITER_FIXED_STEP: usize = 20;
 /// Convergence `η ‖Δ‖ ≤ KAPPA`: tighter than DASSL's 0.33, since the errors
 /// of the first two stages enter the third through `d_1`, `d_2`.
 const KAPPA: f64 = 0.01;
@@ -47,8 +46,6 @@ const ROUND_OFF_FLOOR: f64 = 1e-2;
 /// Smallest rate factor carried into a new iteration: a first increment is
 /// accepted alone only when it is below `KAPPA/ETA_MIN`.
 const ETA_MIN: f64 = 0.05;
-
-pub(super) use crate::core::matrix::JacState;
 
 /// Which stage buffer a Newton iteration works on.
 #[derive(Clone, Copy)]
@@ -75,35 +72,18 @@ impl Integrator<'_> {
     }
 
     /// The stages of the current attempt from `t` to `t + h`, retried once
-    /// with a fresh `J` when an old one fails.
+    /// with a fresh `J` when an old one fails (MEBDF's reuse).
     pub(super) fn attempt(&mut self) -> Result<(), Failure> {
-        loop {
-            let stale = self.jac_state == JacState::Stale;
-            match self.stages() {
-                Ok(()) => {
-                    self.jac_state = JacState::Stale;
-                    return Ok(());
-                }
-                Err(Failure::Newton) if stale => self.jac_state = JacState::Needed,
-                Err(fail) => {
-                    self.jac_state = JacState::Needed;
-                    return Err(fail);
-                }
-            }
-        }
+        corrector::solve_reusing(self, Reuse::MEBDF, Self::stages)
     }
 
     /// Solve the three stages (one for `p = 1`).
     fn stages(&mut self) -> Result<(), Failure> {
-        let n = self.n;
+        let n = self.ms.n;
         let p = self.p;
         let k = Self::steps_of(p);
-        let h = self.h;
-        let t1 = if self.last {
-            self.cfg.t_end
-        } else {
-            self.t + h
-        };
+        let h = self.ms.h;
+        let t1 = self.ms.t_next();
         let t2 = t1 + h;
         let beta = self.coef.bdf_beta[k];
         let hb = h * beta;
@@ -156,10 +136,10 @@ impl Integrator<'_> {
     /// Evaluate `J` at the predictor when due, and factor `E/(hβ) − J`
     /// when `J` or `hβ` changed.
     fn ensure_matrix(&mut self, t: f64, hb: f64) -> Result<(), Failure> {
-        if self.jac_state == JacState::Needed {
+        if self.ms.jac == JacState::Needed {
             self.sys.rhs_jacobian(t, &self.y1, &mut self.jac);
-            self.stats.jacobian_evals += 1;
-            self.jac_state = JacState::Fresh;
+            self.ms.stats.jacobian_evals += 1;
+            self.ms.jac = JacState::Fresh;
             self.hb_factored = 0.0;
         }
         if hb == self.hb_factored {
@@ -177,8 +157,8 @@ impl Integrator<'_> {
         if !all_finite(a) {
             return Err(Failure::NonFinite("iteration matrix"));
         }
-        self.stats.factorizations += 1;
-        self.eta = 100.0;
+        self.ms.stats.factorizations += 1;
+        self.ms.rate = UNKNOWN_RATE;
         self.hb_factored = 0.0;
         self.lu
             .factor(&Rows::square())
@@ -188,9 +168,9 @@ impl Integrator<'_> {
     }
 
     /// `δ = F(t, y, y')` for the stage iterate `y`.
-    fn residual(&mut self, t: f64, y: &[f64]) -> bool {
+    fn evaluate_residual(&mut self, t: f64, y: &[f64]) -> bool {
         self.sys.residual(t, y, &self.yp, &mut self.delta);
-        self.stats.residual_evals += 1;
+        self.ms.stats.residual_evals += 1;
         all_finite(&self.delta)
     }
 
@@ -217,37 +197,46 @@ impl Integrator<'_> {
         for ((yp, yi), c) in self.yp.iter_mut().zip(y.iter()).zip(&self.c) {
             *yp = (yi + c) * inv;
         }
-        self.last_iterations = 0;
-        if !self.residual(t, y) {
+        self.ms.last_iterations = 0;
+        if !self.evaluate_residual(t, y) {
             return Err(Failure::NonFinite("residual"));
         }
-        let tiny = 100.0 * f64::EPSILON * self.weights.norm(y);
-        let maxit = if self.cfg.fixed_step {
-            MAX_ITER_FIXED_STEP
-        } else {
-            MAX_ITER
-        };
-        let mut monitor = Contraction::new(Rule::Dassl, maxit, KAPPA, self.eta.max(ETA_MIN));
+        let tiny = 100.0 * f64::EPSILON * self.ms.weights.norm(y);
+        let maxit = corrector::max_iterations(&self.ms, MAX_ITER);
+        let mut monitor = Contraction::new(Rule::Dassl, maxit, KAPPA, self.ms.rate.max(ETA_MIN));
         monitor.floor = ROUND_OFF_FLOOR;
-        loop {
-            self.lu.solve(&mut self.delta);
-            self.stats.newton_iterations += 1;
-            self.last_iterations += 1;
-            for ((yi, yp), d) in y.iter_mut().zip(self.yp.iter_mut()).zip(&self.delta) {
-                *yi -= d;
-                *yp -= d * inv;
-            }
-            let norm = self.weights.norm(&self.delta);
-            let verdict = monitor.observe(norm, tiny);
-            self.eta = monitor.eta;
-            match verdict {
-                Verdict::Converged => return Ok(()),
-                Verdict::Diverged | Verdict::TooSlow { .. } => return Err(Failure::Newton),
-                Verdict::Continue => {}
-            }
-            if !self.residual(t, y) {
-                return Err(Failure::Newton);
-            }
+        let mut stage = StageIteration {
+            integ: self,
+            y,
+            t,
+            inv,
+        };
+        corrector::iterate(&mut stage, monitor, tiny)
+    }
+}
+
+/// A stage's Newton iteration on its iterate `y` at `t`, `1/(hβ)` = `inv`.
+struct StageIteration<'s, 'a> {
+    integ: &'s mut Integrator<'a>,
+    y: &'s mut [f64],
+    t: f64,
+    inv: f64,
+}
+
+impl Iteration for StageIteration<'_, '_> {
+    fn ms(&mut self) -> &mut Common {
+        &mut self.integ.ms
+    }
+    fn update(&mut self) -> f64 {
+        let integ = &mut *self.integ;
+        integ.lu.solve(&mut integ.delta);
+        for ((yi, yp), d) in self.y.iter_mut().zip(integ.yp.iter_mut()).zip(&integ.delta) {
+            *yi -= d;
+            *yp -= d * self.inv;
         }
+        integ.ms.weights.norm(&integ.delta)
+    }
+    fn residual(&mut self) -> bool {
+        self.integ.evaluate_residual(self.t, self.y)
     }
 }

@@ -1,22 +1,23 @@
-//! The integrator: the settings of a run, its state and workspace, the
-//! driver's view of it, and one accepted step with its retries after failed
-//! attempts.
+//! The integrator: its state and workspace beyond the engine's
+//! ([`Common`]), the engine's view of it ([`Family`]), and one attempt
+//! with the order and step of its retry after a rejected error test.
 
 use super::coeffs::{Coefficients, MAX_ORDER};
-use super::history::History;
-use super::stages::JacState;
-use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
-use crate::core::driver::Method;
+use crate::core::attempt::{Outcome, Policy, Retry};
 use crate::core::eliminate::Formulation;
-use crate::core::matrix::{Corrector, SquareLu};
+use crate::core::matrix::{Corrector, JacState, SquareLu};
 use crate::core::weights::Weights;
 use crate::init::{initial_derivative_with, DerivativeRule};
+use crate::multistep::backward::History;
+use crate::multistep::{Common, Config, Family};
 use crate::options::Tolerances;
-use crate::{SolveError, Stats};
+use crate::SolveError;
 use nalgebra::DMatrix;
 
-/// Settings of one integrator (the order in this method's count).
-pub(super) use crate::core::control::StepConfig as Config;
+/// Columns of the difference table: `∇^0 … ∇^(MAX_ORDER+1)` (the order-raise
+/// estimate at the highest order needs `∇^(MAX_ORDER+2) y_{n+1}`, one more
+/// than stored at `t_n`).
+const NB: usize = MAX_ORDER + 2;
 
 /// An order-one attempt whose step is at most this fraction of the last
 /// rejected order-one attempt's on the same step, ...
@@ -44,16 +45,14 @@ const RESTART_SPACING: usize = 20;
 
 /// State and workspace of the MEBDF step (`N` unknowns).
 pub(super) struct Integrator<'a> {
+    /// The engine's state: settings, weights (index-scaled), step point
+    /// and step, counters, budgets, whether `J` is current, the carried
+    /// rate `θ/(1−θ)`.
+    pub(super) ms: Common,
     /// The formulation.
     pub(super) sys: Formulation<'a>,
-    /// Settings of this run.
-    pub(super) cfg: Config,
     /// The formulas.
     pub(super) coef: Coefficients,
-    /// Unknowns `N`.
-    pub(super) n: usize,
-    /// Error weights, index-scaled.
-    pub(super) weights: Weights,
     /// Unknowns in the error estimate: index at most two (the index-3
     /// multipliers are left out, see the module documentation).
     pub(super) estimated: Vec<bool>,
@@ -64,20 +63,12 @@ pub(super) struct Integrator<'a> {
     /// Differences of the past values.
     pub(super) hist: History,
 
-    /// Current time `t_n`.
-    pub(super) t: f64,
-    /// Step size of the next attempt.
-    pub(super) h: f64,
     /// Order of the next attempt.
     pub(super) p: usize,
     /// Order of the last accepted step (0 before the first).
     pub(super) p_old: usize,
     /// Accepted steps since the last change of step size or order.
     pub(super) same: usize,
-    /// No step has been rejected yet: larger step increases are allowed.
-    pub(super) ramp: bool,
-    /// The current attempt reaches `t_end`.
-    pub(super) last: bool,
     /// Steps accepted since the last [`Integrator::restart`].
     pub(super) since_restart: usize,
 
@@ -89,12 +80,6 @@ pub(super) struct Integrator<'a> {
     pub(super) lu: SquareLu,
     /// `hβ` of the factored matrix (0: none).
     pub(super) hb_factored: f64,
-    /// Whether `J` is current.
-    pub(super) jac_state: JacState,
-    /// Newton rate factor `θ/(1−θ)`, carried between iterations.
-    pub(super) eta: f64,
-    /// Newton iterations of the last stage.
-    pub(super) last_iterations: usize,
 
     /// The predictor `P(t_{n+1})` of degree `p`.
     pub(super) ypred: Vec<f64>,
@@ -117,12 +102,6 @@ pub(super) struct Integrator<'a> {
     /// Residual, then Newton update; scratch.
     pub(super) delta: Vec<f64>,
 
-    /// Work counters.
-    pub(super) stats: Stats,
-    /// The attempt loop's state: budgets, limits, the end rule.
-    pub(super) steps: Steps,
-    /// Error-test failures on this step.
-    error_failures: usize,
     /// Step and error of the last order-one attempt rejected by the error
     /// test on this step (see [`Integrator::restart`]).
     order_one: Option<(f64, f64)>,
@@ -135,55 +114,39 @@ pub(super) struct Integrator<'a> {
     stalled_this_step: bool,
 }
 
-impl Method for Integrator<'_> {
-    fn t(&self) -> f64 {
-        self.t
+impl Family for Integrator<'_> {
+    fn ms(&self) -> &Common {
+        &self.ms
     }
-    fn y(&self) -> &[f64] {
+    fn ms_mut(&mut self) -> &mut Common {
+        &mut self.ms
+    }
+    fn value(&self) -> &[f64] {
         self.hist.y()
     }
-    fn dense(&self, tau: f64, out: &mut [f64]) {
-        self.hist.interpolate(self.t, tau, self.p_old.max(1), out)
+    fn dense_at(&self, tau: f64, out: &mut [f64]) {
+        self.hist
+            .interpolate(self.ms.t, tau, self.p_old.max(1), out)
     }
-    fn dense_degree(&self) -> usize {
-        // The polynomial of the last step's order through the last values.
-        self.cfg.max_order
-    }
-    fn finished(&self) -> bool {
-        self.t >= self.cfg.t_end
-    }
-    fn step(&mut self) -> Result<(), SolveError> {
-        self.error_failures = 0;
+    fn begin_step(&mut self) {
         self.order_one = None;
         self.first_rejection = None;
         if !self.stalled_this_step {
             self.stalls = 0;
         }
         self.stalled_this_step = false;
-        attempt::step(self)
     }
-    fn stats(&self) -> Stats {
-        self.stats
-    }
-}
-
-impl Attempts for Integrator<'_> {
-    fn steps(&mut self) -> &mut Steps {
-        &mut self.steps
-    }
-    fn stats_mut(&mut self) -> &mut Stats {
-        &mut self.stats
-    }
-    fn point(&self) -> (f64, f64) {
-        (self.t, self.h)
-    }
-    fn set_step(&mut self, h: f64, last: bool) {
-        self.h = h;
-        self.last = last;
+    fn step_changed(&mut self, _h_before: f64) {
         self.fit_history();
     }
-    fn attempt(&mut self) -> Result<Outcome, SolveError> {
-        Integrator::attempt_step(self)
+    fn attempt_once(&mut self) -> Result<Outcome, SolveError> {
+        self.attempt_step()
+    }
+    fn start(&mut self, t0: f64, y0: &[f64], yp0: &[f64], h: f64) {
+        Integrator::start(self, t0, y0, yp0, h)
+    }
+    fn start_from_history(&mut self, t: f64, values: &[&[f64]], h: f64) {
+        self.start_from_values(t, values, h, self.ms.cfg.max_order)
     }
 }
 
@@ -204,30 +167,22 @@ impl<'a> Integrator<'a> {
         // `E` is constant (in `t` and `y`: `eliminate::constant_leading`
         // made it so or refused), so any point serves.
         sys.leading(0.0, &vec![0.0; n], &mut lead);
+        let weights = Weights::new(tol, |_| 1.0, vec![true; n], index_power);
         Integrator {
+            ms: Common::new(cfg, n, weights, Policy::MEBDF),
             sys: sys.clone(),
-            cfg,
             coef: Coefficients::new(),
-            n,
-            weights: Weights::new(tol, |_| 1.0, vec![true; n], index_power),
-            hist: History::new(n),
+            hist: History::new(n, NB),
             estimated,
             estimate_scale: (n.max(1) as f64 / count as f64).sqrt(),
-            t: 0.0,
-            h: 0.0,
             p: 1,
             p_old: 0,
             same: 0,
-            ramp: true,
-            last: false,
             since_restart: RESTART_SPACING,
             lead,
             jac: DMatrix::zeros(n, n),
             lu: SquareLu::new(n, n),
             hb_factored: 0.0,
-            jac_state: JacState::Needed,
-            eta: 100.0,
-            last_iterations: 0,
             ypred: vec![0.0; n],
             y1: vec![0.0; n],
             y2: vec![0.0; n],
@@ -238,16 +193,6 @@ impl<'a> Integrator<'a> {
             back: vec![0.0; n * MAX_ORDER],
             yp: vec![0.0; n],
             delta: vec![0.0; n],
-            stats: Stats::default(),
-            steps: Steps::new(
-                Policy::MEBDF,
-                cfg.max_steps,
-                cfg.t_end,
-                cfg.span,
-                cfg.hmax,
-                cfg.fixed_step,
-            ),
-            error_failures: 0,
             order_one: None,
             first_rejection: None,
             stalls: 0,
@@ -255,23 +200,17 @@ impl<'a> Integrator<'a> {
         }
     }
 
-    /// DASSL's initial step: `0.001 (t_end − t₀)`, reduced so that
-    /// `h ‖y'₀‖ ≤ 0.5` (unscaled weights), at most `h_max`.
-    pub(super) fn initial_step(&mut self, y0: &[f64], yp0: &[f64]) -> f64 {
-        self.weights.update(y0);
-        let mut h = 0.001 * self.cfg.span;
-        let ypnorm = self.weights.norm(yp0);
-        if ypnorm > 0.5 / h {
-            h = 0.5 / ypnorm;
-        }
-        h.min(self.cfg.hmax)
-    }
-
-    /// Start at `(t0, y0, y'0)` with order one and step `h`.
+    /// Start at `(t0, y0, y'0)` with step `h`: order one, or with a
+    /// constant step the run's order (the straight line through `y₀` with
+    /// slope `y'₀` is its history).
     pub(super) fn start(&mut self, t0: f64, y0: &[f64], yp0: &[f64], h: f64) {
-        self.t = t0;
-        self.h = h;
-        self.p = 1;
+        self.ms.t = t0;
+        self.ms.h = h;
+        self.p = if self.ms.cfg.fixed_step {
+            self.ms.cfg.max_order
+        } else {
+            1
+        };
         self.p_old = 0;
         self.hist.start(y0, yp0, h);
     }
@@ -279,30 +218,30 @@ impl<'a> Integrator<'a> {
     /// Start a constant-step run of order `p` at `t` from the values at
     /// `t − (m−1)h, …, t` (oldest first).
     pub(super) fn start_from_values(&mut self, t: f64, values: &[&[f64]], h: f64, p: usize) {
-        self.t = t;
-        self.h = h;
+        self.ms.t = t;
+        self.ms.h = h;
         self.p = p;
         self.p_old = values.len().saturating_sub(1);
-        self.ramp = false;
+        self.ms.ramp = false;
         self.hist.start_from_values(values, h);
     }
 
     /// One attempt from `t` with `h` and order `p`; after a rejected
     /// error test, the order and step of the retry.
     fn attempt_step(&mut self) -> Result<Outcome, SolveError> {
-        self.weights.update_scaled(self.hist.y(), self.h);
+        self.ms.weights.update_scaled(self.hist.y(), self.ms.h);
         let err = match self.attempt() {
-            Ok(()) if self.cfg.fixed_step => {
+            Ok(()) if self.ms.cfg.fixed_step => {
                 self.accept(0.0);
                 return Ok(Outcome::Accepted);
             }
             Ok(()) => self.error_estimate(),
             Err(failure) => {
-                self.ramp = false;
+                self.ms.ramp = false;
                 return Ok(Outcome::Failed {
                     failure,
                     retry: Retry::Policy,
-                    iterations: self.last_iterations,
+                    iterations: self.ms.last_iterations,
                 });
             }
         };
@@ -312,7 +251,7 @@ impl<'a> Integrator<'a> {
         }
         if self.p == 1 {
             if let Some((h_prev, err_prev)) = self.order_one {
-                if self.h <= STALLED_CUT * h_prev
+                if self.ms.h <= STALLED_CUT * h_prev
                     && err > STALLED_FALL * err_prev
                     && self.since_restart >= RESTART_SPACING
                 {
@@ -320,10 +259,10 @@ impl<'a> Integrator<'a> {
                     return Ok(Outcome::Accepted);
                 }
             }
-            self.order_one = Some((self.h, err));
+            self.order_one = Some((self.ms.h, err));
         }
-        self.ramp = false;
-        self.error_failures += 1;
+        self.ms.ramp = false;
+        self.ms.error_failures += 1;
         // A second rejection whose estimate fell by less than half on a
         // step at least 10 % shorter, at an order that predicts a fall by
         // `(h₂/h₁)^(p+1)`, on STALLED_STEPS steps in a row: the estimate
@@ -337,12 +276,12 @@ impl<'a> Integrator<'a> {
         // (after p + 1 steps of one size) came, and the run ended in
         // `newton_failure` at h = 6e-17.
         let stalled = self.p > 1
-            && self.error_failures == 2
+            && self.ms.error_failures == 2
             && self
                 .first_rejection
-                .is_some_and(|(h1, e1)| self.h <= 0.9 * h1 && err > STALLED_FALL * e1);
-        if self.error_failures == 1 {
-            self.first_rejection = Some((self.h, err));
+                .is_some_and(|(h1, e1)| self.ms.h <= 0.9 * h1 && err > STALLED_FALL * e1);
+        if self.ms.error_failures == 1 {
+            self.first_rejection = Some((self.ms.h, err));
         }
         if stalled {
             // Once per step: the second rejection comes once.
@@ -352,11 +291,11 @@ impl<'a> Integrator<'a> {
         if stalled && self.stalls >= STALLED_STEPS {
             self.stalls = 0;
             self.p = 1;
-            self.h *= 0.25;
+            self.ms.h *= 0.25;
         } else {
-            self.reject(err, self.error_failures);
+            self.reject(err, self.ms.error_failures);
         }
-        Ok(Outcome::ErrorTest { h: self.h })
+        Ok(Outcome::ErrorTest { h: self.ms.h })
     }
 
     /// Accept the current order-one attempt although its error estimate
@@ -376,29 +315,25 @@ impl<'a> Integrator<'a> {
     /// its equation. The order-one estimate stayed at 2.48 from h = 1e-6
     /// down to h = 3e-17, and the run stopped with `step_size_too_small`.
     fn restart(&mut self) -> Result<(), SolveError> {
-        let t = if self.last {
-            self.cfg.t_end
-        } else {
-            self.t + self.h
-        };
+        let t = self.ms.t_next();
         let y = self.y1.clone();
         let yp = initial_derivative_with(&*self.sys, t, &y, &DerivativeRule::SOLVER)?;
-        self.stats.residual_evals += 1;
-        self.stats.steps += 1;
-        let h = self.h;
+        self.ms.stats.residual_evals += 1;
+        self.ms.stats.steps += 1;
+        let h = self.ms.h;
         self.start(t, &y, &yp, h);
         self.since_restart = 0;
         self.same = 0;
-        self.ramp = true;
-        self.jac_state = JacState::Needed;
+        self.ms.ramp = true;
+        self.ms.jac = JacState::Needed;
         Ok(())
     }
 
     /// Bring the history to the step size of the next attempt (the
     /// polynomial of the current order).
     fn fit_history(&mut self) {
-        if self.h != self.hist.h {
-            self.hist.rescale(self.h, self.p);
+        if self.ms.h != self.hist.h {
+            self.hist.rescale(self.ms.h, self.p);
             self.same = 0;
         }
     }
@@ -406,25 +341,21 @@ impl<'a> Integrator<'a> {
     /// After an accepted step of error norm `err` (0 with a constant step):
     /// choose order and step of the next one, and advance the history.
     fn accept(&mut self, err: f64) {
-        let (p_next, r) = if self.cfg.fixed_step {
+        let (p_next, r) = if self.ms.cfg.fixed_step {
             (self.p, 1.0)
         } else {
             self.propose(err)
         };
         let y = if self.p == 1 { &self.y1 } else { &self.y3 };
         self.hist.advance(y);
-        self.t = if self.last {
-            self.cfg.t_end
-        } else {
-            self.t + self.h
-        };
-        self.stats.steps += 1;
+        self.ms.t = self.ms.t_next();
+        self.ms.stats.steps += 1;
         self.since_restart += 1;
         self.p_old = self.p;
         if p_next != self.p || r != 1.0 {
             self.same = 0;
         }
         self.p = p_next;
-        self.h *= r;
+        self.ms.h *= r;
     }
 }
