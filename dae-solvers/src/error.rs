@@ -579,6 +579,17 @@ pub enum NotApplicable {
         /// Unknowns `N`.
         unknowns: usize,
     },
+    /// `idec` with error control on a formulation with unknowns of index 2
+    /// (see [`crate::idec`], "Known limitation"): every interval restarts
+    /// from the accepted value, which costs the index-2 unknowns the order
+    /// the corrections should give, so the steps grow like `tol^(−1/2)` to
+    /// `tol^(−1)` and the run crawls to the step limit. The seed's
+    /// constant-step scheme ([`crate::Options::fixed_step`]) keeps the
+    /// global connection its theory needs and takes these formulations.
+    #[error(
+        "index-2 unknowns with error control: idec restarts every interval from the accepted value, which costs the index-2 unknowns the order of the corrections (steps grow like tol^(-1/2) to tol^(-1), a crawl to the step limit); use an index-1 formulation (rcd0), a fixed step, or radau5"
+    )]
+    RestartedIndexTwo,
     /// An unknown has a higher index than the method integrates.
     #[error("index {index}: solver takes unknowns of index at most {max}")]
     IndexTooHigh {

@@ -227,7 +227,7 @@ const MAX_DEGREE: usize = 8;
 /// | gauss | the collocation polynomial | 3 |
 /// | bdf, odbdf | DASSL's interpolant through the last `k + 1` values | `max_order` (≤ 5) |
 /// | mebdf | the interpolant of the last step's order through the last values | order bound (≤ 8) |
-/// | idec | the degree-`m` polynomial on the interval's nodes; the algebraic unknowns the cubic through the last four interval ends | `max(m, 3)` |
+/// | idec | the degree-`m` polynomial on the interval's nodes | `m` |
 ///
 /// With a constant step ([`Options::fixed_step`](crate::Options::fixed_step)),
 /// bdf and mebdf first run an adaptive start-up integration: its steps are

@@ -14,6 +14,8 @@
 //!   (`attempt::Attempts`) and says how it ended; the retries, the shrink
 //!   factors of its policy, the budgets, the smallest step and the one
 //!   end-of-horizon rule are there.
+//! - `lagrange`: the Lagrange polynomial on equally spaced nodes of a
+//!   step (its derivative at the nodes, its value anywhere).
 //! - `output`: the output grid (one rule for `t0`, `t_end` and the times
 //!   between) and dense output.
 //! - `startup`: the constant-step start-up of a multistep method (its
@@ -41,6 +43,7 @@ pub(crate) mod control;
 pub(crate) mod driver;
 pub(crate) mod eliminate;
 pub mod events;
+pub(crate) mod lagrange;
 pub(crate) mod matrix;
 pub(crate) mod newton;
 pub(crate) mod output;

@@ -2,7 +2,6 @@
 //! [`Method::step`], constant steps (the seed's scheme) or error-controlled
 //! ones.
 
-use super::interp::{weights, Ends};
 use super::sweep::Sweep;
 use super::{Idec, FAC, H0_DEFAULT, RATIO_MAX, RATIO_MIN};
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
@@ -12,7 +11,6 @@ use crate::core::eliminate::Formulation;
 use crate::core::weights::Weights;
 use crate::linalg::all_finite;
 use crate::{Options, Problem, SolveError, Stats};
-use dae_core::system::VarKind;
 
 /// State of one IDeC integration.
 pub(super) struct Integrator<'a> {
@@ -47,9 +45,6 @@ pub(super) struct Integrator<'a> {
     t_prev: f64,
     h_prev: f64,
     dense_nodes: Vec<f64>,
-    /// With error control: the algebraic unknowns at the last accepted
-    /// interval ends, their dense output ([`Ends`]).
-    ends: Option<Ends>,
     /// Scratch for the error estimate.
     diff: Vec<f64>,
     /// The step `E − hJ` is factorised for (none after a new Jacobian).
@@ -71,22 +66,12 @@ impl Method for Integrator<'_> {
     }
     fn dense(&self, tau: f64, out: &mut [f64]) {
         let theta = (tau - self.t_prev) / self.h_prev;
-        let w = weights(self.m, theta);
-        out.fill(0.0);
-        for (l, wl) in w.iter().enumerate().take(self.m + 1) {
-            let node = &self.dense_nodes[l * self.n..(l + 1) * self.n];
-            for (o, v) in out.iter_mut().zip(node) {
-                *o += wl * v;
-            }
-        }
-        if let Some(ends) = &self.ends {
-            ends.interpolate(tau, out);
-        }
+        let n = self.n;
+        let nodes = |l: usize| &self.dense_nodes[l * n..(l + 1) * n];
+        self.sweep.nodes.evaluate(theta, nodes, out);
     }
     fn dense_degree(&self) -> usize {
-        // Degree m on the interval's nodes; the algebraic unknowns' cubic
-        // through the last interval ends.
-        self.m.max(super::interp::ENDS - 1)
+        self.m
     }
     fn finished(&self) -> bool {
         self.done
@@ -156,14 +141,11 @@ impl<'a> Integrator<'a> {
         // Constant steps carry every level over the whole horizon: its
         // running sums are compensated (`Sweep::compensated`).
         sweep.compensated = options.fixed_step.is_some();
-        // Index-k unknowns are measured with h^(k−1) (see the module
-        // documentation, "Error estimate").
-        let index_power = info
-            .variables
-            .iter()
-            .map(|v| i32::from(v.index.max(1)) - 1)
-            .collect();
-        let weights = Weights::new(&options.tol, |_| 1.0, vec![true; n], index_power);
+        // Error control samples the defect at the end of each Euler step
+        // (module documentation, "Variable steps").
+        sweep.at_end = options.fixed_step.is_none();
+        // Error control takes index 1 only: no index scaling.
+        let weights = Weights::new(&options.tol, |_| 1.0, vec![true; n], vec![0; n]);
         let h_max = options.h_max.unwrap_or(span).min(span / m as f64);
         let steps = Steps::new(
             Policy::HALVE,
@@ -200,13 +182,6 @@ impl<'a> Integrator<'a> {
             t_prev: problem.t0,
             h_prev: h,
             dense_nodes: vec![0.0; (m + 1) * n],
-            ends: options.fixed_step.is_none().then(|| {
-                let algebraic = (info.variables.iter().enumerate())
-                    .filter(|(_, v)| v.kind == VarKind::Algebraic)
-                    .map(|(i, _)| i)
-                    .collect();
-                Ends::new(algebraic, problem.t0, problem.y0)
-            }),
             diff: vec![0.0; n],
             factored: None,
             last: false,
@@ -262,9 +237,6 @@ impl<'a> Integrator<'a> {
         } else {
             t + self.m as f64 * h
         };
-        if let Some(ends) = &mut self.ends {
-            ends.push(self.t, &self.y);
-        }
         self.done = self.last;
     }
 
@@ -347,9 +319,11 @@ impl<'a> Integrator<'a> {
     }
 
     /// `‖η^[J] − η^[J−1]‖` at the end of the interval, weighted at the
-    /// interval's start value with index scaling by the interval length.
+    /// interval's start value.
     fn error_norm(&mut self, h: f64) -> f64 {
         let (jj, m, n) = (self.corrections, self.m, self.n);
+        // Index scaling is 1 (index 1); the floor of the weights is the
+        // core's.
         self.weights.update_scaled(&self.y, m as f64 * h);
         let (best, prev) = (self.sweep.node(jj, m), self.sweep.node(jj - 1, m));
         for ((d, a), b) in self.diff[..n].iter_mut().zip(best).zip(prev) {

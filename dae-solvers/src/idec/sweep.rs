@@ -16,10 +16,10 @@
 //! over the 5·10⁷ steps per level of S01 at h = 3.9e-7 they reach 5e-8,
 //! the floor of the third correction (docs/bench_idec.md §5).
 
-use super::interp::{two_sum, Nodes};
 use crate::core::control::Failure;
+use crate::core::lagrange::Nodes;
 use crate::core::matrix::{Corrector, Rows, SquareLu};
-use crate::linalg::{all_finite, mat_vec};
+use crate::linalg::{all_finite, mat_vec, two_sum};
 use crate::Stats;
 use dae_core::system::{DaeSystem, FormulationInfo};
 use nalgebra::DMatrix;
@@ -31,7 +31,7 @@ pub(super) struct Sweep {
     /// Corrections `J`.
     corrections: usize,
     /// The interpolation nodes (degree `m`).
-    nodes: Nodes,
+    pub(super) nodes: Nodes,
     /// `η^[l]` at the nodes `k = 0 … m`: entry `(l (m + 1) + k) N + i`.
     eta: Vec<f64>,
     /// `η^[l]` at the start of the interval, `l = 0 … J`.
@@ -48,7 +48,9 @@ pub(super) struct Sweep {
     np_start_lo: Vec<f64>,
     np_end_lo: Vec<f64>,
     pi_lo: Vec<f64>,
-    /// `f(t_k, η^[j]_k)`, `k = 0 … m − 1`, for the correction in progress.
+    /// `f` of level `j` (the correction in progress) where the defect is
+    /// sampled: `f(t_k, η^[j]_k)` at the nodes `k = 0 … m − 1`, or at
+    /// `1 … m` ([`Sweep::at_end`]).
     f_eta: Vec<f64>,
     /// Scratch: the current `π`, `f`, `h p'`, `E h p'`, the right-hand side.
     pi: Vec<f64>,
@@ -72,6 +74,12 @@ pub(super) struct Sweep {
     /// with error control, where every interval restarts from the accepted
     /// value after `m` steps (its results are those of plain sums).
     pub(super) compensated: bool,
+    /// Evaluate `f` of each Euler step at the step's end time and sample
+    /// the defect at the step's end node (error control), instead of both
+    /// at its start (the seed's scheme): the corrections then tend to
+    /// collocation at the nodes `1 … m`, stiffly accurate, not at `0 …
+    /// m − 1` (module documentation, "Variable steps").
+    pub(super) at_end: bool,
 }
 
 impl Sweep {
@@ -103,6 +111,7 @@ impl Sweep {
             rows: Rows::new(info),
             every_step: false,
             compensated: false,
+            at_end: false,
         }
     }
 
@@ -216,7 +225,8 @@ impl Sweep {
         let block = (m + 1) * n;
         let compensated = self.compensated;
         // The linearly implicit Euler solution of the original problem,
-        // (E − hJ)(η_{k+1} − η_k) = h f(t_k, η_k).
+        // (E − hJ)(η_{k+1} − η_k) = h f(t_k, η_k) (f at t_{k+1} if
+        // `at_end`; the defect of level 0 is then sampled afresh below).
         self.eta[..n].copy_from_slice(&self.start[..n]);
         self.eta_lo[..n].copy_from_slice(&self.start_lo[..n]);
         for k in 0..m {
@@ -228,7 +238,8 @@ impl Sweep {
                 Self::step_matrix(sys, stats, parts, tk, eta_k, h)?;
             }
             let f_k = &mut self.f_eta[k * n..(k + 1) * n];
-            Self::rhs(sys, stats, tk, eta_k, f_k)?;
+            let tf = if self.at_end { tk + h } else { tk };
+            Self::rhs(sys, stats, tf, eta_k, f_k)?;
             for (r, f) in self.rhs.iter_mut().zip(f_k.iter()) {
                 *r = h * f;
             }
@@ -247,7 +258,8 @@ impl Sweep {
         }
         // The corrections: the neighbouring problem E y' = f(t, y) + d(t),
         // d(t) = E p'(t) − f(t, p(t)), p the interpolant of η^[j], solved
-        // by the same scheme from π^[j](t_start); then
+        // by the same scheme (f and d at t_k, or both at t_{k+1}) from
+        // π^[j](t_start); then
         // η^[j+1] = η^[0] − (π^[j] − η^[j]) at the nodes.
         for j in 0..self.corrections {
             let (lower, upper) = self.eta.split_at_mut((j + 1) * block);
@@ -258,11 +270,13 @@ impl Sweep {
             let eta0_lo = &lower_lo[..block];
             let eta_j_lo = &lower_lo[j * block..];
             let eta_next_lo = &mut upper_lo[..block];
-            if j > 0 {
+            if j > 0 || self.at_end {
+                let shift = usize::from(self.at_end);
                 for k in 0..m {
-                    let tk = t + k as f64 * h;
+                    let tk = t + (k + shift) as f64 * h;
                     let f_k = &mut self.f_eta[k * n..(k + 1) * n];
-                    Self::rhs(sys, stats, tk, &eta_j[k * n..(k + 1) * n], f_k)?;
+                    let at = (k + shift) * n;
+                    Self::rhs(sys, stats, tk, &eta_j[at..at + n], f_k)?;
                 }
             }
             self.pi.copy_from_slice(&self.np_start[j * n..(j + 1) * n]);
@@ -272,19 +286,24 @@ impl Sweep {
             eta_next_lo[..n].copy_from_slice(&self.start_lo[(j + 1) * n..(j + 2) * n]);
             for k in 0..m {
                 let tk = t + k as f64 * h;
+                let (kd, tf) = if self.at_end {
+                    (k + 1, tk + h)
+                } else {
+                    (k, tk)
+                };
                 if compensated {
                     self.nodes.derivative_compensated(
-                        k,
+                        kd,
                         |l| &eta_j[l * n..(l + 1) * n],
                         |l| &eta_j_lo[l * n..(l + 1) * n],
                         &mut self.dp,
                     );
                 } else {
                     self.nodes
-                        .derivative(k, |l| &eta_j[l * n..(l + 1) * n], &mut self.dp);
+                        .derivative(kd, |l| &eta_j[l * n..(l + 1) * n], &mut self.dp);
                 }
                 mat_vec(&self.e, &self.dp, &mut self.edp);
-                Self::rhs(sys, stats, tk, &self.pi, &mut self.f)?;
+                Self::rhs(sys, stats, tf, &self.pi, &mut self.f)?;
                 if self.every_step {
                     let parts = (&mut self.lu, &self.rows, &self.e, &mut self.jac);
                     Self::step_matrix(sys, stats, parts, tk, &self.pi, h)?;

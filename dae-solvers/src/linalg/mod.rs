@@ -142,4 +142,32 @@ mod tests {
             assert!(!all_finite(&[f64::INFINITY, bad]));
         }
     }
+
+    /// `two_sum` returns the rounding error of the sum exactly, whichever
+    /// operand is larger.
+    #[test]
+    fn two_sum_is_exact() {
+        let half_ulp = f64::EPSILON / 2.0;
+        let cases = [
+            ((1.0, 1e-17), (1.0, 1e-17)),
+            ((1e-17, 1.0), (1.0, 1e-17)),
+            ((-1e-17, -1.0), (-1.0, -1e-17)),
+            // Ties round to even, up or down.
+            ((1.0, half_ulp), (1.0, half_ulp)),
+            (
+                (1.0 + f64::EPSILON, half_ulp),
+                (1.0 + 2.0 * f64::EPSILON, -half_ulp),
+            ),
+            ((-2.5, 2.5), (0.0, 0.0)),
+        ];
+        for ((a, b), want) in cases {
+            assert_eq!(two_sum(a, b), want, "{a} + {b}");
+        }
+        // An Euler update of size 4e-7 on a value of size 3: the error is
+        // b − (s − a), both differences exact here.
+        let (a, b) = (3.0_f64.sqrt(), 4e-7 / 3.0);
+        let (s, e) = two_sum(a, b);
+        assert_eq!(e, b - (s - a));
+        assert!(e != 0.0 && e.abs() <= 2.0 * half_ulp);
+    }
 }
