@@ -420,7 +420,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             });
         }
 
-        c.stall.converged(self.newton.stagnant(), h);
+        c.stall.converged(|| self.newton.stagnant(), h);
         if err >= 1.0 {
             // ---- rejected by the error test ----
             c.reject = true;

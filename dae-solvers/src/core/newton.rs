@@ -341,12 +341,17 @@ impl Stall {
     /// a row starts again; the walk goes on if the iteration converged at
     /// its round-off floor (`stagnant`, [`Contraction::stagnant`]) and
     /// ends if its increments fell below `κ`.
-    pub(crate) fn converged(&mut self, stagnant: bool, h: f64) {
+    ///
+    /// `stagnant` is asked only during a walk: outside one this costs what
+    /// resetting the count did.
+    pub(crate) fn converged(&mut self, stagnant: impl FnOnce() -> bool, h: f64) {
         self.count = 0;
-        if !stagnant {
-            self.walk = 0;
-        } else if self.walk > 0 {
-            self.walk_from = self.walk_from.max(h);
+        if self.walk > 0 {
+            if stagnant() {
+                self.walk_from = self.walk_from.max(h);
+            } else {
+                self.walk = 0;
+            }
         }
     }
 
@@ -550,7 +555,7 @@ mod tests {
                     return Some((i, h));
                 }
                 h *= 0.5;
-                s.converged(clean_at != Some(i), h);
+                s.converged(|| clean_at != Some(i), h);
                 h *= 1.3;
                 assert!(!s.walked());
             }
@@ -573,7 +578,7 @@ mod tests {
             let h_failed = h;
             s.failed(h, norm);
             h *= 1e-1;
-            s.converged(true, h);
+            s.converged(|| true, h);
             h_failed
         };
         for _ in 0..8 {
@@ -595,7 +600,7 @@ mod tests {
         let mut s = Stall::default();
         for _ in 0..50 {
             s.failed(1e-3, 0.5);
-            s.converged(true, 2e-3);
+            s.converged(|| true, 2e-3);
         }
         assert!(!s.walked());
     }
@@ -635,7 +640,7 @@ mod tests {
             h *= 0.5;
         }
         assert!(s.failed(h, 0.5));
-        s.converged(false, h);
+        s.converged(|| false, h);
         assert!(!s.failed(h * 0.5, 0.5));
     }
 }
