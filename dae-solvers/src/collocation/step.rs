@@ -125,22 +125,30 @@ impl<K: Collocation> Attempts for Integrator<'_, K> {
         Integrator::attempt(self)
     }
     fn failure_error(&self, failure: Failure, t: f64, h: f64, iterations: usize) -> SolveError {
-        let (level, unknown) = self.newton_last;
         if failure == Failure::Newton && self.c.stall.stalled() {
-            return SolveError::RoundOffFloor {
-                t,
-                h,
-                h_from: self.c.stall.first_step(),
-                unknown: self
-                    .sys
-                    .info()
-                    .variables
-                    .get(unknown)
-                    .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
-                level,
-            };
+            return self.round_off_floor(t, h);
         }
         Budget::error(failure, t, h, iterations)
+    }
+}
+
+impl<K: Collocation> Integrator<'_, K> {
+    /// [`SolveError::RoundOffFloor`] at `t` with step `h`, naming the
+    /// unknown that dominated the last failed iteration ([`Stall`]).
+    fn round_off_floor(&self, t: f64, h: f64) -> SolveError {
+        let (level, unknown) = self.newton_last;
+        SolveError::RoundOffFloor {
+            t,
+            h,
+            h_from: self.c.stall.first_step(),
+            unknown: self
+                .sys
+                .info()
+                .variables
+                .get(unknown)
+                .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
+            level,
+        }
     }
 }
 
@@ -378,6 +386,14 @@ impl<'a, K: Collocation> Integrator<'a, K> {
         // (`Stall`): what the failure that ends the step is called.
         if retry.is_some() && !non_finite && fixed.is_none() {
             self.c.stall.failed(h, self.newton_last.0);
+            // Failures at the floor between steps accepted at it, the step
+            // cut 10⁴-fold meanwhile: no shorter step can help. Not for a
+            // method iterating towards round-off (`gauss`), whose every
+            // iteration may stop at its floor, so that nothing would end a
+            // walk in a whole run: measured on radau5 only.
+            if matches!(K::POLICY.newton, NewtonStop::Tolerance) && self.c.stall.walked() {
+                return Err(self.round_off_floor(t, h));
+            }
         }
         let c = &mut self.c;
         if let Some(mut retry) = retry {
@@ -404,7 +420,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             });
         }
 
-        c.stall.reset();
+        c.stall.converged(|| self.newton.stagnant(), h);
         if err >= 1.0 {
             // ---- rejected by the error test ----
             c.reject = true;

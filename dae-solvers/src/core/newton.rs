@@ -185,6 +185,15 @@ impl Contraction {
         self.k
     }
 
+    /// The iteration that has just converged ended with increments that no
+    /// longer contracted (`θ` or the last ratio at least [`STAGNANT`]): it
+    /// stopped at its round-off floor, not because the increments fell
+    /// below `κ`. (An iteration converged at its first increment has no
+    /// ratio: not stagnant.)
+    pub(crate) fn stagnant(&self) -> bool {
+        self.k > 1 && self.q_prev.max(self.theta) >= STAGNANT
+    }
+
     /// Judge the increment of norm `norm`; `tiny` is DASSL's round-off
     /// bound `100 ε ‖y‖` (ignored by the RADAU5 rule). A non-finite norm
     /// diverges.
@@ -287,7 +296,12 @@ impl Contraction {
 /// not a gross divergence) that vary by at most [`STALL_SPREAD`] while the
 /// step has shrunk by [`STALL_SHRINK`] or more. Any other failure starts
 /// the count again, as does an accepted step or one rejected by its error
-/// test ([`Stall::reset`]).
+/// test ([`Stall::converged`]).
+///
+/// The same failures separated by steps whose iterations converged at the
+/// round-off floor are a walk down it ([`Stall::walked`]): that one ends
+/// the run when it is seen, since the step it shrinks is not retried
+/// within one step's failure budget but step after step.
 ///
 /// It names a failure, it does not cause one: the step is still shrunk
 /// within the failure budget — the thresholds are heuristics, and a run
@@ -301,6 +315,10 @@ pub(crate) struct Stall {
     h_last: f64,
     lo: f64,
     hi: f64,
+    /// Failures of the current walk (see [`Stall::walked`]); 0: none.
+    walk: usize,
+    /// The longest step attempted during the walk.
+    walk_from: f64,
 }
 
 /// Failed iterations in a row that make a stall.
@@ -317,17 +335,62 @@ pub(crate) const STALL_SPREAD: f64 = 2.0;
 /// halvings), in which increments that scale with `h` would have fallen by
 /// more than [`STALL_SPREAD`].
 pub(crate) const STALL_SHRINK: f64 = 8.0;
+/// Failures that make a walk down the round-off floor ([`Stall::walked`]).
+pub(crate) const WALK_FAILURES: usize = 8;
+/// The step must have shrunk by at least this factor over a walk: far more
+/// than the halvings of a stall in a row, since steps accepted at the floor
+/// separate its failures.
+pub(crate) const WALK_SHRINK: f64 = 1e4;
 
 impl Stall {
-    /// A step was accepted or failed its error test (the iteration
-    /// converged): the count starts again.
-    pub(crate) fn reset(&mut self) {
+    /// The iteration of an attempt with step `h` converged (the step was
+    /// then accepted or failed its error test): the count of failures in
+    /// a row starts again; the walk goes on if the iteration converged at
+    /// its round-off floor (`stagnant`, [`Contraction::stagnant`]) and
+    /// ends if its increments fell below `κ`.
+    ///
+    /// `stagnant` is asked only during a walk: outside one this costs what
+    /// resetting the count did.
+    pub(crate) fn converged(&mut self, stagnant: impl FnOnce() -> bool, h: f64) {
         self.count = 0;
+        if self.walk > 0 {
+            if stagnant() {
+                self.walk_from = self.walk_from.max(h);
+            } else {
+                self.walk = 0;
+            }
+        }
     }
 
-    /// The step of the first failure counted.
+    /// The step of the first failure counted (of the walk, once it ended
+    /// the run).
     pub(crate) fn first_step(&self) -> f64 {
-        self.h_first
+        if self.walked() {
+            self.walk_from
+        } else {
+            self.h_first
+        }
+    }
+
+    /// The run walks down the round-off floor: since the last iteration
+    /// that converged below `κ`, every iteration has either stagnated at
+    /// the floor or failed with increments between [`STALL_MIN`] and
+    /// [`STALL_MAX`], [`WALK_FAILURES`] failures or more, and the step has
+    /// shrunk by [`WALK_SHRINK`] from the longest one attempted meanwhile.
+    ///
+    /// The failures of a stall in a row ([`Stall::stalled`]) are separated
+    /// here by steps accepted at the floor: the increments of the unknown
+    /// at its floor are a few quanta of round-off, some under the floor
+    /// ([`ROUND_OFF_FLOOR`], converged) and some over it (failed, the step
+    /// cut), whatever the step, and the step, grown by less after an
+    /// acceptance than it is cut after a failure, drifts down to the
+    /// smallest step — `rcd0` of the stiff spring (`tests/stiff_spring.rs`)
+    /// from 5·10⁻⁴ to 10⁻¹⁶ in 63 attempts at t = 0.0594, its runs of up
+    /// to five failures in a row too uneven (0.30–0.64) to be a stall. A
+    /// step too long is cured by shrinking it: its iterations converge
+    /// below `κ` again, which ends the walk.
+    pub(crate) fn walked(&self) -> bool {
+        self.walk >= WALK_FAILURES && self.h_last * WALK_SHRINK <= self.walk_from
     }
 
     /// The failures counted so far make a stall.
@@ -339,9 +402,14 @@ impl Stall {
     /// norm `norm`; `true` when the failures make a stall.
     pub(crate) fn failed(&mut self, h: f64, norm: f64) -> bool {
         if !(STALL_MIN..=STALL_MAX).contains(&norm) {
-            self.count = 0;
+            (self.count, self.walk) = (0, 0);
             return false;
         }
+        if self.walk == 0 {
+            self.walk_from = h;
+        }
+        self.walk += 1;
+        self.walk_from = self.walk_from.max(h);
         if self.count == 0 {
             (self.h_first, self.lo, self.hi) = (h, norm, norm);
         } else {
@@ -479,6 +547,72 @@ mod tests {
     }
 
     #[test]
+    fn a_walk_is_failures_at_the_floor_between_steps_accepted_at_it() {
+        // The stiff spring's rcd0 at t = 0.0595 (k = 1e9, tol 1e-8): the
+        // increments of λ are 1–4 roundings of the spring's length, weighted
+        // 0.14–0.63 whatever the step; every other attempt fails (the step
+        // halved) and the others converge at the floor (the step grown by
+        // ~1.5): the step drifts down without a stall in a row.
+        let walk = |clean_at: Option<usize>| {
+            let mut s = Stall::default();
+            let mut h = 6.5e-4;
+            for i in 0..60 {
+                assert!(!s.failed(h, [0.55, 0.35, 0.62][i % 3]), "{i}");
+                if s.walked() {
+                    return Some((i, h));
+                }
+                h *= 0.5;
+                s.converged(|| clean_at != Some(i), h);
+                h *= 1.3;
+                assert!(!s.walked());
+            }
+            None
+        };
+        // Ended when the step has shrunk 10⁴-fold (1.3/2 per failure: 22
+        // failures), not at the smallest step.
+        let (i, h) = walk(None).unwrap();
+        assert_eq!(i, 22);
+        assert!(h * WALK_SHRINK <= 6.5e-4 && h > 1e-9, "{h}");
+        // One iteration converged below κ (a step too long, cured by
+        // shrinking it) starts the walk again.
+        let (i, _) = walk(Some(10)).unwrap();
+        assert_eq!(i, 33);
+        // So does a failure outside the band (a gross divergence): the
+        // walk after it is counted from its own first failure.
+        let mut s = Stall::default();
+        let mut h = 1.0;
+        let mut fail = |s: &mut Stall, norm: f64| {
+            let h_failed = h;
+            s.failed(h, norm);
+            h *= 1e-1;
+            s.converged(|| true, h);
+            h_failed
+        };
+        for _ in 0..8 {
+            fail(&mut s, 0.5);
+        }
+        assert!(s.walked());
+        fail(&mut s, 50.0);
+        assert!(!s.walked());
+        let first = fail(&mut s, 0.5);
+        for _ in 0..6 {
+            fail(&mut s, 0.5);
+            assert!(!s.walked());
+        }
+        fail(&mut s, 0.5);
+        assert!(s.walked());
+        assert_eq!(s.first_step(), first);
+        // Failures at the floor with the step kept (a constant step, a
+        // step grown back after each cut): no walk.
+        let mut s = Stall::default();
+        for _ in 0..50 {
+            s.failed(1e-3, 0.5);
+            s.converged(|| true, 2e-3);
+        }
+        assert!(!s.walked());
+    }
+
+    #[test]
     fn a_stall_is_increments_that_do_not_shrink_with_the_step() {
         // The stiff spring's multiplier: 0.3–0.65 of the tolerance at every
         // step from 2.4e-8 down (`tests/stiff_spring.rs`).
@@ -513,7 +647,7 @@ mod tests {
             h *= 0.5;
         }
         assert!(s.failed(h, 0.5));
-        s.reset();
+        s.converged(|| false, h);
         assert!(!s.failed(h * 0.5, 0.5));
     }
 }
