@@ -95,7 +95,7 @@ pub(super) struct Stagger {
 /// one solve; the iteration costs each parameter about three iterations of
 /// products, transforms and two solves. On the pendulum (`N = 5`, rcd0,
 /// BENCHMARKS.md §13e) the exact solve costs about 16 000 instructions an
-/// attempt and 3 500 a parameter, the iteration 8 000 and 8 400: the
+/// attempt and 3 500 a parameter, the iteration 8 400 and 8 400: the
 /// iteration is cheaper for one parameter, the exact solve from two. The
 /// factorisation grows as `N³` and the iteration as `N²`: above 12
 /// unknowns (not measured) the iteration stays.

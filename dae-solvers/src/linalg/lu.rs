@@ -296,7 +296,7 @@ impl DenseLu {
     pub(crate) fn factor_stages(&mut self) -> Result<(), Singular> {
         let (a, piv) = (self.a.as_mut_slice(), &mut self.piv[..]);
         let pivoting = self.pivoting;
-        with_stage_size!(piv.len(), |M| columns_factor(
+        with_stage_size!(piv.len(), |M| real_factor(
             &mut a[..M * M],
             &mut piv[..M],
             M,
@@ -317,12 +317,10 @@ impl DenseLu {
     }
 }
 
-/// [`real_factor`] with the columns after the pivot's split from it, so
-/// that the update of each (`a_j −= a_kj l_k`) is a loop over two
-/// separate slices the compiler vectorises: the same operations in the
-/// same order, the same factors to the bit.
+/// The update of each column after the pivot's (`a_j −= a_kj l_k`) runs
+/// over two slices split apart, a loop the compiler can vectorise.
 #[inline(always)]
-fn columns_factor(
+fn real_factor(
     a: &mut [f64],
     piv: &mut [usize],
     n: usize,
@@ -363,52 +361,6 @@ fn columns_factor(
             }
             for (v, &l) in col[k + 1..].iter_mut().zip(&*lk) {
                 *v -= l * akj;
-            }
-        }
-    }
-    Ok(())
-}
-
-#[inline(always)]
-fn real_factor(
-    a: &mut [f64],
-    piv: &mut [usize],
-    n: usize,
-    pivoting: Pivoting,
-) -> Result<(), Singular> {
-    let skip_zeros = pivoting == Pivoting::Linpack;
-    for k in 0..n {
-        let ck = k * n;
-        let mut p = k;
-        let mut pmax = a[ck + k].abs();
-        for i in k + 1..n {
-            let v = a[ck + i].abs();
-            if v > pmax {
-                pmax = v;
-                p = i;
-            }
-        }
-        piv[k] = p;
-        if pivoting.singular(pmax) {
-            return Err(Singular);
-        }
-        if p != k {
-            for j in 0..n {
-                a.swap(j * n + k, j * n + p);
-            }
-        }
-        let inv = 1.0 / a[ck + k];
-        for i in k + 1..n {
-            a[ck + i] *= inv;
-        }
-        for j in k + 1..n {
-            let cj = j * n;
-            let akj = a[cj + k];
-            if skip_zeros && akj == 0.0 {
-                continue;
-            }
-            for i in k + 1..n {
-                a[cj + i] -= a[ck + i] * akj;
             }
         }
     }
