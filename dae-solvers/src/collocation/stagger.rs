@@ -188,7 +188,8 @@ impl Stagger {
                 1.0,
                 1.0,
             ),
-            direct: (b.size <= DIRECT_MAX && b.count - 1 >= DIRECT_FROM).then(|| Direct {
+            // `count` is `1 + P`: at least `DIRECT_FROM` parameters.
+            direct: (b.size <= DIRECT_MAX && b.count > DIRECT_FROM).then(|| Direct {
                 lu: DenseLu::new(3 * b.size, Pivoting::Checked),
                 x: vec![0.0; 3 * b.size],
             }),
