@@ -96,7 +96,7 @@ use crate::expr::Q;
 use crate::interp::InterpretedModel;
 use crate::system::{
     Blocks, BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo, Model,
-    ParameterError, RowInfo, VarInfo,
+    ParameterError, Pattern, RowInfo, VarInfo,
 };
 use nalgebra::DMatrix;
 use std::cell::RefCell;
@@ -288,7 +288,47 @@ pub struct SensitivitySystem {
     e_entries: Vec<(usize, usize, f64)>,
     /// Whether the sensitivities are in the methods' error test.
     error_control: bool,
+    /// The linearisation from the augmented Jacobian's non-zeros
+    /// ([`Linearisation`]); `None` for an augmented formulation that
+    /// reports no structure (its dense Jacobian is gathered instead).
+    lin: Option<Linearisation>,
     scratch: RefCell<Scratch>,
+}
+
+/// [`DaeSystem::first_block_linearisation`] from the augmented
+/// formulation's Jacobian on its own pattern
+/// ([`DaeSystem::rhs_jacobian_values`]): no dense augmented matrix is
+/// zeroed, written and gathered per stage point.
+struct Linearisation {
+    /// The augmented formulation's `∂f/∂y` pattern.
+    pattern: Pattern,
+    /// `(value, entry)`: the position in the pattern's values of each
+    /// non-zero of `[∂f/∂y | ∂f/∂p]` of the state's rows, and its place in
+    /// that matrix (column-major, `N` rows).
+    map: Vec<(usize, usize)>,
+}
+
+impl Linearisation {
+    /// The map of `augmented`'s Jacobian pattern onto `[∂f/∂y | ∂f/∂p]`
+    /// (the columns `cols`, the rows `row_of`); `None` when the pattern is
+    /// dense (a system that knows no structure evaluates its values from
+    /// the dense matrix, allocating).
+    fn new(augmented: &dyn DaeSystem, cols: &[usize], row_of: &[usize]) -> Option<Self> {
+        let pattern = augmented.sparsity().rhs_jacobian;
+        if pattern.nnz() == pattern.rows * pattern.cols {
+            return None;
+        }
+        let mut map = Vec::new();
+        for (oc, &ac) in cols.iter().enumerate() {
+            for at in pattern.col_ptr[ac]..pattern.col_ptr[ac + 1] {
+                let ar = pattern.row_idx[at];
+                if let Some(r) = row_of.iter().position(|&x| x == ar) {
+                    map.push((at, oc * row_of.len() + r));
+                }
+            }
+        }
+        Some(Linearisation { pattern, map })
+    }
 }
 
 struct Scratch {
@@ -311,6 +351,8 @@ struct Scratch {
     /// The augmented formulation's `f` and its derivatives along `dirs`.
     fa: Vec<f64>,
     dfa: Vec<f64>,
+    /// The augmented Jacobian's values on [`Linearisation::pattern`].
+    values: Vec<f64>,
 }
 
 impl std::fmt::Debug for SensitivitySystem {
@@ -502,6 +544,8 @@ impl SensitivitySystem {
         for (i, &c) in param_cols.iter().enumerate() {
             dirs[i * na + c] = 1.0;
         }
+        let lin_cols: Vec<usize> = var_cols.iter().chain(&param_cols).copied().collect();
+        let lin = Linearisation::new(&*augmented, &lin_cols, &row_of);
         let scratch = RefCell::new(Scratch {
             point,
             jac: DMatrix::zeros(ai.equations(), na),
@@ -513,6 +557,7 @@ impl SensitivitySystem {
             dirs,
             fa: vec![0.0; ai.equations()],
             dfa: vec![0.0; ai.equations() * np],
+            values: vec![0.0; lin.as_ref().map_or(0, |l| l.pattern.nnz())],
         });
         Ok(SensitivitySystem {
             state,
@@ -524,6 +569,7 @@ impl SensitivitySystem {
             e,
             e_entries,
             error_control: true,
+            lin,
             scratch,
         })
     }
@@ -797,6 +843,16 @@ impl DaeSystem for SensitivitySystem {
         }
         let s = &mut *self.scratch.borrow_mut();
         self.lift(s, y);
+        if let Some(lin) = &self.lin {
+            self.augmented
+                .rhs_jacobian_values(t, &s.point, &lin.pattern, &mut s.values);
+            let out = out.as_mut_slice();
+            out.fill(0.0);
+            for &(v, o) in &lin.map {
+                out[o] = s.values[v];
+            }
+            return true;
+        }
         self.augmented.rhs_jacobian(t, &s.point, &mut s.jac);
         // Column-major: each column of `out` gathers the state's rows of
         // one column of the augmented Jacobian.

@@ -12,7 +12,9 @@
 //! 1. the state's stages by the simplified Newton iteration of the plain
 //!    run — the state's own residual, Jacobian and Newton norm, so that
 //!    with the sensitivities out of the error test the state takes the
-//!    plain run's steps, to the bit;
+//!    plain run's steps, to the bit; its kernels run on compact buffers of
+//!    the state's rows alone (`Stagger::exchange`), not over all
+//!    `N (1 + P)` unknowns;
 //! 2. with the state's stages fixed, the sensitivities' stage equations
 //!    `E Sᵢ'(c_k) = J(Y_k) Sᵢ(c_k) + ∂f/∂pᵢ(Y_k)`, linear in the
 //!    sensitivity stages, by the same simplified Newton iteration with
@@ -26,6 +28,15 @@
 //!    increment is zero there, so the sub-diagonal blocks `Bᵢ` of the
 //!    simultaneous corrector are never formed: a Jacobian is the state's
 //!    alone.
+//!
+//! Phase 2 cannot be one solve with the state's factorisations: those
+//! hold `J₀` (the Jacobian the state reuses, often from earlier steps),
+//! the sensitivities' equations `J(Y_k)` at each stage point, and the
+//! difference couples the three stages. Solved exactly, they are one
+//! `3N × 3N` linear system per attempt, shared by the `P` parameters
+//! (`Direct`): for small states with two or more parameters that is
+//! cheaper than iterating each parameter (`DIRECT_MAX`, `DIRECT_FROM`),
+//! and it is exact where the iteration stops at its Newton bound.
 //!
 //! The sensitivities' iteration has its own contraction monitor (its `η`
 //! carried across steps like the state's) and its own weights: every
@@ -45,7 +56,7 @@ use crate::core::block::Part;
 use crate::core::matrix::Matrix;
 use crate::core::newton::{Contraction, Verdict};
 use crate::core::weights::{Plain, Weights};
-use crate::linalg::with_size;
+use crate::linalg::{with_size, DenseLu, Pivoting};
 use crate::options::Options;
 use dae_core::system::{Blocks, DaeSystem};
 use nalgebra::DMatrix;
@@ -67,6 +78,45 @@ pub(super) struct Stagger {
     lin: [DMatrix<f64>; 3],
     /// The sensitivities' contraction monitor.
     pub(super) newton: Contraction,
+    /// The exact solve of the sensitivities' stage equations, for a state
+    /// of at most [`DIRECT_MAX`] unknowns; `None`: the iteration.
+    direct: Option<Direct>,
+    /// The state phase's stage buffers `Z, G, ΔW, Y, Y'` (`3N` each, the
+    /// state's rows alone), exchanged with the step loop's for that phase
+    /// ([`Stagger::exchange`]): its kernels run over `N` unknowns, not
+    /// `N (1 + P)`.
+    compact: [Vec<f64>; 5],
+}
+
+/// When the sensitivities' stage equations are solved exactly
+/// ([`Direct`]) rather than iterated: a state of at most `DIRECT_MAX`
+/// unknowns and at least `DIRECT_FROM` parameters. The exact solve's
+/// `3N × 3N` factorisation is shared by the parameters and each then costs
+/// one solve; the iteration costs each parameter about three iterations of
+/// products, transforms and two solves. On the pendulum (`N = 5`, rcd0,
+/// BENCHMARKS.md §13e) the exact solve costs about 16 000 instructions an
+/// attempt and 3 500 a parameter, the iteration 8 400 and 8 400: the
+/// iteration is cheaper for one parameter, the exact solve from two. The
+/// factorisation grows as `N³` and the iteration as `N²`: above 12
+/// unknowns (not measured) the iteration stays.
+const DIRECT_MAX: usize = 12;
+const DIRECT_FROM: usize = 2;
+
+/// The sensitivities' stage equations with the state's stages fixed,
+///
+/// ```text
+///     Σ_j (a⁻¹_kj / h) E Zᵢ_j − J(Y_k) Zᵢ_k = J(Y_k) sᵢ + ∂f/∂pᵢ(Y_k),   k = 1, 2, 3,
+/// ```
+///
+/// linear in the stage increments `Zᵢ` of each parameter, with one
+/// `3N × 3N` matrix shared by the `P` parameters: factorised once per
+/// attempt and solved once per parameter, exactly, where the iteration
+/// replaces each `J(Y_k)` by `J₀` and iterates on the difference.
+struct Direct {
+    /// The matrix (stage-major unknowns and rows), then its factors.
+    lu: DenseLu,
+    /// A right-hand side, then the increments (`3N`).
+    x: Vec<f64>,
 }
 
 /// Which unknowns one simplified Newton iteration solves for.
@@ -138,13 +188,40 @@ impl Stagger {
                 1.0,
                 1.0,
             ),
+            // `count` is `1 + P`: at least `DIRECT_FROM` parameters.
+            direct: (b.size <= DIRECT_MAX && b.count > DIRECT_FROM).then(|| Direct {
+                lu: DenseLu::new(3 * b.size, Pivoting::Checked),
+                x: vec![0.0; 3 * b.size],
+            }),
+            compact: std::array::from_fn(|_| vec![0.0; 3 * b.size]),
         })
     }
 
-    /// Both Newton weights for step size `h` at `y` (every unknown).
+    /// Exchange the step loop's stage buffers (`Z, G, ΔW, Y, Y'` of `n`
+    /// unknowns, stage-major) with the state's compact ones, and carry the
+    /// state's stages `Z` across: `into` the state phase, from the loop's
+    /// `Z` into the compact one; out of it, back into the loop's.
+    fn exchange(&mut self, [z, rest @ ..]: [&mut Vec<f64>; 5], n: usize, into: bool) {
+        let size = self.size;
+        let [cz, crest @ ..] = &mut self.compact;
+        for (big, small) in rest.into_iter().zip(crest) {
+            std::mem::swap(big, small);
+        }
+        std::mem::swap(z, cz);
+        // `cz` now holds the stages to carry, `z` the buffer they go to.
+        let (from, to) = if into { (n, size) } else { (size, n) };
+        for k in 0..3 {
+            z[k * to..k * to + size].copy_from_slice(&cz[k * from..k * from + size]);
+        }
+    }
+
+    /// The Newton weights for step size `h` at `y` (every unknown): the
+    /// state's, and the sensitivities' where they are iterated.
     pub(super) fn update_weights(&mut self, y: &[f64], h: f64) {
         self.state_weights.update_scaled(y, h);
-        self.sens_weights.update_scaled(y, h);
+        if self.direct.is_none() {
+            self.sens_weights.update_scaled(y, h);
+        }
     }
 
     /// The Newton norm of phase `phase` of the stage increments `dw`
@@ -164,13 +241,25 @@ impl<K: Collocation> Integrator<'_, K> {
     /// in the plain run); the sensitivities' are not in the statistics
     /// (BENCHMARKS.md §13d counts them from a profile).
     pub(super) fn newton_staggered(&mut self, t: f64, h: f64, may_shorten: bool) -> Newton {
-        if let Some(st) = &mut self.w.stagger {
-            st.update_weights(&self.w.y, h);
-        }
+        self.exchange(true, h);
         let state = self.iterate(t, h, may_shorten, Phase::State);
+        self.exchange(false, h);
         let Newton::Converged(k) = state else {
             return state;
         };
+        let direct = self
+            .w
+            .stagger
+            .as_ref()
+            .is_some_and(|st| st.direct.is_some());
+        if direct && self.linearise(t, h) {
+            return match self.solve_sensitivities(h) {
+                Ok(()) => Newton::Converged(k),
+                // A singular stage system: retried as a diverged iteration.
+                Err(Exact::Singular) => Newton::Diverged(k),
+                Err(Exact::NonFinite) => Newton::NonFinite(k),
+            };
+        }
         match self.iterate(t, h, may_shorten, Phase::Sensitivities) {
             Newton::Converged(_) => Newton::Converged(k),
             Newton::TooSlow { factor, .. } => Newton::TooSlow {
@@ -179,6 +268,21 @@ impl<K: Collocation> Integrator<'_, K> {
             },
             Newton::Diverged(_) => Newton::Diverged(k),
             Newton::NonFinite(_) => Newton::NonFinite(k),
+        }
+    }
+
+    /// Into (`into`) or out of the state phase: the step loop's stage
+    /// buffers exchanged with the state's compact ones
+    /// ([`Stagger::exchange`]); on the way in, the Newton weights for `h`.
+    fn exchange(&mut self, into: bool, h: f64) {
+        let n = self.n;
+        let w = &mut self.w;
+        if let Some(st) = &mut w.stagger {
+            if into {
+                st.update_weights(&w.y, h);
+            }
+            let loop_buffers = [&mut w.z, &mut w.res, &mut w.dw, &mut w.ys, &mut w.yd];
+            st.exchange(loop_buffers, n, into);
         }
     }
 
@@ -199,7 +303,13 @@ impl<K: Collocation> Integrator<'_, K> {
     /// the plain run's loop carries no dispatch on the phase.
     #[inline(always)]
     pub(super) fn iterate(&mut self, t: f64, h: f64, may_shorten: bool, phase: Phase) -> Newton {
-        let (n, m) = (self.n, self.m);
+        let size = self.w.stagger.as_ref().map_or(self.n, |st| st.size);
+        // The state phase runs on the compact buffers of its rows alone.
+        let (n, m) = if phase == Phase::State {
+            (size, size)
+        } else {
+            (self.n, self.m)
+        };
         let max_iter = if may_shorten {
             K::POLICY.max_newton
         } else {
@@ -211,20 +321,13 @@ impl<K: Collocation> Integrator<'_, K> {
         if matches!(K::POLICY.newton, NewtonStop::RoundOff { .. }) {
             self.newton.kappa = self.newton_floor.max(self.newton_drift * h * h);
         }
-        let size = self.w.stagger.as_ref().map_or(n, |st| st.size);
-        if phase == Phase::State {
-            // The sensitivities' rows stay zero: their increments are zero.
-            for g in self.w.res.chunks_exact_mut(m) {
-                g[size..].fill(0.0);
-            }
-        }
         // The sensitivities' rows are linear in them: with the state's
         // stages fixed, their matrices at the three stage points once, and
         // each iteration's residuals by products.
         let linear = phase == Phase::Sensitivities && self.linearise(t, h);
         loop {
             match phase {
-                Phase::State => self.state_stage_residuals(t, h, size),
+                Phase::State => self.state_stage_residuals(t, h),
                 Phase::Sensitivities if linear => self.linear_stage_residuals(h),
                 Phase::Whole | Phase::Sensitivities => self.stage_residuals(t, h),
             }
@@ -297,48 +400,86 @@ impl<K: Collocation> Integrator<'_, K> {
     }
 
     /// The state's stage residuals `G_i(Z) = E Y'_i − f(t + c_i h, Y_i)`
-    /// from its own formulation into the first `size` rows of each stage's
-    /// block of `res` (the stage points of every unknown are formed: the
-    /// sensitivities' are the next phase's).
-    fn state_stage_residuals(&mut self, t: f64, h: f64, size: usize) {
-        let (n, m) = (self.n, self.m);
+    /// from its own formulation, on the compact buffers of the state phase
+    /// (`N` apart, [`Stagger::exchange`]).
+    fn state_stage_residuals(&mut self, t: f64, h: f64) {
         let w = &mut self.w;
-        super::kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
-        let Some(first) = self.sys.first_block() else {
+        let (Some(first), Some(st)) = (self.sys.first_block(), &w.stagger) else {
             // Not reached: a staggered corrector exists only for a system
             // with a first block.
             return;
         };
+        let size = st.size;
+        super::kernels::stage_points::<K>(&w.y[..size], &w.z, h, &mut w.ys, &mut w.yd);
         for (i, &ci) in K::TABLEAU.c.iter().enumerate() {
+            let at = i * size..(i + 1) * size;
             first.residual(
                 t + ci * h,
-                &w.ys[i * n..i * n + size],
-                &w.yd[i * n..i * n + size],
-                &mut w.res[i * m..i * m + size],
+                &w.ys[at.clone()],
+                &w.yd[at.clone()],
+                &mut w.res[at],
             );
         }
         self.stats.residual_evals += 3;
     }
 
-    /// `[∂f/∂y | ∂f/∂p]` at the state's three stage points (the stages
-    /// as the state's iteration left them); whether the system offers it.
+    /// `[∂f/∂y | ∂f/∂p]` at the state's three stage points `Y_k = y + Z_k`
+    /// (the stages as the state's iteration left them, into the state's
+    /// rows of `ys`); whether the system offers it.
     fn linearise(&mut self, t: f64, h: f64) -> bool {
         let n = self.n;
         let w = &mut self.w;
         let Some(st) = &mut w.stagger else {
             return false;
         };
-        super::kernels::stage_points::<K>(&w.y, &w.z, h, &mut w.ys, &mut w.yd);
         let size = st.size;
         for (k, (&ck, lin)) in K::TABLEAU.c.iter().zip(&mut st.lin).enumerate() {
-            if !self
-                .sys
-                .first_block_linearisation(t + ck * h, &w.ys[k * n..k * n + size], lin)
-            {
+            let point = &mut w.ys[k * n..k * n + size];
+            for ((p, &y), &z) in point.iter_mut().zip(&w.y).zip(&w.z[k * n..]) {
+                *p = y + z;
+            }
+            if !self.sys.first_block_linearisation(t + ck * h, point, lin) {
                 return false;
             }
         }
         true
+    }
+
+    /// The sensitivities' stage increments by [`Direct`]'s exact solve,
+    /// with `[J | ∂f/∂p]` of [`Self::linearise`], into their rows of `Z`.
+    fn solve_sensitivities(&mut self, h: f64) -> Result<(), Exact> {
+        let (n, m) = (self.n, self.m);
+        let w = &mut self.w;
+        let Some(st) = &mut w.stagger else {
+            return Ok(());
+        };
+        let Some(d) = &mut st.direct else {
+            return Ok(());
+        };
+        let size = st.size;
+        let e = w.e_n.dense().as_slice();
+        let lin = st.lin.each_ref().map(|l| l.as_slice());
+        let a = d.lu.matrix_mut().as_mut_slice();
+        with_size!(size, |N| stage_matrix::<K>(a, e, m, lin, h, N));
+        d.lu.factor_stages().map_err(|_| Exact::Singular)?;
+        let params = st.lin[0].ncols() - size;
+        for i in 1..=params {
+            let s = &w.y[size * i..size * (i + 1)];
+            for (k, lin) in st.lin.iter().enumerate() {
+                let rhs = &mut d.x[k * size..(k + 1) * size];
+                with_size!(size, |N| sensitivity_rhs(rhs, s, lin.as_slice(), i, N));
+            }
+            d.lu.solve_stages(&mut d.x);
+            // `x · 0` is zero for a finite `x` only.
+            if d.x.iter().fold(0.0, |acc, &x| acc + x * 0.0) != 0.0 {
+                return Err(Exact::NonFinite);
+            }
+            for (k, x) in d.x.chunks_exact(size).enumerate() {
+                let at = k * n + size * i;
+                w.z[at..at + size].copy_from_slice(x);
+            }
+        }
+        Ok(())
     }
 
     /// The sensitivities' stage residuals `E Sᵢ'(c_k) − J(Y_k) Sᵢ(c_k) −
@@ -413,6 +554,65 @@ pub(super) fn rhs_for_error(
         }
     }
     sys.rhs(t, y, f)
+}
+
+/// Why [`Direct`]'s solve failed.
+enum Exact {
+    /// The stage system is singular.
+    Singular,
+    /// An increment is not finite.
+    NonFinite,
+}
+
+/// [`Direct`]'s matrix into `a` (`3N × 3N`, column-major, stage-major
+/// unknowns and rows): block `(k, j)` is `(a⁻¹_kj / h) E − δ_kj J(Y_k)`,
+/// `e` is `E` column-major with leading dimension `m` (its first block
+/// `E₀`), `lin[k]` is `[J(Y_k) | ∂f/∂p]` with leading dimension `size`.
+#[inline(always)]
+fn stage_matrix<K: Collocation>(
+    a: &mut [f64],
+    e: &[f64],
+    m: usize,
+    lin: [&[f64]; 3],
+    h: f64,
+    size: usize,
+) {
+    let big = 3 * size;
+    let a = &mut a[..big * big];
+    for j in 0..3 {
+        let jac = &lin[j][..size * size];
+        for c in 0..size {
+            let col = &mut a[(j * size + c) * big..(j * size + c + 1) * big];
+            let ec = &e[c * m..c * m + size];
+            for k in 0..3 {
+                let coef = K::TABLEAU.ainv[k][j] / h;
+                let rows = &mut col[k * size..(k + 1) * size];
+                for r in 0..size {
+                    rows[r] = coef * ec[r];
+                }
+            }
+            let rows = &mut col[j * size..(j + 1) * size];
+            let jc = &jac[c * size..(c + 1) * size];
+            for r in 0..size {
+                rows[r] -= jc[r];
+            }
+        }
+    }
+}
+
+/// The right-hand side `J sᵢ + ∂f/∂pᵢ` of parameter `i` (from 1) at one
+/// stage point: `lin` is `[J | ∂f/∂p]` column-major with leading
+/// dimension `size`.
+#[inline(always)]
+fn sensitivity_rhs(rhs: &mut [f64], s: &[f64], lin: &[f64], i: usize, size: usize) {
+    let (rhs, s) = (&mut rhs[..size], &s[..size]);
+    rhs.copy_from_slice(&lin[(size + i - 1) * size..(size + i) * size]);
+    for (c, &sc) in s.iter().enumerate() {
+        let jc = &lin[c * size..(c + 1) * size];
+        for k in 0..size {
+            rhs[k] += jc[k] * sc;
+        }
+    }
 }
 
 /// One sensitivity's stage residual `r = E₀ s' − J s − ∂f/∂pᵢ` at the
