@@ -259,7 +259,7 @@ fn dense_output_along_the_pendulum() {
 }
 
 /// With error control the multipliers' dense output is as accurate as
-/// their values at the accepted interval ends: it interpolates those
+/// their values at the accepted interval ends (within 2×, asserted).
 /// Measured here (`rcd0`): between the ends 1.0× the largest error at
 /// them with the interval's own polynomial (the defect sampled at the
 /// Euler steps' end); with the defect sampled at their start that
@@ -267,27 +267,26 @@ fn dense_output_along_the_pendulum() {
 /// which gives 2.6× with the present scheme.
 #[test]
 fn dense_output_of_lambda_follows_the_interval_ends() {
-    for form in [Form::Rcd0] {
-        let sys = Pendulum::new(form);
-        let options = Options {
-            output_times: (0..200).map(|k| 0.01 * k as f64 + 0.0013).collect(),
-            record_steps: true,
-            ..Options::with_tol(1e-8)
-        };
-        let sol = run(Idec::default(), &sys, &sys.y0(), 2.0, &options).expect("run");
-        let off = |(t, u): (&f64, &Vec<f64>)| (u[Pendulum::LAMBDA] - pendulum_exact(*t)[4]).abs();
-        let at_ends = sol
-            .steps
-            .iter()
-            .map(|(t, u)| off((t, u)))
-            .fold(0.0, f64::max);
-        let between = sol.t.iter().zip(&sol.y).map(off).fold(0.0, f64::max);
-        assert!(
-            at_ends > 0.0 && between <= 2.0 * at_ends,
-            "{}: λ off by {between:e} between the ends, {at_ends:e} at them",
-            form.name()
-        );
-    }
+    let form = Form::Rcd0;
+    let sys = Pendulum::new(form);
+    let options = Options {
+        output_times: (0..200).map(|k| 0.01 * k as f64 + 0.0013).collect(),
+        record_steps: true,
+        ..Options::with_tol(1e-8)
+    };
+    let sol = run(Idec::default(), &sys, &sys.y0(), 2.0, &options).expect("run");
+    let off = |(t, u): (&f64, &Vec<f64>)| (u[Pendulum::LAMBDA] - pendulum_exact(*t)[4]).abs();
+    let at_ends = sol
+        .steps
+        .iter()
+        .map(|(t, u)| off((t, u)))
+        .fold(0.0, f64::max);
+    let between = sol.t.iter().zip(&sol.y).map(off).fold(0.0, f64::max);
+    assert!(
+        at_ends > 0.0 && between <= 2.0 * at_ends,
+        "{}: λ off by {between:e} between the ends, {at_ends:e} at them",
+        form.name()
+    );
 }
 
 #[test]
