@@ -118,7 +118,15 @@ fn the_other_forms_finish_and_the_index_1_forms_finish_where_the_floor_allows() 
         let steps = run(f, 1e7, 1e-8).unwrap_or_else(|e| panic!("{f} at k = 1e7: {e}"));
         assert!(steps < 10_000, "{f} at k = 1e7: {steps} steps");
     }
-    // At k = 1e9, rcd0 finishes at 1e-7 (16 171 steps).
-    let steps = run("rcd0", 1e9, 1e-7).unwrap_or_else(|e| panic!("rcd0 at k = 1e9, 1e-7: {e}"));
-    assert!(steps < 20_000, "rcd0 at k = 1e9, 1e-7: {steps} steps");
+    // At k = 1e9, rcd0 at 1e-7 runs on λ's floor too: with DASSL's scaled
+    // Newton norm it finishes (16 171 steps, its walks shrinking the step at
+    // most 125-fold); with the plain sum radau5 takes since session 9
+    // (BENCHMARKS §12e) one walk goes on from h = 1.2e-10 at t = 0.993 and
+    // the run stops typed, naming λ. The last bits of the norm decide which;
+    // either is asserted, nothing else.
+    match run("rcd0", 1e9, 1e-7) {
+        Ok(steps) => assert!(steps < 20_000, "rcd0 at k = 1e9, 1e-7: {steps} steps"),
+        Err(SolveError::RoundOffFloor { unknown, .. }) => assert_eq!(unknown, "lambda"),
+        Err(e) => panic!("rcd0 at k = 1e9, 1e-7: {e}"),
+    }
 }
