@@ -44,7 +44,7 @@ pub(crate) struct Weights<S = Scaled> {
 /// [`Plain`], a type parameter of the weights (no test per call). The two
 /// agree to rounding.
 ///
-/// The collocation family sums plainly: one pass instead of two is 2.6 % of
+/// The collocation family sums plainly: one pass instead of two is 3.2 % of
 /// radau5's instructions on the pendulum (BENCHMARKS §12e). The multistep
 /// families keep DASSL's scaled sum: a DASSL-type step-size sequence turns
 /// the last bit of a norm into a different sequence within a few hundred
