@@ -19,8 +19,8 @@
 //! dense kernel's in the same order: only updates by structural zeros are
 //! skipped.
 //!
-//! Rows are never exchanged in storage: pivot `k` is row `perm[k]` of the
-//! matrix as written (column-major, `n × n`), its multipliers stay in
+//! Rows are never exchanged in storage: pivot `k` is a row (`Step::pivot`)
+//! of the matrix as written (column-major, `n × n`), its multipliers stay in
 //! their rows of column `k`, and [`PatternLu::solve`] reads the right-hand
 //! side by rows and writes the solution by columns.
 
