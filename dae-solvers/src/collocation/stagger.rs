@@ -615,6 +615,9 @@ enum Exact {
     NonFinite,
 }
 
+/// Structural non-zeros `(row, column)` of an `N × N` matrix.
+type Entries<'a> = &'a [(usize, usize)];
+
 /// [`Direct`]'s matrix into `a` (`3N × 3N`, column-major, stage-major
 /// unknowns and rows): block `(k, j)` is `(a⁻¹_kj / h) E − δ_kj J(Y_k)`,
 /// `e` is `E` column-major with leading dimension `m` (its first block
@@ -626,7 +629,7 @@ fn stage_matrix<K: Collocation>(
     e: &[f64],
     m: usize,
     lin: [&[f64]; 3],
-    (e_entries, j_entries): (&[(usize, usize)], &[(usize, usize)]),
+    (e_entries, j_entries): (Entries, Entries),
     h: f64,
     size: usize,
 ) {
