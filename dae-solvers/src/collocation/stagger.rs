@@ -34,9 +34,11 @@
 //! the sensitivities' equations `J(Y_k)` at each stage point, and the
 //! difference couples the three stages. Solved exactly, they are one
 //! `3N × 3N` linear system per attempt, shared by the `P` parameters
-//! (`Direct`): for small states with two or more parameters that is
-//! cheaper than iterating each parameter (`DIRECT_MAX`, `DIRECT_FROM`),
-//! and it is exact where the iteration stops at its Newton bound.
+//! (`Direct`), sparse (`E₀` in every block, `J` in the diagonal ones) and
+//! factorised on its non-zeros alone ([`PatternLu`]): for small states
+//! (`DIRECT_MAX`) that is cheaper than iterating even one parameter, and
+//! it is exact where the iteration stops at its Newton bound. The
+//! iteration stays for larger states.
 //!
 //! The sensitivities' iteration has its own contraction monitor (its `η`
 //! carried across steps like the state's) and its own weights: every
@@ -56,7 +58,7 @@ use crate::core::block::Part;
 use crate::core::matrix::Matrix;
 use crate::core::newton::{Contraction, Verdict};
 use crate::core::weights::{Plain, Weights};
-use crate::linalg::{with_size, DenseLu, Pivoting};
+use crate::linalg::{with_size, PatternLu};
 use crate::options::Options;
 use dae_core::system::{Blocks, DaeSystem};
 use nalgebra::DMatrix;
@@ -90,17 +92,29 @@ pub(super) struct Stagger {
 
 /// When the sensitivities' stage equations are solved exactly
 /// ([`Direct`]) rather than iterated: a state of at most `DIRECT_MAX`
-/// unknowns and at least `DIRECT_FROM` parameters. The exact solve's
-/// `3N × 3N` factorisation is shared by the parameters and each then costs
-/// one solve; the iteration costs each parameter about three iterations of
-/// products, transforms and two solves. On the pendulum (`N = 5`, rcd0,
-/// BENCHMARKS.md §13e) the exact solve costs about 16 000 instructions an
-/// attempt and 3 500 a parameter, the iteration 8 400 and 8 400: the
-/// iteration is cheaper for one parameter, the exact solve from two. The
-/// factorisation grows as `N³` and the iteration as `N²`: above 12
+/// unknowns. The exact solve's `3N × 3N` factorisation is shared by the
+/// parameters and each then costs one solve; the iteration costs each
+/// parameter about three iterations of products, transforms and two
+/// solves. On the pendulum (`N = 5`, rcd0, BENCHMARKS.md §13f) the exact
+/// solve on the matrix's non-zeros ([`PatternLu`]: 69 of 225, 203
+/// updates where a dense LU makes 1 015) costs about 4 600 instructions
+/// an attempt for the factorisation and 1 000 for the matrix, and 2 050 a
+/// parameter for the solve, where the iteration costs about 8 400 a
+/// parameter: the exact solve is cheaper from one parameter on (§13e's
+/// dense 15 × 15 LU cost 10 600, and kept the iteration for one). The
+/// factorisation grows faster than the iteration with `N`: above 12
 /// unknowns (not measured) the iteration stays.
 const DIRECT_MAX: usize = 12;
-const DIRECT_FROM: usize = 2;
+
+/// With one parameter the exact solve is kept when its elimination makes
+/// at most this many updates per `N²` (judged on its first factorisation;
+/// the iteration otherwise). Measured on the pendulum (BENCHMARKS.md
+/// §13f): rcd0 (`N = 5`, 203 updates, 8.1 `N²`) is cheaper exact (258.5 M
+/// instructions against the iteration's 265.8 M), ggl1 (`N = 6`, about
+/// 356 updates, 9.9 `N²`) dearer (290.0 M against 258.9 M before the
+/// clearing of [`PatternLu::factor`] was made sparse). Two points: a
+/// rough boundary, not a model.
+const ONE_PARAMETER_UPDATES: usize = 9;
 
 /// The sensitivities' stage equations with the state's stages fixed,
 ///
@@ -113,10 +127,41 @@ const DIRECT_FROM: usize = 2;
 /// attempt and solved once per parameter, exactly, where the iteration
 /// replaces each `J(Y_k)` by `J₀` and iterates on the difference.
 struct Direct {
-    /// The matrix (stage-major unknowns and rows), then its factors.
-    lu: DenseLu,
+    /// The matrix (stage-major unknowns and rows), then its factors; its
+    /// pattern is `E₀`'s in every block and `J`'s in the diagonal blocks
+    /// (`N = 5` on the pendulum: 69 non-zeros of 225).
+    lu: PatternLu,
+    /// The structural non-zeros `(row, column)` of `E₀` and of `J`.
+    e_entries: Vec<(usize, usize)>,
+    j_entries: Vec<(usize, usize)>,
     /// A right-hand side, then the increments (`3N`).
     x: Vec<f64>,
+    /// Whether its cost for one parameter has been judged
+    /// ([`ONE_PARAMETER_UPDATES`]).
+    judged: bool,
+}
+
+impl Direct {
+    /// The exact solve of a state of `size` unknowns whose `E₀` and `J`
+    /// have the structural non-zeros of `first`'s [`DaeSystem::sparsity`]
+    /// (`None` above [`PatternLu`]'s size).
+    fn new(first: &dyn DaeSystem, size: usize) -> Option<Self> {
+        let sparsity = first.sparsity();
+        let e_entries: Vec<_> = sparsity.leading.entries().collect();
+        let j_entries: Vec<_> = sparsity.rhs_jacobian.entries().collect();
+        let (e, j) = (&sparsity.leading, &sparsity.rhs_jacobian);
+        let lu = PatternLu::new(3 * size, |row, col| {
+            let (r, c) = (row % size, col % size);
+            e.contains(r, c) || (row / size == col / size && j.contains(r, c))
+        })?;
+        Some(Direct {
+            lu,
+            e_entries,
+            j_entries,
+            x: vec![0.0; 3 * size],
+            judged: false,
+        })
+    }
 }
 
 /// Which unknowns one simplified Newton iteration solves for.
@@ -188,11 +233,9 @@ impl Stagger {
                 1.0,
                 1.0,
             ),
-            // `count` is `1 + P`: at least `DIRECT_FROM` parameters.
-            direct: (b.size <= DIRECT_MAX && b.count > DIRECT_FROM).then(|| Direct {
-                lu: DenseLu::new(3 * b.size, Pivoting::Checked),
-                x: vec![0.0; 3 * b.size],
-            }),
+            direct: (b.size <= DIRECT_MAX)
+                .then(|| Direct::new(first, b.size))
+                .flatten(),
             compact: std::array::from_fn(|_| vec![0.0; 3 * b.size]),
         })
     }
@@ -459,9 +502,9 @@ impl<K: Collocation> Integrator<'_, K> {
         let size = st.size;
         let e = w.e_n.dense().as_slice();
         let lin = st.lin.each_ref().map(|l| l.as_slice());
-        let a = d.lu.matrix_mut().as_mut_slice();
-        with_size!(size, |N| stage_matrix::<K>(a, e, m, lin, h, N));
-        d.lu.factor_stages().map_err(|_| Exact::Singular)?;
+        let entries = (&d.e_entries[..], &d.j_entries[..]);
+        d.lu.factor(|a| stage_matrix::<K>(a, e, m, lin, entries, h, size))
+            .map_err(|_| Exact::Singular)?;
         let params = st.lin[0].ncols() - size;
         for i in 1..=params {
             let s = &w.y[size * i..size * (i + 1)];
@@ -469,7 +512,7 @@ impl<K: Collocation> Integrator<'_, K> {
                 let rhs = &mut d.x[k * size..(k + 1) * size];
                 with_size!(size, |N| sensitivity_rhs(rhs, s, lin.as_slice(), i, N));
             }
-            d.lu.solve_stages(&mut d.x);
+            d.lu.solve(&mut d.x);
             // `x · 0` is zero for a finite `x` only.
             if d.x.iter().fold(0.0, |acc, &x| acc + x * 0.0) != 0.0 {
                 return Err(Exact::NonFinite);
@@ -477,6 +520,14 @@ impl<K: Collocation> Integrator<'_, K> {
             for (k, x) in d.x.chunks_exact(size).enumerate() {
                 let at = k * n + size * i;
                 w.z[at..at + size].copy_from_slice(x);
+            }
+        }
+        // One parameter: the exact solve stays only where its elimination
+        // is cheaper than the iteration (judged on the first one).
+        if params == 1 && !d.judged {
+            d.judged = true;
+            if d.lu.updates() > ONE_PARAMETER_UPDATES * size * size {
+                st.direct = None;
             }
         }
         Ok(())
@@ -564,38 +615,37 @@ enum Exact {
     NonFinite,
 }
 
+/// Structural non-zeros `(row, column)` of an `N × N` matrix.
+type Entries<'a> = &'a [(usize, usize)];
+
 /// [`Direct`]'s matrix into `a` (`3N × 3N`, column-major, stage-major
 /// unknowns and rows): block `(k, j)` is `(a⁻¹_kj / h) E − δ_kj J(Y_k)`,
 /// `e` is `E` column-major with leading dimension `m` (its first block
-/// `E₀`), `lin[k]` is `[J(Y_k) | ∂f/∂p]` with leading dimension `size`.
-#[inline(always)]
+/// `E₀`), `lin[k]` is `[J(Y_k) | ∂f/∂p]` with leading dimension `size`;
+/// only the structural non-zeros `entries` of `E₀` and `J` are written,
+/// into zeros ([`PatternLu::factor`] clears them).
 fn stage_matrix<K: Collocation>(
     a: &mut [f64],
     e: &[f64],
     m: usize,
     lin: [&[f64]; 3],
+    (e_entries, j_entries): (Entries, Entries),
     h: f64,
     size: usize,
 ) {
     let big = 3 * size;
-    let a = &mut a[..big * big];
-    for j in 0..3 {
-        let jac = &lin[j][..size * size];
-        for c in 0..size {
+    for &(r, c) in e_entries {
+        let ev = e[c * m + r];
+        for j in 0..3 {
             let col = &mut a[(j * size + c) * big..(j * size + c + 1) * big];
-            let ec = &e[c * m..c * m + size];
             for k in 0..3 {
-                let coef = K::TABLEAU.ainv[k][j] / h;
-                let rows = &mut col[k * size..(k + 1) * size];
-                for r in 0..size {
-                    rows[r] = coef * ec[r];
-                }
+                col[k * size + r] = K::TABLEAU.ainv[k][j] / h * ev;
             }
-            let rows = &mut col[j * size..(j + 1) * size];
-            let jc = &jac[c * size..(c + 1) * size];
-            for r in 0..size {
-                rows[r] -= jc[r];
-            }
+        }
+    }
+    for (k, jac) in lin.iter().enumerate() {
+        for &(r, c) in j_entries {
+            a[(k * size + c) * big + k * size + r] -= jac[c * size + r];
         }
     }
 }

@@ -48,7 +48,7 @@ pub(crate) enum Pivoting {
 }
 
 impl Pivoting {
-    fn singular(self, pmax: f64) -> bool {
+    pub(crate) fn singular(self, pmax: f64) -> bool {
         match self {
             Pivoting::Linpack => pmax == 0.0,
             Pivoting::Checked => !(pmax > 0.0 && pmax.is_finite()),
@@ -226,98 +226,6 @@ pub(crate) fn factor_in_place(
         return r;
     }
     real_factor(&mut a[..n * n], piv, n, pivoting)
-}
-
-/// Calls `$body` with `$c` a constant for `$n = 3, 6, …, 36` (the stage
-/// systems of three stages of 1 … 12 unknowns) and the run-time `$n`
-/// otherwise.
-macro_rules! with_stage_size {
-    ($n:expr, |$c:ident| $body:expr) => {
-        match $n {
-            3 => {
-                const $c: usize = 3;
-                $body
-            }
-            6 => {
-                const $c: usize = 6;
-                $body
-            }
-            9 => {
-                const $c: usize = 9;
-                $body
-            }
-            12 => {
-                const $c: usize = 12;
-                $body
-            }
-            15 => {
-                const $c: usize = 15;
-                $body
-            }
-            18 => {
-                const $c: usize = 18;
-                $body
-            }
-            21 => {
-                const $c: usize = 21;
-                $body
-            }
-            24 => {
-                const $c: usize = 24;
-                $body
-            }
-            27 => {
-                const $c: usize = 27;
-                $body
-            }
-            30 => {
-                const $c: usize = 30;
-                $body
-            }
-            33 => {
-                const $c: usize = 33;
-                $body
-            }
-            36 => {
-                const $c: usize = 36;
-                $body
-            }
-            _ => {
-                #[allow(non_snake_case)]
-                let $c: usize = $n;
-                $body
-            }
-        }
-    };
-}
-
-impl DenseLu {
-    /// [`DenseLu::factor`] of a `3n × 3n` matrix, its size made a constant
-    /// for `n ≤ 12` (the loops of [`real_factor`] unrolled and their bounds
-    /// checks gone, which at 15 × 15 is most of their cost): the same
-    /// operations in the same order.
-    pub(crate) fn factor_stages(&mut self) -> Result<(), Singular> {
-        let (a, piv) = (self.a.as_mut_slice(), &mut self.piv[..]);
-        let pivoting = self.pivoting;
-        with_stage_size!(piv.len(), |M| real_factor(
-            &mut a[..M * M],
-            &mut piv[..M],
-            M,
-            pivoting
-        ))
-    }
-
-    /// [`DenseLu::solve`] with the factors of [`DenseLu::factor_stages`].
-    pub(crate) fn solve_stages(&self, b: &mut [f64]) {
-        let (a, piv) = (self.a.as_slice(), &self.piv[..]);
-        with_stage_size!(piv.len(), |M| real_solve(
-            &a[..M * M],
-            &piv[..M],
-            &mut b[..M],
-            M,
-            self.pivoting
-        ))
-    }
 }
 
 /// The update of each column after the pivot's (`a_j −= a_kj l_k`) runs

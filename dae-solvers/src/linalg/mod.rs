@@ -74,6 +74,7 @@ pub(crate) use with_size;
 
 pub(crate) mod lstsq;
 pub(crate) mod lu;
+pub(crate) mod pattern_lu;
 pub(crate) mod small;
 #[cfg(feature = "sparse")]
 pub(crate) mod sparse;
@@ -84,6 +85,7 @@ pub(crate) mod sparse_lstsq;
 
 pub(crate) use lstsq::ConstrainedLstsq;
 pub(crate) use lu::{ComplexLu, DenseLu, Pivoting, Singular};
+pub(crate) use pattern_lu::PatternLu;
 
 use nalgebra::DMatrix;
 

@@ -1,0 +1,358 @@
+//! LU factors of a small sparse matrix whose pattern is fixed, on a pivot
+//! sequence recorded once and replayed (the refactorisation of KLU and
+//! MA48, at the size of Radau IIA's coupled stage systems).
+//!
+//! A dense LU of the sensitivities' `3N × 3N` stage system
+//! (`collocation::stagger`) spends most of its work on zeros: on the
+//! pendulum (`N = 5`) the matrix has 69 structural non-zeros of 225 and
+//! its elimination about 200 non-zero updates of the dense kernel's 1 015.
+//! [`PatternLu`] takes the pattern once ([`PatternLu::new`]); its first
+//! [`PatternLu::factor`] eliminates with partial pivoting among the
+//! structural candidates of each column and records the pivot rows, the
+//! rows below each pivot and the columns right of it, fill-in included
+//! (the record); later factorisations replay the record — the same
+//! operations on the non-zeros alone, no search, no row exchange — as long
+//! as each recorded pivot is still the largest of its column's candidates.
+//! When it is not, that factorisation is recorded afresh. The factors are
+//! therefore always those of partial pivoting (up to the order in which
+//! equal candidates are taken), and the arithmetic on each entry is the
+//! dense kernel's in the same order: only updates by structural zeros are
+//! skipped.
+//!
+//! Rows are never exchanged in storage: pivot `k` is a row (`Step::pivot`)
+//! of the matrix as written (column-major, `n × n`), its multipliers stay in
+//! their rows of column `k`, and [`PatternLu::solve`] reads the right-hand
+//! side by rows and writes the solution by columns.
+
+use super::{Pivoting, Singular};
+
+/// Entries a [`PatternLu`] can hold (a matrix of at most 45 × 45): its
+/// storage is an array of this power of two and every index is masked by
+/// `CAP − 1`, which is in bounds by construction, so the replay's and the
+/// solve's indexed updates carry no bounds check.
+pub(crate) const CAP: usize = 2048;
+const MASK: usize = CAP - 1;
+/// Matrices of at most this many entries (2 KB) are cleared whole by
+/// [`PatternLu::clear`]: a vector `memset` of about 250 instructions at
+/// 15 × 15, where clearing the pendulum's 100-odd touched entries one by
+/// one costs more; above it glibc's `memset` turns to `rep stosb`, which
+/// callgrind counts byte by byte (2 600 instructions at 18 × 18), and the
+/// touched entries alone are cleared.
+const CLEAR_WHOLE: usize = 256;
+/// Rows of the largest matrix, a power of two, for the solve's scratch.
+const ROWS_CAP: usize = 64;
+const ROWS: usize = ROWS_CAP - 1;
+
+/// LU factors of an `n × n` matrix with a fixed pattern (see the [module
+/// documentation](self)).
+pub(crate) struct PatternLu {
+    n: usize,
+    /// The matrix (column-major, rows as written), then its factors.
+    a: Box<[f64; CAP]>,
+    /// Structural non-zeros of the matrix (column-major).
+    pattern: Vec<bool>,
+    /// The elimination last recorded, if any.
+    record: Option<Record>,
+    /// Scratch for the solution by rows.
+    by_rows: Box<[f64; ROWS_CAP]>,
+    /// How many factorisations recorded their elimination afresh.
+    pub(crate) recorded: usize,
+}
+
+/// One elimination's pivot rows and the non-zeros it touches.
+struct Record {
+    /// Each column's elimination step, in order.
+    steps: Vec<Step>,
+    /// Rows below the pivots (not yet pivoted, structural non-zeros in
+    /// the pivot's column), step by step.
+    lower: Vec<usize>,
+    /// Offsets `j n` of the columns `j > k` where pivot row `k` has a
+    /// structural non-zero, step by step.
+    right: Vec<usize>,
+    /// Rows of the earlier pivots with a structural non-zero in each
+    /// column (the entries of `U` above its diagonal), step by step.
+    upper: Vec<usize>,
+    /// Every position the elimination reads or writes (the pattern and
+    /// its fill): the entries to clear before the next matrix is written.
+    touched: Vec<usize>,
+    /// Updates `a_ij −= l_ik u_kj` of one elimination.
+    updates: usize,
+}
+
+/// The elimination of column `k`.
+struct Step {
+    /// Its offset `k n` in the matrix.
+    column: usize,
+    /// The pivot's row.
+    pivot: usize,
+    /// Its rows in [`Record::lower`], columns in [`Record::right`] and
+    /// rows in [`Record::upper`].
+    lower: std::ops::Range<usize>,
+    right: std::ops::Range<usize>,
+    upper: std::ops::Range<usize>,
+}
+
+impl PatternLu {
+    /// Storage for an `n × n` matrix whose structural non-zeros are
+    /// `pattern(i, j)`; `None` for a matrix of more than [`CAP`] entries.
+    pub(crate) fn new(n: usize, pattern: impl Fn(usize, usize) -> bool) -> Option<Self> {
+        (n * n <= CAP && n <= ROWS_CAP).then(|| PatternLu {
+            n,
+            a: Box::new([0.0; CAP]),
+            pattern: (0..n * n).map(|at| pattern(at % n, at / n)).collect(),
+            record: None,
+            by_rows: Box::new([0.0; ROWS_CAP]),
+            recorded: 0,
+        })
+    }
+
+    /// Factorise the matrix `write` writes (column-major, `n × n`: every
+    /// structural non-zero, into zeros: `write` may add) in place, `P A = L U` with partial
+    /// pivoting ([`Pivoting::Checked`]): by the record when its pivots are
+    /// still the largest, by a new record otherwise (`write` is then
+    /// called again: a refused replay has overwritten part of the matrix).
+    pub(crate) fn factor(&mut self, write: impl Fn(&mut [f64])) -> Result<(), Singular> {
+        let nn = self.n * self.n;
+        self.clear();
+        write(&mut self.a[..nn]);
+        if let Some(rec) = &self.record {
+            if replay(rec, &mut self.a) {
+                return Ok(());
+            }
+            self.clear();
+            write(&mut self.a[..nn]);
+        }
+        self.recorded += 1;
+        self.record = None;
+        self.record = Some(record(&mut self.a[..nn], &self.pattern, self.n)?);
+        Ok(())
+    }
+
+    /// Zeros over every entry a factorisation may have left non-zero:
+    /// the whole matrix up to [`CLEAR_WHOLE`] entries or before the first
+    /// record, the record's pattern and fill otherwise (every other entry
+    /// is zero already).
+    fn clear(&mut self) {
+        let nn = self.n * self.n;
+        match &self.record {
+            Some(rec) if nn > CLEAR_WHOLE => {
+                for &at in &rec.touched {
+                    self.a[at & MASK] = 0.0;
+                }
+            }
+            _ => self.a[..nn].fill(0.0),
+        }
+    }
+
+    /// The updates of the recorded elimination (none before the first).
+    pub(crate) fn updates(&self) -> usize {
+        self.record.as_ref().map_or(0, |rec| rec.updates)
+    }
+
+    /// Solve `A x = b`: `b` by rows, overwritten with `x` by columns, with
+    /// the factors of a successful [`PatternLu::factor`].
+    pub(crate) fn solve(&mut self, b: &mut [f64]) {
+        let Some(rec) = &self.record else {
+            return;
+        };
+        let (n, a) = (self.n, &*self.a);
+        let b = &mut b[..n];
+        let x = &mut *self.by_rows;
+        // L y = P b, in place by rows (in `x`).
+        x[..n].copy_from_slice(b);
+        for step in &rec.steps {
+            let bk = x[step.pivot & ROWS];
+            for &i in &rec.lower[step.lower.clone()] {
+                x[i & ROWS] -= a[(step.column + i) & MASK] * bk;
+            }
+        }
+        // U x = y, column by column from the last.
+        for (step, bk) in rec.steps.iter().zip(b).rev() {
+            let (ck, p) = (step.column, step.pivot);
+            let xk = x[p & ROWS] / a[(ck + p) & MASK];
+            *bk = xk;
+            for &r in &rec.upper[step.upper.clone()] {
+                x[r & ROWS] -= a[(ck + r) & MASK] * xk;
+            }
+        }
+    }
+}
+
+/// The elimination of `rec` on `a`; `false` (with `a` partly eliminated)
+/// when a recorded pivot is no longer the largest of its column's
+/// candidates, or is zero or not finite.
+fn replay(rec: &Record, a: &mut [f64; CAP]) -> bool {
+    for step in &rec.steps {
+        let (ck, p) = (step.column, step.pivot);
+        let lower = &rec.lower[step.lower.clone()];
+        let pivot = a[(ck + p) & MASK];
+        if Pivoting::Checked.singular(pivot.abs()) {
+            return false;
+        }
+        // The multipliers, and whether the pivot is still the largest
+        // (checked after scaling: a refused replay is written afresh).
+        let inv = 1.0 / pivot;
+        let mut largest = 0.0f64;
+        for &i in lower {
+            let v = &mut a[(ck + i) & MASK];
+            if v.abs() > largest {
+                largest = v.abs();
+            }
+            *v *= inv;
+        }
+        if largest > pivot.abs() {
+            return false;
+        }
+        for &off in &rec.right[step.right.clone()] {
+            let u = a[(off + p) & MASK];
+            for &i in lower {
+                let l = a[(ck + i) & MASK];
+                a[(off + i) & MASK] -= l * u;
+            }
+        }
+    }
+    true
+}
+
+/// Partial pivoting among the structural candidates of each column, on
+/// `a` in place, and its record; `Err` at a singular pivot.
+fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular> {
+    let mut nz = pattern.to_vec();
+    let mut pivoted = vec![false; n];
+    let mut rec = Record {
+        steps: Vec::with_capacity(n),
+        lower: Vec::new(),
+        right: Vec::new(),
+        upper: Vec::new(),
+        touched: Vec::new(),
+        updates: 0,
+    };
+    for k in 0..n {
+        let ck = k * n;
+        let mut p = None;
+        let mut pmax = 0.0;
+        for i in (0..n).filter(|&i| !pivoted[i] && nz[ck + i]) {
+            let v = a[ck + i].abs();
+            if p.is_none() || v > pmax {
+                (p, pmax) = (Some(i), v);
+            }
+        }
+        let Some(p) = p.filter(|_| !Pivoting::Checked.singular(pmax)) else {
+            return Err(Singular);
+        };
+        pivoted[p] = true;
+        let lower: Vec<usize> = (0..n).filter(|&i| !pivoted[i] && nz[ck + i]).collect();
+        let inv = 1.0 / a[ck + p];
+        for &i in &lower {
+            a[ck + i] *= inv;
+        }
+        let right_from = rec.right.len();
+        for j in k + 1..n {
+            if !nz[j * n + p] {
+                continue;
+            }
+            let u = a[j * n + p];
+            for &i in &lower {
+                a[j * n + i] -= a[ck + i] * u;
+                nz[j * n + i] = true;
+            }
+            rec.right.push(j * n);
+            rec.updates += lower.len();
+        }
+        let lower_from = rec.lower.len();
+        rec.lower.extend(lower);
+        rec.steps.push(Step {
+            column: ck,
+            pivot: p,
+            lower: lower_from..rec.lower.len(),
+            right: right_from..rec.right.len(),
+            upper: 0..0,
+        });
+    }
+    // U's entries above the diagonal, column by column: the earlier pivot
+    // rows with a non-zero in the column (fill included).
+    for k in 0..n {
+        let from = rec.upper.len();
+        for m in 0..k {
+            let r = rec.steps[m].pivot;
+            if nz[k * n + r] {
+                rec.upper.push(r);
+            }
+        }
+        rec.steps[k].upper = from..rec.upper.len();
+    }
+    rec.touched = (0..n * n).filter(|&at| nz[at]).collect();
+    Ok(rec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::DenseLu;
+
+    /// A 9 × 9 matrix with a fixed pattern (about half its entries, the
+    /// diagonal but one), its values moved by `s` so that different pivots
+    /// win for different `s`.
+    fn matrix(s: f64) -> (Vec<f64>, Vec<bool>) {
+        let n = 9;
+        let mut a = vec![0.0; n * n];
+        let mut pattern = vec![false; n * n];
+        for j in 0..n {
+            for i in 0..n {
+                let structural = (i == j || (i + 2 * j) % 5 == 0 || (i % 3 == j % 3 && i != 4))
+                    && !(i == 4 && j == 4);
+                if structural {
+                    pattern[j * n + i] = true;
+                    a[j * n + i] = ((i * 7 + j * 3) % 11) as f64 - 5.0 + s * (i as f64 - j as f64);
+                }
+            }
+        }
+        (a, pattern)
+    }
+
+    fn dense_solution(a: &[f64], b: &[f64]) -> Vec<f64> {
+        let n = b.len();
+        let mut lu = DenseLu::new(n, Pivoting::Checked);
+        lu.matrix_mut().as_mut_slice().copy_from_slice(a);
+        lu.factor().unwrap();
+        let mut x = b.to_vec();
+        lu.solve(&mut x);
+        x
+    }
+
+    #[test]
+    fn replays_and_records_give_the_dense_partial_pivoting_solution() {
+        let (a0, pattern) = matrix(0.0);
+        let n = 9;
+        let mut lu = PatternLu::new(n, |i, j| pattern[j * n + i]).unwrap();
+        let b: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        for s in [0.0, 0.0, 0.01, 3.0, 3.0, -2.0] {
+            let (a, _) = matrix(s);
+            lu.factor(|m| m.copy_from_slice(&a)).unwrap();
+            let mut x = b.clone();
+            lu.solve(&mut x);
+            let want = dense_solution(&a, &b);
+            assert_eq!(x, want, "s = {s}");
+        }
+        // The repeated matrices replayed; some of the others re-recorded.
+        assert!(lu.recorded >= 2 && lu.recorded < 6, "{}", lu.recorded);
+        let _ = a0;
+    }
+
+    #[test]
+    fn a_singular_matrix_is_refused_and_recorded_again_after() {
+        let n = 2;
+        let mut lu = PatternLu::new(n, |_, _| true).unwrap();
+        assert!(lu
+            .factor(|m| m.copy_from_slice(&[1.0, 2.0, 2.0, 4.0]))
+            .is_err());
+        lu.factor(|m| m.copy_from_slice(&[1.0, 2.0, 3.0, 4.0]))
+            .unwrap();
+        let mut x = [5.0, 6.0];
+        lu.solve(&mut x);
+        assert!(
+            (x[0] + 1.0).abs() < 1e-15 && (x[1] - 2.0).abs() < 1e-15,
+            "{x:?}"
+        );
+    }
+}
