@@ -16,10 +16,14 @@ beyond the shared engines". For every family (`bdf`, `odbdf`, `mebdf`,
 - code: the rest — the count that decides.
 
 It exits with status 1 when a family's code lines exceed the bound (500),
-else 0. Deterministic (files in sorted order), standard library only.
+else 0 — except that a family in `OVER` (the families still above the
+bound, issue 26 open) may keep the code lines it has there but not grow;
+`--strict` ignores `OVER`. `.ci/run` runs it. Deterministic (files in
+sorted order), standard library only.
 
-Usage: `python3 scripts/family_lines.py [--bound N] [ROOT]`, ROOT the
-repository (default: the parent of this script's directory).
+Usage: `python3 scripts/family_lines.py [--strict] [--files] [--bound N]
+[ROOT]`, ROOT the repository (default: the parent of this script's
+directory).
 """
 
 import argparse
@@ -29,6 +33,10 @@ import sys
 FAMILIES = ["bdf", "odbdf", "mebdf", "idec", "radau5", "odradau", "gauss"]
 ENGINES = ["core", "collocation", "multistep", "linalg"]
 BOUND = 500
+# Families above the bound and the code lines they have (branch fold10,
+# BENCHMARKS.md §12g): not to grow; lower each entry as code moves out, and
+# drop it at 500.
+OVER = {"mebdf": 615, "idec": 592}
 
 
 def strip_code(line):
@@ -131,6 +139,7 @@ def main():
     parser.add_argument("root", nargs="?", default=os.path.join(os.path.dirname(__file__), ".."))
     parser.add_argument("--bound", type=int, default=BOUND)
     parser.add_argument("--files", action="store_true", help="also every file")
+    parser.add_argument("--strict", action="store_true", help="no family above the bound")
     args = parser.parse_args()
     src = os.path.join(args.root, "dae-solvers", "src")
     header = f"{'':<26}{'total':>7}{'blank':>7}{'comment':>8}{'test':>6}{'code':>6}"
@@ -148,9 +157,17 @@ def main():
                     print(f"  {rel:<24}" + "".join(f"{v:>{w}}" for v, w in zip(c, (7, 7, 8, 6, 6))))
             if title == "family" and sums[4] > args.bound:
                 over.append((name, sums[4]))
+    failed = False
     for name, code in over:
-        print(f"family {name}: {code} code lines, above the bound of {args.bound}", file=sys.stderr)
-    return 1 if over else 0
+        allowed = None if args.strict else OVER.get(name)
+        if allowed is not None and code <= allowed:
+            print(f"family {name}: {code} code lines, above the bound of {args.bound} "
+                  f"(known, at most {allowed}: issue 26)", file=sys.stderr)
+        else:
+            failed = True
+            print(f"family {name}: {code} code lines, above the bound of {args.bound}"
+                  + (f" and its known {allowed}" if allowed is not None else ""), file=sys.stderr)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

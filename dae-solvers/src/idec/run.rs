@@ -3,7 +3,7 @@
 //! ones.
 
 use super::sweep::Sweep;
-use super::{Idec, FAC, H0_DEFAULT, RATIO_MAX, RATIO_MIN};
+use super::{Idec, FAC, RATIO_MAX, RATIO_MIN};
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
 use crate::core::control::{self, Failure};
 use crate::core::driver::Method;
@@ -154,11 +154,7 @@ impl<'a> Integrator<'a> {
         );
         let h = match options.fixed_step {
             Some(h) => h,
-            None => options
-                .h0
-                .unwrap_or(H0_DEFAULT)
-                .min(h_max)
-                .max(100.0 * control::h_min(problem.t0, span)),
+            None => control::first_step(options.h0, h_max, problem.t0, span),
         };
         Ok(Integrator {
             sys: sys.clone(),

@@ -7,7 +7,7 @@ use crate::core::attempt::{Outcome, Policy, Retry};
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::JacState;
 use crate::core::shifted::Shifted;
-use crate::core::weights::Weights;
+use crate::core::weights::{self, Weights};
 use crate::init::{initial_derivative_with, DerivativeRule};
 use crate::multistep::backward::History;
 use crate::multistep::{Common, Config, Family, FALL_BACK_AFTER};
@@ -151,18 +151,13 @@ impl<'a> Integrator<'a> {
     pub(super) fn new(sys: Formulation<'a>, tol: &Tolerances, cfg: Config) -> Self {
         let info = sys.info();
         let n = info.unknowns();
-        let index_power = info
-            .variables
-            .iter()
-            .map(|v| i32::from(v.index.max(1)) - 1)
-            .collect();
         let estimated: Vec<bool> = info.variables.iter().map(|v| v.index <= 2).collect();
         let count = estimated.iter().filter(|&&b| b).count().max(1);
         let mut matrix = Shifted::new(n);
         // `E` is constant (in `t` and `y`: `eliminate::constant_leading`
         // made it so or refused), so any point serves.
         sys.leading(0.0, &vec![0.0; n], &mut matrix.lead);
-        let weights = Weights::new(tol, |_| 1.0, vec![true; n], index_power);
+        let weights = Weights::new(tol, |_| 1.0, vec![true; n], weights::index_powers(info));
         Integrator {
             ms: Common::new(cfg, n, weights, Policy::MEBDF),
             sys: sys.clone(),
