@@ -8,8 +8,9 @@
 //!   work counters, the attempt loop's budgets ([`Steps`]), the error-test
 //!   failures of the step, the iteration matrix's state and the Newton
 //!   rate carried from step to step; DASSL's initial step
-//!   ([`Common::initial_step`]) and the time a step reaches
-//!   ([`Common::t_next`]).
+//!   ([`Common::initial_step`]), the time a step reaches
+//!   ([`Common::t_next`]) and DASSL's fall-back to order one after the
+//!   third error-test failure on a step ([`Common::fall_back`]).
 //! - [`Family`]: what a family implements — one attempt, its start from
 //!   `y₀, y'₀` or from equally spaced values, its solution and dense
 //!   output; the engine makes every family a [`Method`] for the driver and
