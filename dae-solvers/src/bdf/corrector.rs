@@ -5,9 +5,10 @@
 use super::step::Integrator;
 use super::EPS;
 use crate::core::control::Failure as Fail;
+use crate::core::eval;
 use crate::core::matrix::{Corrector, JacState};
 use crate::core::newton::{Contraction, Rule};
-use crate::linalg::{all_finite, small};
+use crate::linalg::small;
 use crate::multistep::corrector::{self, Iteration, Reuse};
 use crate::multistep::{Common, UNKNOWN_RATE};
 use dae_core::system::{FormulationInfo, RowKind};
@@ -101,16 +102,11 @@ impl<L: Corrector> Iteration for Integrator<'_, L> {
 }
 
 impl<L: Corrector> Integrator<'_, L> {
-    /// `δ = F(t, y, y')`.
+    /// `δ = F(t, y, y')`, counted.
+    #[inline]
     fn evaluate_residual(&mut self) -> Result<(), Fail> {
-        self.sys
-            .residual(self.ms.t, &self.y, &self.yp, &mut self.delta);
-        self.ms.stats.residual_evals += 1;
-        if all_finite(&self.delta) {
-            Ok(())
-        } else {
-            Err(Fail::NonFinite("residual"))
-        }
+        let point = (self.ms.t, &self.y[..], &self.yp[..]);
+        eval::residual(&*self.sys, &mut self.ms.stats, point, &mut self.delta)
     }
 
     /// Evaluate `G = ∂(E(t, y) y')/∂y − ∂f/∂y + c_J E(t, y)` at the predictor and

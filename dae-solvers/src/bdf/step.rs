@@ -10,7 +10,7 @@ use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, JacState, Matrix, Rows, Structure};
 use crate::core::weights::Weights;
 use crate::multistep::divided::Divided;
-use crate::multistep::{Common, Config, Family};
+use crate::multistep::{Common, Config, Family, FALL_BACK_AFTER};
 use crate::options::Tolerances;
 use crate::SolveError;
 
@@ -174,19 +174,15 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                 iterations: self.ms.last_iterations,
             },
             Err(test) => {
-                self.ms.error_failures += 1;
-                let nef = self.ms.error_failures;
-                let h = if nef == 1 {
+                let nef = self.ms.error_test_failed();
+                let h = if nef >= FALL_BACK_AFTER {
+                    self.ms.fall_back(&mut self.k)
+                } else if nef == 1 {
                     self.k = test.knew;
                     let r: f64 = 0.9 * (2.0 * test.est + 1e-4).powf(-1.0 / (self.k + 1) as f64);
                     self.ms.h * r.clamp(0.25, 0.9)
                 } else {
-                    // From the third failure on, order one, as DASSL: at
-                    // higher orders an algebraic component left off its
-                    // constraint by the Newton tolerance is an error
-                    // estimate that does not shrink with h. With a fixed
-                    // order it is raised again after the step.
-                    self.k = if nef == 2 { test.knew } else { 1 };
+                    self.k = test.knew;
                     0.25 * self.ms.h
                 };
                 Outcome::ErrorTest { h }

@@ -82,8 +82,6 @@ const FACL: f64 = 5.0;
 const FACR: f64 = 0.125;
 /// Unit round-off.
 const UROUND: f64 = f64::EPSILON * 0.5;
-/// Initial step when [`Options::h0`] is not given (RADAU5's default).
-const H0_DEFAULT: f64 = 1e-6;
 
 /// From this tolerance down (the smallest relative tolerance, or absolute
 /// where all relative ones are zero) the integration is run for the last

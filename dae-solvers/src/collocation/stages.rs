@@ -11,7 +11,7 @@ use super::step::Integrator;
 use super::tableau::Collocation;
 use crate::core::block::{self, Part};
 use crate::core::matrix::{Matrix, Rows, Structure};
-use crate::core::weights::{Plain, Weights};
+use crate::core::weights::{self, Plain, Weights};
 use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
 use crate::options::Options;
 use crate::NotApplicable;
@@ -151,10 +151,7 @@ impl Work {
                 &options.tol,
                 |i| (K::POLICY.tolerance_factor)(options.tol.rtol(i), options.tol.atol(i)),
                 block::in_error_test(n, blocks),
-                info.variables
-                    .iter()
-                    .map(|var| i32::from(var.index.max(1)) - 1)
-                    .collect(),
+                weights::index_powers(info),
             ),
             rows: Rows::new(info),
             cont: v(4 * n),

@@ -57,7 +57,7 @@ use super::UROUND;
 use crate::core::block::Part;
 use crate::core::matrix::Matrix;
 use crate::core::newton::{Contraction, Verdict};
-use crate::core::weights::{Plain, Weights};
+use crate::core::weights::{self, Plain, Weights};
 use crate::linalg::{with_size, PatternLu};
 use crate::options::Options;
 use dae_core::system::{Blocks, DaeSystem};
@@ -206,11 +206,7 @@ impl Stagger {
         }
         let factor =
             |i: usize| (K::POLICY.tolerance_factor)(options.tol.rtol(i), options.tol.atol(i));
-        let powers: Vec<i32> = info
-            .variables
-            .iter()
-            .map(|var| i32::from(var.index.max(1)) - 1)
-            .collect();
+        let powers = weights::index_powers(info);
         let state_weights = Weights::new(
             &options.tol,
             factor,

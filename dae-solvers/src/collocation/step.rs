@@ -7,7 +7,7 @@ use super::solve::StageSolveKind;
 use super::stages::{Newton, Work};
 use super::stagger::rhs_for_error;
 use super::tableau::{dense, Collocation, NewtonStop, StepRule};
-use super::{smallest_tolerance, H0_DEFAULT, TIGHT_NEWTON, TIGHT_TOL, UROUND};
+use super::{smallest_tolerance, TIGHT_NEWTON, TIGHT_TOL, UROUND};
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
 use crate::core::control::{self, Budget, Failure};
 use crate::core::driver::Method;
@@ -311,13 +311,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
         let c = &mut self.c;
         c.h = match c.fixed {
             Some(hf) => hf,
-            // A tiny h0 is raised to well above the smallest step.
-            None => self
-                .options
-                .h0
-                .unwrap_or(H0_DEFAULT)
-                .min(c.steps.h_max)
-                .max(100.0 * control::h_min(t0, span)),
+            None => control::first_step(self.options.h0, c.steps.h_max, t0, span),
         };
         (c.h, c.last) = c.steps.toward_end(t0, c.h);
         c.h_old = c.h;

@@ -18,6 +18,19 @@ pub(crate) fn h_min(t: f64, span: f64) -> f64 {
     4.0 * f64::EPSILON * t.abs().max(f64::EPSILON * span)
 }
 
+/// First step of a one-step method when [`crate::Options::h0`] is not
+/// given (RADAU5's default).
+pub(crate) const H0_DEFAULT: f64 = 1e-6;
+
+/// The first step of a one-step method (the collocation engine, idec's
+/// Euler step): the caller's `h0` or [`H0_DEFAULT`], at most `h_max`, and a
+/// tiny one raised to well above the smallest step at `t0`.
+pub(crate) fn first_step(h0: Option<f64>, h_max: f64, t0: f64, span: f64) -> f64 {
+    h0.unwrap_or(H0_DEFAULT)
+        .min(h_max)
+        .max(100.0 * h_min(t0, span))
+}
+
 /// Newton failures tolerated on one step.
 pub(crate) const MAX_NEWTON_FAILURES: usize = 10;
 /// Singular iteration matrices tolerated on one step.

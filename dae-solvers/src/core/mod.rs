@@ -8,6 +8,11 @@
 //! - `matrix`: the linear systems of the Newton iterations — square LU for
 //!   square formulations, constrained least squares for overdetermined ones —
 //!   behind one interface, so that a method is written once for both.
+//! - `eval`: counted evaluations of `F` and `f`, a non-finite value the
+//!   attempt's typed failure.
+//! - `shifted`: the iteration matrix `a E − b J` of a method on a constant
+//!   leading matrix (MEBDF's stages, IDeC's Euler steps), factored when it
+//!   changed.
 //! - `control`: the smallest step and the failure budgets, the same for
 //!   every method, and the typed errors they end in.
 //! - `attempt`: the step-attempt loop — a family implements one attempt
@@ -42,11 +47,13 @@ pub(crate) mod block;
 pub(crate) mod control;
 pub(crate) mod driver;
 pub(crate) mod eliminate;
+pub(crate) mod eval;
 pub mod events;
 pub(crate) mod lagrange;
 pub(crate) mod matrix;
 pub(crate) mod newton;
 pub(crate) mod output;
 pub mod policy;
+pub(crate) mod shifted;
 pub(crate) mod startup;
 pub(crate) mod weights;

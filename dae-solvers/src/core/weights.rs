@@ -25,6 +25,7 @@ use std::marker::PhantomData;
 
 use crate::linalg::with_size;
 use crate::options::Tolerances;
+use dae_core::system::FormulationInfo;
 
 /// Error weights of the `N` unknowns, updated from the solution as the
 /// integration proceeds (see the [module documentation](self)).
@@ -78,6 +79,16 @@ impl Sum for Plain {
     fn norm(w: &[f64], v: &[f64], stride: usize, blocks: usize, n: usize, inv_count: f64) -> f64 {
         plain_norm(w, v, stride, blocks, n, inv_count)
     }
+}
+
+/// The index scaling [`Weights::new`] takes for the unknowns of `info`:
+/// the power `k − 1` of `h` for an unknown of index `k` (index 0 as 1).
+/// Used by the collocation engine and by mebdf.
+pub(crate) fn index_powers(info: &FormulationInfo) -> Vec<i32> {
+    info.variables
+        .iter()
+        .map(|var| i32::from(var.index.max(1)) - 1)
+        .collect()
 }
 
 impl<S: Sum> Weights<S> {

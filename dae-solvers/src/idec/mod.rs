@@ -254,8 +254,6 @@ const FAC: f64 = 0.9;
 /// Bounds of the step-size ratio `h_new / h`.
 const RATIO_MIN: f64 = 0.2;
 const RATIO_MAX: f64 = 5.0;
-/// First Euler step when [`Options::h0`] is not given.
-const H0_DEFAULT: f64 = 1e-6;
 
 /// The linearly implicit Euler method with `j` defect corrections on
 /// intervals of `m` steps (see the [module documentation](self)).

@@ -3,13 +3,12 @@
 //! ones.
 
 use super::sweep::Sweep;
-use super::{Idec, FAC, H0_DEFAULT, RATIO_MAX, RATIO_MIN};
+use super::{Idec, FAC, RATIO_MAX, RATIO_MIN};
 use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
 use crate::core::control::{self, Failure};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::weights::Weights;
-use crate::linalg::all_finite;
 use crate::{Options, Problem, SolveError, Stats};
 
 /// State of one IDeC integration.
@@ -47,8 +46,6 @@ pub(super) struct Integrator<'a> {
     dense_nodes: Vec<f64>,
     /// Scratch for the error estimate.
     diff: Vec<f64>,
-    /// The step `E − hJ` is factorised for (none after a new Jacobian).
-    factored: Option<f64>,
     /// The next interval reaches `t_end`; `t_end` reached; the Jacobian
     /// at `t` is evaluated; the last attempt was rejected.
     last: bool,
@@ -130,8 +127,8 @@ impl<'a> Integrator<'a> {
         let mut sweep = Sweep::new(info, corrections, m);
         // `E` is constant in `t` and `y` (`eliminate::constant_leading`):
         // evaluated once, at the start.
-        sys.leading(problem.t0, problem.y0, &mut sweep.e);
-        if sweep.e.iter().any(|v| !v.is_finite()) {
+        sys.leading(problem.t0, problem.y0, &mut sweep.matrix.lead);
+        if sweep.matrix.lead.iter().any(|v| !v.is_finite()) {
             return Err(SolveError::NonFinite {
                 t: problem.t0,
                 what: "leading matrix",
@@ -157,11 +154,7 @@ impl<'a> Integrator<'a> {
         );
         let h = match options.fixed_step {
             Some(h) => h,
-            None => options
-                .h0
-                .unwrap_or(H0_DEFAULT)
-                .min(h_max)
-                .max(100.0 * control::h_min(problem.t0, span)),
+            None => control::first_step(options.h0, h_max, problem.t0, span),
         };
         Ok(Integrator {
             sys: sys.clone(),
@@ -183,7 +176,6 @@ impl<'a> Integrator<'a> {
             h_prev: h,
             dense_nodes: vec![0.0; (m + 1) * n],
             diff: vec![0.0; n],
-            factored: None,
             last: false,
             done: false,
             have_jacobian: false,
@@ -193,10 +185,8 @@ impl<'a> Integrator<'a> {
 
     /// `J = ∂f/∂y` at `(t, y)`, counted.
     fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
-        self.sys.rhs_jacobian(t, &self.y, &mut self.sweep.jac);
-        self.stats.jacobian_evals += 1;
-        self.factored = None;
-        if all_finite(self.sweep.jac.as_slice()) {
+        let matrix = &mut self.sweep.matrix;
+        if matrix.jacobian(&*self.sys, &mut self.stats, t, &self.y) {
             Ok(())
         } else {
             Err(SolveError::NonFinite {
@@ -209,12 +199,7 @@ impl<'a> Integrator<'a> {
     /// Factorise `E − hJ` (unless it is for this `h` and Jacobian) and run
     /// one interval from `t`.
     fn interval(&mut self, t: f64, h: f64) -> Result<(), Failure> {
-        if self.factored != Some(h) {
-            self.factored = None;
-            self.sweep.factor(h)?;
-            self.factored = Some(h);
-            self.stats.factorizations += 1;
-        }
+        self.sweep.factor(&mut self.stats, h)?;
         self.sweep.run(&*self.sys, &mut self.stats, t, h)
     }
 

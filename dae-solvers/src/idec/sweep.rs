@@ -17,12 +17,12 @@
 //! the floor of the third correction (docs/bench_idec.md §5).
 
 use crate::core::control::Failure;
+use crate::core::eval;
 use crate::core::lagrange::Nodes;
-use crate::core::matrix::{Corrector, Rows, SquareLu};
+use crate::core::shifted::Shifted;
 use crate::linalg::{all_finite, mat_vec, two_sum};
 use crate::Stats;
 use dae_core::system::{DaeSystem, FormulationInfo};
-use nalgebra::DMatrix;
 
 /// The workspace of one interval of `m` Euler steps with `J` corrections.
 pub(super) struct Sweep {
@@ -58,13 +58,9 @@ pub(super) struct Sweep {
     dp: Vec<f64>,
     edp: Vec<f64>,
     rhs: Vec<f64>,
-    /// The constant leading matrix `E`.
-    pub(super) e: DMatrix<f64>,
-    /// The Jacobian `J = ∂f/∂y` the iteration matrix is built from.
-    pub(super) jac: DMatrix<f64>,
+    /// The constant leading matrix `E`, the Jacobian `J = ∂f/∂y` and
     /// `E − h J`, factorised.
-    lu: SquareLu,
-    rows: Rows,
+    pub(super) matrix: Shifted,
     /// Evaluate `J` and factorise `E − hJ` at the start of every Euler
     /// step, at that step's own point (each level and each neighbouring
     /// problem at its own values), instead of once per interval.
@@ -105,10 +101,7 @@ impl Sweep {
             dp: vec![0.0; n],
             edp: vec![0.0; n],
             rhs: vec![0.0; n],
-            e: DMatrix::zeros(n, n),
-            jac: DMatrix::zeros(n, n),
-            lu: SquareLu::new(n, n),
-            rows: Rows::new(info),
+            matrix: Shifted::new(n),
             every_step: false,
             compensated: false,
             at_end: false,
@@ -150,64 +143,23 @@ impl Sweep {
         self.np_start_lo.copy_from_slice(&self.np_end_lo);
     }
 
-    /// Factorise `E − h J`.
-    pub(super) fn factor(&mut self, h: f64) -> Result<(), Failure> {
-        Self::factor_parts(&mut self.lu, &self.rows, &self.e, &self.jac, h)
+    /// Factorise `E − h J` (unless it is for this `h` and `J`), counted.
+    pub(super) fn factor(&mut self, stats: &mut Stats, h: f64) -> Result<(), Failure> {
+        self.matrix.factor(1.0, h, stats).map(|_| ())
     }
 
-    /// `E − hJ` into `lu`, factorised.
-    fn factor_parts(
-        lu: &mut SquareLu,
-        rows: &Rows,
-        e: &DMatrix<f64>,
-        jac: &DMatrix<f64>,
-        h: f64,
-    ) -> Result<(), Failure> {
-        let a = lu.matrix_mut();
-        for (a, (e, j)) in a
-            .as_mut_slice()
-            .iter_mut()
-            .zip(e.as_slice().iter().zip(jac.as_slice()))
-        {
-            *a = e - h * j;
-        }
-        lu.factor(rows).map_err(|_| Failure::Singular)
-    }
-
-    /// `J` at `(t, y)` into `jac` and `E − hJ` factorised, both counted
+    /// `J` at `(t, y)` and `E − hJ` factorised, both counted
     /// ([`Sweep::every_step`]).
     fn step_matrix(
+        matrix: &mut Shifted,
         sys: &dyn DaeSystem,
         stats: &mut Stats,
-        (lu, rows, e, jac): (&mut SquareLu, &Rows, &DMatrix<f64>, &mut DMatrix<f64>),
-        t: f64,
-        y: &[f64],
-        h: f64,
+        (t, y, h): (f64, &[f64], f64),
     ) -> Result<(), Failure> {
-        sys.rhs_jacobian(t, y, jac);
-        stats.jacobian_evals += 1;
-        if !all_finite(jac.as_slice()) {
+        if !matrix.jacobian(sys, stats, t, y) {
             return Err(Failure::NonFinite("Jacobian"));
         }
-        stats.factorizations += 1;
-        Self::factor_parts(lu, rows, e, jac, h)
-    }
-
-    /// `f(t, y)` into `out`, counted; non-finite values are a failure.
-    fn rhs(
-        sys: &dyn DaeSystem,
-        stats: &mut Stats,
-        t: f64,
-        y: &[f64],
-        out: &mut [f64],
-    ) -> Result<(), Failure> {
-        sys.rhs(t, y, out);
-        stats.residual_evals += 1;
-        if all_finite(out) {
-            Ok(())
-        } else {
-            Err(Failure::NonFinite("residual"))
-        }
+        matrix.factor(1.0, h, stats).map(|_| ())
     }
 
     /// One interval of `m` Euler steps of size `h` from `t`, with the
@@ -234,16 +186,15 @@ impl Sweep {
             let (done, next) = self.eta.split_at_mut((k + 1) * n);
             let eta_k = &done[k * n..];
             if self.every_step {
-                let parts = (&mut self.lu, &self.rows, &self.e, &mut self.jac);
-                Self::step_matrix(sys, stats, parts, tk, eta_k, h)?;
+                Self::step_matrix(&mut self.matrix, sys, stats, (tk, eta_k, h))?;
             }
             let f_k = &mut self.f_eta[k * n..(k + 1) * n];
             let tf = if self.at_end { tk + h } else { tk };
-            Self::rhs(sys, stats, tf, eta_k, f_k)?;
+            eval::rhs(sys, stats, tf, eta_k, f_k)?;
             for (r, f) in self.rhs.iter_mut().zip(f_k.iter()) {
                 *r = h * f;
             }
-            self.lu.solve(&mut self.rhs);
+            self.matrix.solve(&mut self.rhs);
             if compensated {
                 let (lo_done, lo_next) = self.eta_lo.split_at_mut((k + 1) * n);
                 let lo_k = &lo_done[k * n..];
@@ -276,7 +227,7 @@ impl Sweep {
                     let tk = t + (k + shift) as f64 * h;
                     let f_k = &mut self.f_eta[k * n..(k + 1) * n];
                     let at = (k + shift) * n;
-                    Self::rhs(sys, stats, tk, &eta_j[at..at + n], f_k)?;
+                    eval::rhs(sys, stats, tk, &eta_j[at..at + n], f_k)?;
                 }
             }
             self.pi.copy_from_slice(&self.np_start[j * n..(j + 1) * n]);
@@ -302,17 +253,16 @@ impl Sweep {
                     self.nodes
                         .derivative(kd, |l| &eta_j[l * n..(l + 1) * n], &mut self.dp);
                 }
-                mat_vec(&self.e, &self.dp, &mut self.edp);
-                Self::rhs(sys, stats, tf, &self.pi, &mut self.f)?;
+                mat_vec(&self.matrix.lead, &self.dp, &mut self.edp);
+                eval::rhs(sys, stats, tf, &self.pi, &mut self.f)?;
                 if self.every_step {
-                    let parts = (&mut self.lu, &self.rows, &self.e, &mut self.jac);
-                    Self::step_matrix(sys, stats, parts, tk, &self.pi, h)?;
+                    Self::step_matrix(&mut self.matrix, sys, stats, (tk, &self.pi, h))?;
                 }
                 let f_k = &self.f_eta[k * n..(k + 1) * n];
                 for (i, r) in self.rhs.iter_mut().enumerate() {
                     *r = h * (self.f[i] - f_k[i]) + self.edp[i];
                 }
-                self.lu.solve(&mut self.rhs);
+                self.matrix.solve(&mut self.rhs);
                 let at = (k + 1) * n;
                 if compensated {
                     for i in 0..n {

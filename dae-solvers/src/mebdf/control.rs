@@ -18,7 +18,7 @@
 //! ×10 until the first rejection, ×2 after; decreases at least ×0.2. After a
 //! rejected error test: `r_p` clamped to `[0.1, 0.9]`, or the lower order if
 //! it promises a larger step; from the third failure on one step, order one
-//! and `r = 1/4`.
+//! and `r = 1/4` (the engine's fall-back, `multistep::Common::fall_back`).
 
 use super::coeffs::MAX_ORDER;
 use super::step::Integrator;
@@ -103,15 +103,10 @@ impl Integrator<'_> {
         (p_new, r)
     }
 
-    /// After the `failures`-th rejected error test (error `err`) on this
-    /// step: the new order and step size.
-    pub(super) fn reject(&mut self, err: f64, failures: usize) {
+    /// After the first or second rejected error test (error `err`) on
+    /// this step: the new order, and the step of the retry.
+    pub(super) fn reject(&mut self, err: f64) -> f64 {
         let p = self.p;
-        if failures >= 3 {
-            self.p = 1;
-            self.ms.h *= 0.25;
-            return;
-        }
         let mut r = ratio(err, p, 1.2).clamp(0.1, 0.9);
         if p > 1 && !self.ms.cfg.fixed_order {
             let r_down = ratio(self.estimate_at(p - 1), p - 1, 1.3).clamp(0.1, 0.9);
@@ -120,6 +115,6 @@ impl Integrator<'_> {
                 r = r_down;
             }
         }
-        self.ms.h *= r;
+        self.ms.h * r
     }
 }

@@ -22,9 +22,9 @@
 
 use super::step::Integrator;
 use crate::core::control::Failure;
-use crate::core::matrix::{Corrector, JacState, Rows};
+use crate::core::eval;
+use crate::core::matrix::JacState;
 use crate::core::newton::{Contraction, Rule};
-use crate::linalg::all_finite;
 use crate::multistep::corrector::{self, Iteration, Reuse};
 use crate::multistep::{Common, UNKNOWN_RATE};
 
@@ -137,41 +137,25 @@ impl Integrator<'_> {
     /// when `J` or `hβ` changed.
     fn ensure_matrix(&mut self, t: f64, hb: f64) -> Result<(), Failure> {
         if self.ms.jac == JacState::Needed {
-            self.sys.rhs_jacobian(t, &self.y1, &mut self.jac);
-            self.ms.stats.jacobian_evals += 1;
+            // A non-finite `J` is found in the matrix below.
+            self.matrix
+                .jacobian(&*self.sys, &mut self.ms.stats, t, &self.y1);
             self.ms.jac = JacState::Fresh;
-            self.hb_factored = 0.0;
         }
-        if hb == self.hb_factored {
-            return Ok(());
+        if self.matrix.factor(1.0 / hb, 1.0, &mut self.ms.stats)? {
+            self.ms.rate = UNKNOWN_RATE;
         }
-        let inv = 1.0 / hb;
-        let a = self.lu.matrix_mut().as_mut_slice();
-        for ((g, e), j) in a
-            .iter_mut()
-            .zip(self.lead.as_slice())
-            .zip(self.jac.as_slice())
-        {
-            *g = inv * e - j;
-        }
-        if !all_finite(a) {
-            return Err(Failure::NonFinite("iteration matrix"));
-        }
-        self.ms.stats.factorizations += 1;
-        self.ms.rate = UNKNOWN_RATE;
-        self.hb_factored = 0.0;
-        self.lu
-            .factor(&Rows::square())
-            .map_err(|_| Failure::Singular)?;
-        self.hb_factored = hb;
         Ok(())
     }
 
-    /// `δ = F(t, y, y')` for the stage iterate `y`.
-    fn evaluate_residual(&mut self, t: f64, y: &[f64]) -> bool {
-        self.sys.residual(t, y, &self.yp, &mut self.delta);
-        self.ms.stats.residual_evals += 1;
-        all_finite(&self.delta)
+    /// `δ = F(t, y, y')` for the stage iterate `y`, counted.
+    fn evaluate_residual(&mut self, t: f64, y: &[f64]) -> Result<(), Failure> {
+        eval::residual(
+            &*self.sys,
+            &mut self.ms.stats,
+            (t, y, &self.yp),
+            &mut self.delta,
+        )
     }
 
     /// Simplified Newton iteration on `F(t, y, (y + c)/(hβ)) = 0` from the
@@ -198,9 +182,7 @@ impl Integrator<'_> {
             *yp = (yi + c) * inv;
         }
         self.ms.last_iterations = 0;
-        if !self.evaluate_residual(t, y) {
-            return Err(Failure::NonFinite("residual"));
-        }
+        self.evaluate_residual(t, y)?;
         let tiny = 100.0 * f64::EPSILON * self.ms.weights.norm(y);
         let maxit = corrector::max_iterations(&self.ms, MAX_ITER);
         let mut monitor = Contraction::new(Rule::Dassl, maxit, KAPPA, self.ms.rate.max(ETA_MIN));
@@ -229,7 +211,7 @@ impl Iteration for StageIteration<'_, '_> {
     }
     fn update(&mut self) -> f64 {
         let integ = &mut *self.integ;
-        integ.lu.solve(&mut integ.delta);
+        integ.matrix.solve(&mut integ.delta);
         for ((yi, yp), d) in self.y.iter_mut().zip(integ.yp.iter_mut()).zip(&integ.delta) {
             *yi -= d;
             *yp -= d * self.inv;
@@ -237,6 +219,6 @@ impl Iteration for StageIteration<'_, '_> {
         integ.ms.weights.norm(&integ.delta)
     }
     fn residual(&mut self) -> bool {
-        self.integ.evaluate_residual(self.t, self.y)
+        self.integ.evaluate_residual(self.t, self.y).is_ok()
     }
 }

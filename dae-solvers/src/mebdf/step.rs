@@ -5,14 +5,14 @@
 use super::coeffs::{Coefficients, MAX_ORDER};
 use crate::core::attempt::{Outcome, Policy, Retry};
 use crate::core::eliminate::Formulation;
-use crate::core::matrix::{Corrector, JacState, SquareLu};
-use crate::core::weights::Weights;
+use crate::core::matrix::JacState;
+use crate::core::shifted::Shifted;
+use crate::core::weights::{self, Weights};
 use crate::init::{initial_derivative_with, DerivativeRule};
 use crate::multistep::backward::History;
-use crate::multistep::{Common, Config, Family};
+use crate::multistep::{Common, Config, Family, FALL_BACK_AFTER};
 use crate::options::Tolerances;
 use crate::SolveError;
-use nalgebra::DMatrix;
 
 /// Columns of the difference table: `∇^0 … ∇^(MAX_ORDER+1)` (the order-raise
 /// estimate at the highest order needs `∇^(MAX_ORDER+2) y_{n+1}`, one more
@@ -72,14 +72,9 @@ pub(super) struct Integrator<'a> {
     /// Steps accepted since the last [`Integrator::restart`].
     pub(super) since_restart: usize,
 
-    /// `E` (constant).
-    pub(super) lead: DMatrix<f64>,
-    /// `∂f/∂y` at the last evaluation.
-    pub(super) jac: DMatrix<f64>,
+    /// `E` (constant), `J = ∂f/∂y` at the last evaluation and
     /// `E/(hβ) − J`, factored.
-    pub(super) lu: SquareLu,
-    /// `hβ` of the factored matrix (0: none).
-    pub(super) hb_factored: f64,
+    pub(super) matrix: Shifted,
 
     /// The predictor `P(t_{n+1})` of degree `p`.
     pub(super) ypred: Vec<f64>,
@@ -156,18 +151,13 @@ impl<'a> Integrator<'a> {
     pub(super) fn new(sys: Formulation<'a>, tol: &Tolerances, cfg: Config) -> Self {
         let info = sys.info();
         let n = info.unknowns();
-        let index_power = info
-            .variables
-            .iter()
-            .map(|v| i32::from(v.index.max(1)) - 1)
-            .collect();
         let estimated: Vec<bool> = info.variables.iter().map(|v| v.index <= 2).collect();
         let count = estimated.iter().filter(|&&b| b).count().max(1);
-        let mut lead = DMatrix::zeros(n, n);
+        let mut matrix = Shifted::new(n);
         // `E` is constant (in `t` and `y`: `eliminate::constant_leading`
         // made it so or refused), so any point serves.
-        sys.leading(0.0, &vec![0.0; n], &mut lead);
-        let weights = Weights::new(tol, |_| 1.0, vec![true; n], index_power);
+        sys.leading(0.0, &vec![0.0; n], &mut matrix.lead);
+        let weights = Weights::new(tol, |_| 1.0, vec![true; n], weights::index_powers(info));
         Integrator {
             ms: Common::new(cfg, n, weights, Policy::MEBDF),
             sys: sys.clone(),
@@ -179,10 +169,7 @@ impl<'a> Integrator<'a> {
             p_old: 0,
             same: 0,
             since_restart: RESTART_SPACING,
-            lead,
-            jac: DMatrix::zeros(n, n),
-            lu: SquareLu::new(n, n),
-            hb_factored: 0.0,
+            matrix,
             ypred: vec![0.0; n],
             y1: vec![0.0; n],
             y2: vec![0.0; n],
@@ -261,14 +248,14 @@ impl<'a> Integrator<'a> {
             }
             self.order_one = Some((self.ms.h, err));
         }
-        self.ms.ramp = false;
-        self.ms.error_failures += 1;
+        let failures = self.ms.error_test_failed();
         // A second rejection whose estimate fell by less than half on a
         // step at least 10 % shorter, at an order that predicts a fall by
         // `(h₂/h₁)^(p+1)`, on STALLED_STEPS steps in a row: the estimate
         // does not measure the step (the history's algebraic values are off
         // their equations). Order one then, DASSL's fall-back after the
-        // third failure, where the stall is cured by `restart`. Measured on the transistor amplifier
+        // third failure ([`Common::fall_back`]), where the stall is cured by
+        // `restart`. Measured on the transistor amplifier
         // (`transamp`, tol 1e-5, EXTREMES.md §5 session 8): at order 6 the
         // estimate stayed at 1.0–1.8 from h = 1e-13 down to 1e-16, every
         // step accepted at the third attempt with a step 0.64 × the last, so
@@ -276,11 +263,11 @@ impl<'a> Integrator<'a> {
         // (after p + 1 steps of one size) came, and the run ended in
         // `newton_failure` at h = 6e-17.
         let stalled = self.p > 1
-            && self.ms.error_failures == 2
+            && failures == 2
             && self
                 .first_rejection
                 .is_some_and(|(h1, e1)| self.ms.h <= 0.9 * h1 && err > STALLED_FALL * e1);
-        if self.ms.error_failures == 1 {
+        if failures == 1 {
             self.first_rejection = Some((self.ms.h, err));
         }
         if stalled {
@@ -288,14 +275,15 @@ impl<'a> Integrator<'a> {
             self.stalled_this_step = true;
             self.stalls += 1;
         }
-        if stalled && self.stalls >= STALLED_STEPS {
+        let h = if stalled && self.stalls >= STALLED_STEPS {
             self.stalls = 0;
-            self.p = 1;
-            self.ms.h *= 0.25;
+            self.ms.fall_back(&mut self.p)
+        } else if failures >= FALL_BACK_AFTER {
+            self.ms.fall_back(&mut self.p)
         } else {
-            self.reject(err, self.ms.error_failures);
-        }
-        Ok(Outcome::ErrorTest { h: self.ms.h })
+            self.reject(err)
+        };
+        Ok(Outcome::ErrorTest { h })
     }
 
     /// Accept the current order-one attempt although its error estimate

@@ -8,8 +8,9 @@
 //!   work counters, the attempt loop's budgets ([`Steps`]), the error-test
 //!   failures of the step, the iteration matrix's state and the Newton
 //!   rate carried from step to step; DASSL's initial step
-//!   ([`Common::initial_step`]) and the time a step reaches
-//!   ([`Common::t_next`]).
+//!   ([`Common::initial_step`]), the time a step reaches
+//!   ([`Common::t_next`]) and DASSL's fall-back to order one after the
+//!   third error-test failure on a step ([`Common::fall_back`]).
 //! - [`Family`]: what a family implements — one attempt, its start from
 //!   `y₀, y'₀` or from equally spaced values, its solution and dense
 //!   output; the engine makes every family a [`Method`] for the driver and
@@ -87,6 +88,10 @@ use crate::{SolveError, Stats};
 /// Settings of one multistep integrator (the order in the family's count).
 pub(crate) use crate::core::control::StepConfig as Config;
 
+/// Error-test failures on one step from which on the retry falls back to
+/// order one ([`Common::fall_back`]).
+pub(crate) const FALL_BACK_AFTER: usize = 3;
+
 /// `ρ/(1−ρ)` of a Newton iteration before a rate has been measured.
 pub(crate) const UNKNOWN_RATE: f64 = 100.0;
 
@@ -162,6 +167,26 @@ impl Common {
             h = 0.5 / ypnorm;
         }
         h.min(self.cfg.hmax)
+    }
+
+    /// Count a rejected error test on this step (the initial phase
+    /// ends); how many there have been.
+    pub(crate) fn error_test_failed(&mut self) -> usize {
+        self.ramp = false;
+        self.error_failures += 1;
+        self.error_failures
+    }
+
+    /// The retry of a step whose error test keeps failing: order one
+    /// (into `order`) and a quarter of the step — from the
+    /// [`FALL_BACK_AFTER`]-th failure on one step, as DASSL, or when the
+    /// family sees that the estimate does not measure the step. At higher
+    /// orders an algebraic component left off its constraint by the Newton
+    /// tolerance is an error estimate that does not shrink with `h`; with a
+    /// fixed order the order is raised again after the step.
+    pub(crate) fn fall_back(&self, order: &mut usize) -> f64 {
+        *order = 1;
+        0.25 * self.h
     }
 
     /// The time the current attempt reaches from `t`: `t + h`, or `t_end`
