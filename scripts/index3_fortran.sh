@@ -22,18 +22,13 @@ tols=${*:-"1e-4 1e-5 1e-6 1e-7 1e-8 1e-9 1e-10"}
 out=${OUT:-$(mktemp -d)}
 mkdir -p "$out"
 ff="gfortran -O2 -ffixed-line-length-none -std=legacy -w"
-r="$RADAU5_SRC/radau5.f $RADAU5_SRC/decsol.f $RADAU5_SRC/dc_decsol.f"
-m="$MEBDFI_SRC/mebdfi.f $here/r_stubs.f"
-$ff -o "$out/radau5_caraxis" "$here/radau5_caraxis.f" $r
-$ff -o "$out/radau5_pendulum" "$here/radau5_pendulum.f" $r
-$ff -o "$out/mebdfi_caraxis" "$here/mebdfi_caraxis.f" $m
-$ff -o "$out/mebdfi_pendulum" "$here/mebdfi_pendulum.f" $m
-$ff -o "$out/andrews" "$here/andrews.f" "$MEBDFI_SRC/Ex_andrews.f" $r $m
-for prog in radau5_caraxis mebdfi_caraxis radau5_pendulum mebdfi_pendulum; do
-    echo "== $prog"
-    for t in $tols; do "$out/$prog" "$t"; done
-done
-for code in 1 2; do
-    echo "== andrews (1 RADAU5, 2 MEBDFI)"
-    for t in $tols; do "$out/andrews" "$code" "$t"; done
+codes="$here/runners.f $RADAU5_SRC/radau5.f $RADAU5_SRC/decsol.f $RADAU5_SRC/dc_decsol.f $MEBDFI_SRC/mebdfi.f $here/r_stubs.f"
+$ff -o "$out/caraxis" "$here/caraxis.f" $codes
+$ff -o "$out/pendulum" "$here/pendulum.f" $codes
+$ff -o "$out/andrews" "$here/andrews.f" "$MEBDFI_SRC/Ex_andrews.f" $codes
+for prob in caraxis andrews pendulum; do
+    echo "== $prob"
+    for code in 1 2; do
+        for t in $tols; do "$out/$prob" "$code" "$t"; done
+    done
 done

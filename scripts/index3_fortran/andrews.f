@@ -1,15 +1,14 @@
-C     Andrews' squeezer (IVP Test Set andrews.f rev 1.2, via deTestSet's
-C     Ex_andrews.f), index 3 as written, NIND=(7,7,13), t_end = 0.03.
-C     Usage: andd CODE TOL; CODE = 1 RADAU5, 2 MEBDFI; rtol=atol=h0=TOL.
-C     scd relative over the seven angles (as scenes/andrews.toml).
-      PROGRAM ANDD
+C     Andrews' squeezing mechanism (the IVP Test Set's andrews.f rev 1.2,
+C     through deTestSet's Ex_andrews.f: ANDFUNC, ANDRES, ANDSOLN), index 3
+C     as written, NIND = (7, 7, 13), t_end = 0.03. Usage: andrews CODE TOL
+C     (CODE 1 RADAU5, 2 MEBDFI). scd relative over the seven angles, as
+C     scenes/andrews.toml.
+      PROGRAM ANDREWS
       IMPLICIT DOUBLE PRECISION (A-H,O-Z)
-      PARAMETER (N=27, LW1=N*(5*N+12)+20, LI1=3*N+20)
-      PARAMETER (LW2=40+N*(34+2*N), LI2=N+14)
-      DIMENSION Y(N),YP(N),YREF(N),WORK(LW1),IWORK(LI1),RPAR(1),IPAR(1)
-      DIMENSION W2(LW2),IW2(LI2),MBND(4),RTOL(1),ATOL(1)
+      PARAMETER (N=27)
+      DIMENSION Y(N),YP(N),YREF(N)
       CHARACTER*32 ARG
-      EXTERNAL DAEPARMS,ANDFUNC,ANDRES,MAND,SOLX,JDUM,PDUM
+      EXTERNAL DAEPARMS,ANDFUNC,ANDRES,MAND
       CALL GETARG(1,ARG)
       READ(ARG,*) ICODE
       CALL GETARG(2,ARG)
@@ -27,68 +26,26 @@ C     scd relative over the seven angles (as scenes/andrews.toml).
       Y(16)=-10666.8329399655854029433719415D0
       Y(22)=98.5668703962410896057654982170D0
       Y(23)=-6.12268834425566265503114393122D0
-      YP=0D0
-      DO I=1,14
-         YP(I)=Y(I+7)
-      END DO
-      T=0D0
-      TEND=0.03D0
-      H=TOL
-      RTOL(1)=TOL
-      ATOL(1)=TOL
       IF (ICODE.EQ.1) THEN
-         WORK=0D0
-         IWORK=0
-         IWORK(2)=1000000
-         IWORK(5)=7
-         IWORK(6)=7
-         IWORK(7)=13
-         ML1=N
-         MU1=N
-         ML2=N
-         MU2=N
-         CALL RADAU5(N,ANDFUNC,T,Y,TEND,H,RTOL(1),ATOL(1),0,JDUM,0,ML1,MU1,
-     &   MAND,1,ML2,MU2,SOLX,0,WORK,LW1,IWORK,LI1,RPAR,IPAR,IDID)
-         NST=IWORK(16)
+         CALL RUNR5(N,ANDFUNC,MAND,Y,0.03D0,TOL,7,7,13,IDID,NSTEP)
       ELSE
-         W2=0D0
-         IW2=0
-         IW2(1)=7
-         IW2(2)=7
-         IW2(3)=13
-         IW2(14)=1000000
-         IDID=1
-         IERR=0
-         DO K=1,1000000
-            CALL MEBDFI(N,T,H,Y,YP,TEND,TEND,22,IDID,LW2,W2,LI2,
-     &        IW2,MBND,7,2,RTOL,ATOL,RPAR,IPAR,PDUM,ANDRES,IERR)
-            IF (IDID.LT.0) GOTO 10
-            IF (T.GE.TEND) GOTO 10
-            IDID=0
-         END DO
- 10      CONTINUE
-         NST=IW2(5)
+         YP=0D0
+         YP(1:14)=Y(8:21)
+         CALL RUNMB(N,ANDRES,Y,YP,0.03D0,TOL,7,7,13,IDID,NSTEP)
       END IF
-      E=0D0
-      DO I=1,7
-         E=MAX(E,ABS(Y(I)-YREF(I))/ABS(YREF(I)))
-      END DO
-      WRITE(6,'(A,I2,A,1PE8.1,A,I3,A,0PF6.2,A,I7)') 'code ',ICODE,
-     & ' tol ',TOL,' idid ',IDID,' scd(angles) ',-LOG10(E),' steps ',NST
+      CALL REPORT(ICODE,TOL,IDID,SCDREL(Y,YREF,1,7),NSTEP)
       END
+C     The 42 parameters in the order of deTestSet's andrews() (m1 … mom).
       SUBROUTINE DAEPARMS(NP,P)
       IMPLICIT DOUBLE PRECISION (A-H,O-Z)
-      DIMENSION P(NP)
-      DIMENSION V(42)
+      DIMENSION P(NP),V(42)
       DATA V/.04325D0,.00365D0,.02373D0,.00706D0,.07050D0,.00706D0,
      & .05498D0,-.06934D0,-.00227D0,-0.03635D0,.03273D0,.014D0,.072D0,
      & 4530D0,2.194D-6,4.410D-7,5.255D-6,5.667D-7,1.169D-5,5.667D-7,
      & 1.912D-5,28D-3,115D-4,2D-2,1421D-5,7D-3,92D-5,7785D-5,35D-3,
      & 1874D-5,1043D-5,18D-3,2D-2,2308D-5,916D-5,4D-2,1228D-5,449D-5,
      & 2D-2,4D-2,1421D-5,33D-3/
-      DO I=1,NP
-         P(I)=V(I)
-      END DO
+      P(1:NP)=V(1:NP)
       END
       SUBROUTINE MAND(N,AM,LMAS,RPAR,IPAR)
       IMPLICIT DOUBLE PRECISION (A-H,O-Z)
@@ -97,13 +54,4 @@ C     scd relative over the seven angles (as scenes/andrews.toml).
       DO I=1,14
          AM(I,I)=1D0
       END DO
-      END
-      SUBROUTINE SOLX(NR,XOLD,X,Y,CONT,LRC,N,RPAR,IPAR,IRTRN)
-      IMPLICIT DOUBLE PRECISION (A-H,O-Z)
-      END
-      SUBROUTINE JDUM(N,X,Y,DFY,LDFY,RPAR,IPAR)
-      IMPLICIT DOUBLE PRECISION (A-H,O-Z)
-      END
-      SUBROUTINE PDUM(T,Y,YP,PD,CJ,RPAR,IPAR)
-      IMPLICIT DOUBLE PRECISION (A-H,O-Z)
       END
