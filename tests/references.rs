@@ -302,13 +302,22 @@ fn andrews_against_the_ivp_test_set() {
     // accelerations and multipliers of index 3, their errors scaled by h².
     // radau5(ori2) measured 5.38 and 5.96 scd at 1e-5 and 1e-6; before the
     // multipliers had their index (they were taken as index 1) every
-    // tolerance failed at t = 0 (newton_failure), bdf's too.
+    // tolerance failed at t = 0 (newton_failure), bdf's too. bdf refuses
+    // it now, before a step: variable-step BDF has no convergence theory
+    // at index 3 (core::policy::variable_step_index3; EXTREMES.md §5,
+    // idx10: it gave 0.4 and 1.3 digits here at 1e-5 and 1e-6).
     for r in report
         .runs
         .iter()
         .filter(|r| r.record.formulation == "ori2")
     {
         let r = &r.record;
+        if r.solver == "bdf" {
+            let e = r.error.as_ref().expect("bdf(ori2) is refused");
+            assert_eq!(e.kind, "not_applicable", "{}", e.message);
+            assert!(e.message.contains("variable-step BDF"), "{}", e.message);
+            continue;
+        }
         assert_eq!(
             r.status, "ok",
             "{}(ori2) at {:e}: {:?}",

@@ -130,6 +130,10 @@ fn every_run_is_bounded_and_says_where_it_stopped() {
     for c in case.cells.iter().filter(|c| c.tol.is_some()) {
         match c.class {
             Class::StepLimit { t } => assert!(t > 0.0 && t < 20.0, "{t}"),
+            // bdf refuses the index-3 ori2 before a step (variable step,
+            // core::policy::variable_step_index3).
+            Class::Failed { ref kind, .. }
+                if kind == "not_applicable" && c.solver == "bdf" && c.formulation == "ori2" => {}
             ref other => panic!("{}({}): {other:?}", c.solver, c.formulation),
         }
     }

@@ -561,6 +561,20 @@ pub enum NotApplicable {
         /// The formulation's largest index.
         d_index: u8,
     },
+    /// A variable-step BDF method (`bdf`) on a formulation with unknowns of
+    /// index 3 (see [`crate::core::policy::variable_step_index3`]): BDF's
+    /// convergence results for index 3 are for a constant step, and after a
+    /// change of step size its index-3 unknowns are O(1) wrong (Petzold
+    /// 1982; Brenan, Campbell & Petzold 1996, §3.2).
+    #[error(
+        "{solver} is a variable-step BDF method and this formulation has index {d_index}: BDF converges at index 3 only with a constant step (Brenan, Campbell & Petzold 1996, §3.2; Petzold 1982: after a change of step size the index-3 unknowns are O(1) wrong) and its error test leaves the index-2/3 unknowns out (DASSL-type codes take index ≤ 1); measured on the IVP Test Set's car axis: -1.5 to 2.6 correct digits at tol 1e-4 to 1e-10; use an index-1 or stabilised formulation (rcd0, ggl1, psi0), radau5, mebdf, or a fixed step"
+    )]
+    VariableStepIndexThree {
+        /// The solver that refuses.
+        solver: &'static str,
+        /// The formulation's largest index.
+        d_index: u8,
+    },
     /// An overdetermined formulation whose constraint rows and the
     /// algebraic combinations of its rows holding derivatives fix every
     /// unknown, for a least-squares method whose error estimate measures

@@ -167,6 +167,7 @@ impl Solver for Bdf {
         self.accepts(problem.system.info())?;
         policy::hessenberg(problem.system, problem.t0, problem.y0, options)?;
         policy::leading_constant_in_time(self.name(), problem)?;
+        policy::variable_step_index3(self.name(), problem.system.info(), options)?;
         integrator::<Block<SquareLu>>(problem, options)
     }
 }

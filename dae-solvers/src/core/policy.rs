@@ -13,7 +13,9 @@
 //!   `h^(k−1)` instead (Hairer & Wanner VII.8).
 //! - **What a method accepts**: [`square`], [`overdetermined`],
 //!   [`constant_leading`], [`max_index`] — the typed reasons of
-//!   [`crate::Solver::accepts`].
+//!   [`crate::Solver::accepts`] — and, from the problem and the options,
+//!   [`hessenberg`], [`leading_constant_in_time`], [`free_directions`],
+//!   [`variable_step_index3`] (variable-step BDF on index 3).
 //! - **Which formulation a solver is given when the user names none**:
 //!   [`preferred_formulations`], the order `dae run` tries.
 
@@ -260,6 +262,64 @@ pub fn leading_constant_in_time(
     }
 }
 
+/// A variable-step BDF method (`bdf`) on a formulation with unknowns of
+/// index 3 or more (the index-3 `ori2` of a mechanical system, whose
+/// multipliers have index 3): refused with
+/// [`NotApplicable::VariableStepIndexThree`] unless
+/// [`Options::fixed_step`] is set. Formulations of index at most 2 pass.
+///
+/// *The theory.* The convergence of `k`-step BDF (`k ≤ 6`) on index-3
+/// Hessenberg systems is proved for a **constant** step (Lötstedt &
+/// Petzold 1986; Brenan, Campbell & Petzold 1996, §3.2); with variable
+/// steps it is not: on the chain `x = g(t)`, `y = x'`, `z = y'` the
+/// implicit Euler step after a change from `h₋` to `h` gives
+/// `z ≈ g''·(1 + h₋/h)/2`, an O(1) error whatever the step (Petzold,
+/// "Differential/algebraic equations are not ODE's", SIAM J. Sci. Stat.
+/// Comput. 3 (1982): "a further class of problems cannot be solved at all
+/// with such codes, because changing the stepsize causes large errors").
+/// `bdf` moreover leaves the index-2/3 unknowns out of its error test
+/// ([`bdf_error_test`], DASSL/DASPK's practice), so nothing controls the
+/// velocities and multipliers of `ori2`. DASSL-type codes are documented
+/// for index ≤ 1 (with DASPK's `INFO(16)` for Hessenberg index 2). With a
+/// fixed step (a convergence study) the constant-step theory applies and
+/// the formulation is taken.
+///
+/// *Measured* (EXTREMES.md §5, idx10; `dae run … --solver bdf
+/// --formulation ori2`, tol 1e-4 … 1e-10): the car axis −1.5 … 2.6
+/// correct digits, Andrews' squeezer −1.0 … 4.8, the pendulum −0.8 … 4.1,
+/// where the map asks for `−log₁₀(tol) − 2`. `mebdf` (Cash's MEBDFDAE is
+/// run on these index-3 problems by the IVP Test Set) and `radau5` take
+/// them.
+///
+/// ```
+/// use dae::dae_solvers::core::policy::variable_step_index3;
+/// use dae::dae_solvers::{NotApplicable, Options};
+/// use dae::models::builtin::Pendulum;
+/// use dae::prelude::*;
+///
+/// let (ori2, rcd0) = (Pendulum::default().ori2(), Pendulum::default().rcd0());
+/// let adaptive = Options::with_tol(1e-6);
+/// assert!(matches!(
+///     variable_step_index3("bdf", ori2.info(), &adaptive),
+///     Err(NotApplicable::VariableStepIndexThree { d_index: 3, .. })
+/// ));
+/// assert!(variable_step_index3("bdf", rcd0.info(), &adaptive).is_ok());
+/// let fixed = Options { fixed_step: Some(1e-3), ..Options::with_tol(1e-6) };
+/// assert!(variable_step_index3("bdf", ori2.info(), &fixed).is_ok());
+/// ```
+pub fn variable_step_index3(
+    solver: &'static str,
+    info: &FormulationInfo,
+    options: &Options,
+) -> Result<(), NotApplicable> {
+    let d_index = info.max_index();
+    if d_index < 3 || options.fixed_step.is_some() {
+        Ok(())
+    } else {
+        Err(NotApplicable::VariableStepIndexThree { solver, d_index })
+    }
+}
+
 /// A least-squares method (`odradau`) on an overdetermined formulation
 /// (`M > N`) with a direction left free: refused with
 /// [`NotApplicable::NoFreeDirection`] when, at `t₀`, the constraint rows
@@ -345,7 +405,7 @@ pub fn max_index(info: &FormulationInfo, max: u8) -> Result<(), NotApplicable> {
 /// | solver | order | why (S01 error at 1e-8; 100 · tol = 1e-6) |
 /// |---|---|---|
 /// | `radau5` | ggl1 rcd1 rcd0 psi1 psi0 ori2 | ggl1 3.4e-9 keeps position and velocity constraints to round-off (\|g0\| 2e-15); rcd1 3.5e-9, rcd0 1.2e-9 drift off the position constraint (2e-11, 5e-11); the index-3 ori2 2.2e-6 is *inaccurate* (224 · tol) |
-/// | `bdf` | psi0 ggl1 rcd1 psi1 rcd0 ori2 | no formulation is accurate at 1e-8 (BDF leaves index-2 unknowns out of its error test); psi0 is the closest, 3.9e-5, with every constraint level kept, and the most accurate on S02 too; ggl1 1.1e-4, rcd1 4.3e-5 (drifts 5e-7), rcd0 8.2e-5 (drifts 9e-6, and 5.7 on S02 at 1e-6), ori2 2.9e-3 |
+/// | `bdf` | psi0 ggl1 rcd1 psi1 rcd0 | no formulation is accurate at 1e-8 (BDF leaves index-2 unknowns out of its error test); psi0 is the closest, 3.9e-5, with every constraint level kept, and the most accurate on S02 too; ggl1 1.1e-4, rcd1 4.3e-5 (drifts 5e-7), rcd0 8.2e-5 (drifts 9e-6, and 5.7 on S02 at 1e-6); the index-3 ori2 (2.9e-3) is refused with a variable step ([`variable_step_index3`]) |
 /// | `odradau` | ovd0 ovd1 ggl1 rcd1 rcd0 psi1 psi0 | ovd0 1.4e-9 and ovd1 7.0e-10 keep every constraint (ovd0 the acceleration level too, index 1); the square formulations as for radau5 |
 /// | `odbdf` | ovd0 psi0 rcd0 | ovd0 6.4e-6 and psi0 1.0e-5 keep the position constraint (2e-11); rcd0 1.0e-4 drifts 1e-5 |
 /// | `mebdf` | ggl1 rcd1 ori2 rcd0 | ggl1 5.9e-5, rcd1 6.0e-5; ori2 1.8e-3; rcd0 1.2e-3 drifts 1.4e-4 (0.15 at 1e-6) |
@@ -366,7 +426,7 @@ pub fn max_index(info: &FormulationInfo, max: u8) -> Result<(), NotApplicable> {
 pub fn preferred_formulations(solver: &str) -> Option<&'static [&'static str]> {
     Some(match solver {
         "radau5" => &["ggl1", "rcd1", "rcd0", "psi1", "psi0", "ori2"],
-        "bdf" => &["psi0", "ggl1", "rcd1", "psi1", "rcd0", "ori2"],
+        "bdf" => &["psi0", "ggl1", "rcd1", "psi1", "rcd0"],
         "odradau" => &["ovd0", "ovd1", "ggl1", "rcd1", "rcd0", "psi1", "psi0"],
         "odbdf" => &["ovd0", "psi0", "rcd0"],
         "mebdf" => &["ggl1", "rcd1", "ori2", "rcd0"],

@@ -1,0 +1,66 @@
+C     The IVP Test Set's car axis (caraxis.f rev 1.2), index 3 as written,
+C     NIND = (4, 4, 2), t_end = 3. Usage: caraxis CODE TOL (CODE 1 RADAU5,
+C     2 MEBDFI). scd relative over positions and velocities, as
+C     scenes/caraxis.toml.
+      PROGRAM CARAXIS
+      IMPLICIT DOUBLE PRECISION (A-H,O-Z)
+      PARAMETER (N=10, AK=10D0*1D-4/2D0)
+      DIMENSION Y(N),YP(N),F(N),YREF(N)
+      CHARACTER*32 ARG
+      EXTERNAL FCAR,MCAR,RCAR
+      DATA YREF/0.4934557842755629D-01,0.4969894602303324D+00,
+     & 0.1041742524885400D+01,0.3739110272652214D+00,
+     & -0.7705836840321485D-01,0.7446866596327776D-02,
+     & 0.1755681574942899D-01,0.7703410437794031D+00,
+     & -0.4736886750784630D-02,-0.1104680411345730D-02/
+      CALL GETARG(1,ARG)
+      READ(ARG,*) ICODE
+      CALL GETARG(2,ARG)
+      READ(ARG,*) TOL
+      Y=(/0D0,0.5D0,1D0,0.5D0,-0.5D0,0D0,-0.5D0,0D0,0D0,0D0/)
+      IF (ICODE.EQ.1) THEN
+         CALL RUNR5(N,FCAR,MCAR,Y,3D0,TOL,4,4,2,IDID,NSTEP)
+      ELSE
+         CALL FCAR(N,0D0,Y,F)
+         YP=0D0
+         YP(1:4)=Y(5:8)
+         YP(5:8)=F(5:8)/AK
+         CALL RUNMB(N,RCAR,Y,YP,3D0,TOL,4,4,2,IDID,NSTEP)
+      END IF
+      CALL REPORT(ICODE,TOL,IDID,SCDREL(Y,YREF,1,8),NSTEP)
+      END
+      SUBROUTINE FCAR(N,T,Y,F)
+      IMPLICIT DOUBLE PRECISION (A-H,O-Z)
+      DIMENSION Y(N),F(N)
+      PARAMETER (EPS=1D-2,AM=10D0,AL=1D0,AL0=0.5D0,R=0.1D0,W=10D0,G=1D0)
+      YB=R*SIN(W*T)
+      XB=SQRT(AL*AL-YB*YB)
+      ALL=SQRT(Y(1)**2+Y(2)**2)
+      ALR=SQRT((Y(3)-XB)**2+(Y(4)-YB)**2)
+      AK=AM*EPS*EPS/2D0
+      F(1:4)=Y(5:8)
+      F(5)=(AL0-ALL)*Y(1)/ALL+Y(9)*XB+2D0*Y(10)*(Y(1)-Y(3))
+      F(6)=(AL0-ALL)*Y(2)/ALL+Y(9)*YB+2D0*Y(10)*(Y(2)-Y(4))-AK*G
+      F(7)=(AL0-ALR)*(Y(3)-XB)/ALR-2D0*Y(10)*(Y(1)-Y(3))
+      F(8)=(AL0-ALR)*(Y(4)-YB)/ALR-2D0*Y(10)*(Y(2)-Y(4))-AK*G
+      F(9)=XB*Y(1)+YB*Y(2)
+      F(10)=(Y(1)-Y(3))**2+(Y(2)-Y(4))**2-AL*AL
+      END
+      SUBROUTINE MCAR(N,AM,LMAS,RPAR,IPAR)
+      IMPLICIT DOUBLE PRECISION (A-H,O-Z)
+      DIMENSION AM(LMAS,N)
+      AM=0D0
+      DO I=1,8
+         AM(I,I)=1D0
+         IF (I.GT.4) AM(I,I)=10D0*1D-4/2D0
+      END DO
+      END
+      SUBROUTINE RCAR(T,Y,YP,CJ,DELTA,IERR,RPAR,IPAR)
+      IMPLICIT DOUBLE PRECISION (A-H,O-Z)
+      DIMENSION Y(10),YP(10),DELTA(10),F(10),AM(10,10)
+      CALL FCAR(10,T,Y,F)
+      CALL MCAR(10,AM,10,RPAR,IPAR)
+      DO I=1,10
+         DELTA(I)=AM(I,I)*YP(I)-F(I)
+      END DO
+      END
