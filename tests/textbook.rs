@@ -449,6 +449,21 @@ fn odradau_holds_the_cv_loops_hidden_condition() {
     assert!(r.stats.steps < 400, "{} steps", r.stats.steps);
 }
 
+/// The same hidden condition in `odbdf`'s least-squares corrector
+/// (`core::matrix::LstsqCorrector`): tested with the rows' derivatives it
+/// made `odbdf(ovd0)` crawl to the step limit from 1e-6 on (111 550 steps
+/// to t = 10 at 1e-6 without a limit); held exactly, 240 steps at 1e-8
+/// (7.8 digits, EXTREMES.md §5 "lit10").
+#[test]
+fn odbdf_holds_the_cv_loops_hidden_condition() {
+    let scene = Scene::load(scenes_dir().join("mna_cv_loop.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "odbdf", "ovd0", 1e-8)).unwrap();
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    assert!(r.scd.is_some_and(|d| d >= 6.0), "{:?}", r.scd);
+    assert!(r.stats.steps < 400, "{} steps", r.stats.steps);
+}
+
 /// Andrews' squeezer in `rcd1` with `mebdf` at 1e-8: once stopped with
 /// `step_size_too_small` at t ≈ 0.02 (h ≈ 1e-17, as at 1e-7 and 1e-9),
 /// its order-6 estimate not falling with the step while every step was
