@@ -1414,14 +1414,16 @@ mod tests {
     /// a constraint) make a condition on the unknowns alone: the projected
     /// systems hold it exactly, as they hold the constraint rows, and test
     /// only what is left in the least-squares sense.
-    #[test]
-    fn algebraic_combinations_of_differential_rows_are_held_exactly() {
-        let mut next = rng(5);
-        // Gear–Hsu–Petzold at t = 0.7, η = 1, with the constraint's
-        // derivative kept as a row holding derivatives (the derivation's
-        // ovd0 substitutes it): the constraint, that row and the dynamic
-        // equation; then a 5 × 4 system with a dependent pair of rows
-        // beside two independent ones.
+    /// `(E, J, exact rows, the algebraic combination)` of two systems with
+    /// one algebraic combination among their differential rows:
+    /// Gear–Hsu–Petzold at t = 0.7, η = 1, with the constraint's derivative
+    /// kept as a row holding derivatives (the derivation's ovd0 substitutes
+    /// it): the constraint, that row and the dynamic equation; then a 5 × 4
+    /// system with a dependent pair of rows beside two independent ones.
+    #[allow(clippy::type_complexity)]
+    fn combination_systems(
+        next: &mut impl FnMut() -> f64,
+    ) -> [(DMatrix<f64>, DMatrix<f64>, Vec<bool>, Vec<f64>); 2] {
         let ghp_e = DMatrix::from_row_slice(3, 2, &[0.0, 0.0, 1.0, 0.7, 1.0, 0.7]);
         let ghp_j = DMatrix::from_row_slice(3, 2, &[-1.0, -0.7, 0.0, -1.0, 0.0, -2.0]);
         let mut e5 = DMatrix::from_fn(5, 4, |_, _| next());
@@ -1430,7 +1432,7 @@ mod tests {
             e5[(4, c)] = -2.5 * e5[(2, c)];
         }
         let j5 = DMatrix::from_fn(5, 4, |_, _| next());
-        for (e, j, exact, combination) in [
+        [
             (ghp_e, ghp_j, vec![true, false, false], vec![0.0, 1.0, -1.0]),
             (
                 e5,
@@ -1438,7 +1440,13 @@ mod tests {
                 vec![true, false, false, false, false],
                 vec![0.0, 0.0, 2.5, 0.0, 1.0],
             ),
-        ] {
+        ]
+    }
+
+    #[test]
+    fn algebraic_combinations_of_differential_rows_are_held_exactly() {
+        let mut next = rng(5);
+        for (e, j, exact, combination) in combination_systems(&mut next) {
             let (m, n) = e.shape();
             let rows = rows(&exact, &mut next);
             let (g, a, b) = (3.7, 2.5, 1.5);
@@ -1498,23 +1506,7 @@ mod tests {
     #[test]
     fn lstsq_corrector_holds_algebraic_combinations_exactly() {
         let mut next = rng(7);
-        let ghp_e = DMatrix::from_row_slice(3, 2, &[0.0, 0.0, 1.0, 0.7, 1.0, 0.7]);
-        let ghp_j = DMatrix::from_row_slice(3, 2, &[-1.0, -0.7, 0.0, -1.0, 0.0, -2.0]);
-        let mut e5 = DMatrix::from_fn(5, 4, |_, _| next());
-        for c in 0..4 {
-            e5[(0, c)] = 0.0;
-            e5[(4, c)] = -2.5 * e5[(2, c)];
-        }
-        let j5 = DMatrix::from_fn(5, 4, |_, _| next());
-        for (e, j, exact, combination) in [
-            (ghp_e, ghp_j, vec![true, false, false], vec![0.0, 1.0, -1.0]),
-            (
-                e5,
-                j5,
-                vec![true, false, false, false, false],
-                vec![0.0, 0.0, 2.5, 0.0, 1.0],
-            ),
-        ] {
+        for (e, j, exact, combination) in combination_systems(&mut next) {
             let (m, n) = e.shape();
             let rows = rows(&exact, &mut next);
             let c = 3.7;

@@ -437,6 +437,27 @@ impl Stall {
     }
 }
 
+/// [`crate::SolveError::RoundOffFloor`] at `t` with step `h`, the stall
+/// seen from `h_from`, naming the unknown `unknown` of `info` (the one with
+/// the largest weighted increment, `level`, of the last failed iteration).
+pub(crate) fn round_off_floor(
+    info: &dae_core::system::FormulationInfo,
+    (t, h, h_from): (f64, f64, f64),
+    unknown: usize,
+    level: f64,
+) -> crate::SolveError {
+    crate::SolveError::RoundOffFloor {
+        t,
+        h,
+        h_from,
+        unknown: info
+            .variables
+            .get(unknown)
+            .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
+        level,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -209,7 +209,7 @@ impl ConstrainedLstsq {
         )?;
         let r = if held.is_empty() {
             0
-        } else if q > 0 && held.len() % q == 0 {
+        } else if q > 0 && held.len().is_multiple_of(q) {
             held.len() / q
         } else {
             return Err(Singular);

@@ -7,7 +7,7 @@ use crate::core::attempt::{Outcome, Policy, Retry};
 use crate::core::control::Failure;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, JacState, SquareLu};
-use crate::core::newton::{STALL_MIN, WALK_SHRINK};
+use crate::core::newton::{round_off_floor, STALL_MIN, WALK_SHRINK};
 use crate::core::weights::Weights;
 use crate::init::{initial_derivative_with, DerivativeRule};
 use crate::multistep::backward::History;
@@ -260,7 +260,11 @@ impl<'a> Integrator<'a> {
         }
         *count += 1;
         let level = self.ms.weights.norm(&self.delta);
-        if *count < FLOOR_FAILURES || h * FLOOR_SHRINK > *h_from || !(level >= STALL_MIN) {
+        if *count < FLOOR_FAILURES
+            || h * FLOOR_SHRINK > *h_from
+            || level.is_nan()
+            || level < STALL_MIN
+        {
             return Ok(());
         }
         let w = self.ms.weights.get();
@@ -271,18 +275,12 @@ impl<'a> Integrator<'a> {
                     .total_cmp(&(self.delta[b] * w[b]).abs())
             })
             .unwrap_or(0);
-        Err(SolveError::RoundOffFloor {
-            t: self.ms.t,
-            h,
-            h_from: *h_from,
-            unknown: self
-                .sys
-                .info()
-                .variables
-                .get(unknown)
-                .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
+        Err(round_off_floor(
+            self.sys.info(),
+            (self.ms.t, h, *h_from),
+            unknown,
             level,
-        })
+        ))
     }
 
     /// One attempt from `t` with `h` and order `p`; after a rejected
