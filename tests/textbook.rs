@@ -488,6 +488,63 @@ fn odradau_holds_the_cv_loops_hidden_condition() {
     assert!(r.stats.steps < 400, "{} steps", r.stats.steps);
 }
 
+/// The same hidden condition in `odbdf`'s least-squares corrector
+/// (`core::matrix::LstsqCorrector`): tested with the rows' derivatives it
+/// made `odbdf(ovd0)` crawl to the step limit from 1e-6 on (111 550 steps
+/// to t = 10 at 1e-6 without a limit); held exactly, 240 steps at 1e-8
+/// (7.8 digits, EXTREMES.md §5 "lit10").
+#[test]
+fn odbdf_holds_the_cv_loops_hidden_condition() {
+    let scene = Scene::load(scenes_dir().join("mna_cv_loop.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "odbdf", "ovd0", 1e-8)).unwrap();
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    assert!(r.scd.is_some_and(|d| d >= 6.0), "{:?}", r.scd);
+    assert!(r.stats.steps < 400, "{} steps", r.stats.steps);
+}
+
+/// Andrews' squeezer in `rcd0` with `mebdf`: at 1e-10 the stage increments
+/// of `gaa` stagnate at 0.02–0.27 of its tolerance whatever the step; with
+/// the Newton floor at 0.01 the run walked down to `newton_failure` at
+/// h = 2.7e-17, with RADAU5's 0.3 it reaches the end (7.3 digits, the BDF
+/// family's shortfall on index-3 problems, BENCHMARKS §15b). At 1e-11 the
+/// increments of `pha` stagnate above the floor: the walk is stopped typed
+/// (`round_off_floor`) at h ≈ 5e-13, not at the smallest step
+/// (EXTREMES.md §5, lit10).
+#[test]
+fn mebdf_on_andrews_rcd0_floor() {
+    let scene = Scene::load(scenes_dir().join("andrews.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "mebdf", "rcd0", 1e-10)).unwrap();
+    assert_eq!(r.status, "ok", "{:?}", r.error);
+    assert!(r.scd.is_some_and(|d| d >= 7.0), "{:?}", r.scd);
+    let r = runner::run(&inputs.spec(&scene, "mebdf", "rcd0", 1e-11)).unwrap();
+    let e = r.error.expect("stops at the floor");
+    assert_eq!(e.kind, "round_off_floor", "{e:?}");
+    assert!(e.message.contains("`pha`"), "{e:?}");
+}
+
+/// Andrews' squeezer in `ovd0` with `odradau` at 1e-9: ten Newton failures
+/// in a row at t = 0.0203, the increments of `pha`/`oma` at 0.34–1.6 of
+/// the tolerance as the step is cut from 1.8e-6 to 6e-9: a round-off
+/// floor, once called `newton_failure` because the increments spread by
+/// more than a factor 2 (`core::newton::Stall`); now `round_off_floor`
+/// (EXTREMES.md §5, lit10).
+#[test]
+fn odradau_on_andrews_ovd0_stops_at_the_floor_typed() {
+    let scene = Scene::load(scenes_dir().join("andrews.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    let r = runner::run(&inputs.spec(&scene, "odradau", "ovd0", 1e-9)).unwrap();
+    if r.status == "ok" {
+        // The last bits decide it (it finished with DASSL's scaled norm
+        // sum, BENCHMARKS §12e): finishing is no defect.
+        assert!(r.scd.is_some_and(|d| d >= 7.0), "{:?}", r.scd);
+    } else {
+        let e = r.error.expect("an error");
+        assert_eq!(e.kind, "round_off_floor", "{e:?}");
+    }
+}
+
 /// Andrews' squeezer in `rcd1` with `mebdf` at 1e-8: once stopped with
 /// `step_size_too_small` at t ≈ 0.02 (h ≈ 1e-17, as at 1e-7 and 1e-9),
 /// its order-6 estimate not falling with the step while every step was

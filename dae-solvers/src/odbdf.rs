@@ -25,8 +25,9 @@
 //!
 //! solved by a simplified Newton iteration whose steps are constrained
 //! least-squares solutions of `G δ = F` (see `core::matrix`): the
-//! constraint rows exactly, the differential rows in a weighted
-//! least-squares sense. The constraint rows hold only to the accuracy of
+//! constraint rows exactly, and with them the algebraic combinations of
+//! the differential rows (a circuit's capacitor–source loop), the
+//! differential rows in a weighted least-squares sense. The constraint rows hold only to the accuracy of
 //! the iteration, and the error estimate carries what is left of it, so the
 //! convergence test matters more than in DASSL. On formulations whose rows
 //! keep an invariant (`ovd0`, `psi0`) it is ODASSL's: the contraction rate
@@ -55,8 +56,8 @@
 //! `ori2`) are refused with [`NotApplicable::ConstraintLevel`], as ODASSL
 //! asks for an index-1 overdetermined system.
 
+use crate::core::matrix::LstsqCorrector;
 use crate::core::policy;
-use crate::linalg::ConstrainedLstsq;
 use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 
@@ -82,6 +83,6 @@ impl Solver for OdBdf {
         options: &'a Options,
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
-        crate::bdf::integrator::<ConstrainedLstsq>(problem, options)
+        crate::bdf::integrator::<LstsqCorrector>(problem, options)
     }
 }

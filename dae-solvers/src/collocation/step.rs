@@ -137,18 +137,12 @@ impl<K: Collocation> Integrator<'_, K> {
     /// unknown that dominated the last failed iteration ([`Stall`]).
     fn round_off_floor(&self, t: f64, h: f64) -> SolveError {
         let (level, unknown) = self.newton_last;
-        SolveError::RoundOffFloor {
-            t,
-            h,
-            h_from: self.c.stall.first_step(),
-            unknown: self
-                .sys
-                .info()
-                .variables
-                .get(unknown)
-                .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
+        crate::core::newton::round_off_floor(
+            self.sys.info(),
+            (t, h, self.c.stall.first_step()),
+            unknown,
             level,
-        }
+        )
     }
 }
 

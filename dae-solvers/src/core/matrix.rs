@@ -78,7 +78,10 @@
 //! the differential rows only on the null space of both (`V` from an SVD
 //! of `E_D` with its rows scaled to largest entry one, found again only
 //! when `E_D` changes). When `M = N`, or when `E_D` has full row rank
-//! (`ovd1`), `V` is empty and nothing changes.
+//! (`ovd1`), `V` is empty and nothing changes. `odbdf`'s corrector
+//! ([`LstsqCorrector`]) holds the same `Vᵀ (c E_D − J_D)` exactly beside
+//! its constraint rows: without it `odbdf(ovd0)` crawled on the CV loop
+//! (111 550 steps at 1e-6; 112 with it, EXTREMES.md §5 "lit10").
 
 use super::block::Part;
 use crate::linalg::lstsq::{null_space, split_rows};
@@ -592,19 +595,58 @@ impl Corrector for SquareLu {
     }
 }
 
-impl Corrector for ConstrainedLstsq {
+/// The constrained least-squares corrector of `odbdf` (ODASSL's): the
+/// constraint rows exact, the differential rows weighted, and the algebraic
+/// combinations of the differential rows held exactly beside the constraint
+/// rows, as [`ProjectedStages`] holds them for `odradau` (see the
+/// [module documentation](self)).
+pub(crate) struct LstsqCorrector {
+    ls: ConstrainedLstsq,
+    n: usize,
+    /// `E` of the last [`Corrector::assemble`] (dense), which the
+    /// combinations are found from.
+    e: DMatrix<f64>,
+    alg: Combinations,
+    /// The differential rows of the last factorisation, in order.
+    diff_rows: Vec<usize>,
+}
+
+impl Corrector for LstsqCorrector {
     const LEAST_SQUARES: bool = true;
     fn new(m: usize, n: usize) -> Self {
-        ConstrainedLstsq::new(m, n)
+        LstsqCorrector {
+            ls: ConstrainedLstsq::new(m, n),
+            n,
+            e: DMatrix::zeros(m, n),
+            alg: Combinations::default(),
+            diff_rows: Vec::with_capacity(m),
+        }
     }
     fn matrix_mut(&mut self) -> &mut DMatrix<f64> {
-        ConstrainedLstsq::matrix_mut(self)
+        self.ls.matrix_mut()
+    }
+    fn assemble(&mut self, c: f64, e: &Matrix, j: &Matrix, l: Option<&Matrix>) -> bool {
+        self.e.copy_from(e.dense());
+        write_dense(self.ls.matrix_mut(), c, e, j, l)
     }
     fn factor(&mut self, rows: &Rows) -> Result<(), Singular> {
-        ConstrainedLstsq::factor(self, &rows.exact, &rows.weight)
+        self.diff_rows.clear();
+        self.diff_rows
+            .extend((0..rows.exact.len()).filter(|&i| !rows.exact[i]));
+        let p = rows.exact.len() - self.diff_rows.len();
+        // More differential rows than unknowns left by the constraint rows
+        // (else the system is square, and solved exactly whatever its rows).
+        let r = if p <= self.n && self.diff_rows.len() > self.n - p {
+            self.alg.find(&self.e, &self.diff_rows)?
+        } else {
+            0
+        };
+        let q = self.diff_rows.len();
+        self.ls
+            .factor(&rows.exact, &rows.weight, &self.alg.v()[..r * q])
     }
     fn solve(&mut self, b: &mut [f64]) {
-        ConstrainedLstsq::solve(self, b)
+        self.ls.solve(b)
     }
 }
 
@@ -899,15 +941,8 @@ pub(crate) struct ProjectedStages {
     /// The projected complex right-hand side, split (real, imaginary).
     cre: Vec<f64>,
     cim: Vec<f64>,
-    /// The algebraic combinations of the differential rows (see
-    /// [`algebraic_combinations`]): their number `r` and the combinations
-    /// (`r × q`, row-major), with the `E` (column-major) and the row
-    /// indices they were found for — reused while both stay the same (a
-    /// constant `E`).
-    alg: usize,
-    alg_v: Vec<f64>,
-    alg_e: Vec<f64>,
-    alg_rows: Vec<usize>,
+    /// The algebraic combinations of the differential rows.
+    alg: Combinations,
 }
 
 impl ProjectedStages {
@@ -936,7 +971,7 @@ impl ProjectedStages {
 
 impl ProjectedStages {
     /// The algebraic combinations `V` of the differential rows (see
-    /// [`ProjectedStages::algebraic`]), held exactly: the rows `Vᵀ (g E_D −
+    /// [`Combinations::find`]), held exactly: the rows `Vᵀ (g E_D −
     /// J_D)` of the real matrix written to `ct` after the `p` constraint
     /// rows, and `Vᵀ` to the first rows of `wt`; returns their number `r`.
     /// Out of line: called only when there are more differential rows than
@@ -949,13 +984,13 @@ impl ProjectedStages {
         g: f64,
     ) -> Result<usize, Singular> {
         let (n, p, q) = (self.n, self.p, self.q);
-        let r = self.algebraic(e)?;
+        let r = self.alg.find(e, &self.diff_rows[..q])?;
         if r > n - p {
             return Err(Singular);
         }
         for (col, v) in self.ct[p * n..(p + r) * n]
             .chunks_exact_mut(n)
-            .zip(self.alg_v.chunks_exact(q))
+            .zip(self.alg.v.chunks_exact(q))
         {
             for (c, x) in col.iter_mut().enumerate() {
                 *x = v
@@ -965,43 +1000,62 @@ impl ProjectedStages {
                     .sum();
             }
         }
-        self.wt[..r * q].copy_from_slice(&self.alg_v[..r * q]);
+        self.wt[..r * q].copy_from_slice(&self.alg.v[..r * q]);
         Ok(r)
     }
+}
 
-    /// The algebraic combinations of the differential rows of `e` (the
-    /// rows `diff_rows[..q]`): an orthonormal basis `V` of the left null
-    /// space of `E_D` with each row of `E_D` scaled to largest entry one,
-    /// written to `alg_v` in the original rows' scale (`vᵀ E_D = 0`);
+/// The algebraic combinations of a system's differential rows (see
+/// [`algebraic_combinations`]), with the `E` (column-major) and the row
+/// indices they were found for: found afresh only when either changes (a
+/// constant `E`: once per run).
+#[derive(Default)]
+pub(crate) struct Combinations {
+    /// Their number `r` and the combinations (`r × q`, row-major).
+    r: usize,
+    v: Vec<f64>,
+    e: Vec<f64>,
+    rows: Vec<usize>,
+}
+
+impl Combinations {
+    /// The algebraic combinations of the differential rows `rows` of `e`:
+    /// an orthonormal basis `V` of the left null space of `E_D` with each
+    /// row of `E_D` scaled to largest entry one, kept in the original
+    /// rows' scale (`vᵀ E_D = 0`, `r × q` row-major, `q = rows.len()`);
     /// returns their number `r`. Found afresh only when `E_D` or its rows
     /// changed since the last call.
     ///
     /// Such a combination is a condition on `y` alone hidden among rows
     /// that hold derivatives (see the [module documentation](self),
     /// "Algebraic conditions among the differential rows").
-    fn algebraic(&mut self, e: &DMatrix<f64>) -> Result<usize, Singular> {
-        let (n, q) = (self.n, self.q);
-        let rows = &self.diff_rows[..q];
+    pub(crate) fn find(&mut self, e: &DMatrix<f64>, rows: &[usize]) -> Result<usize, Singular> {
+        let (n, q) = (e.ncols(), rows.len());
         // The whole of `E` is kept (column-major): one comparison of two
         // slices per factorisation while it stays the same.
-        if self.alg_rows.as_slice() == rows && self.alg_e.as_slice() == e.as_slice() {
-            return Ok(self.alg);
+        if self.rows.as_slice() == rows && self.e.as_slice() == e.as_slice() {
+            return Ok(self.r);
         }
-        self.alg_rows.clear();
-        self.alg_rows.extend_from_slice(rows);
-        self.alg_e.clear();
-        self.alg_e.extend_from_slice(e.as_slice());
+        self.rows.clear();
+        self.rows.extend_from_slice(rows);
+        self.e.clear();
+        self.e.extend_from_slice(e.as_slice());
         let mut e_d = Vec::with_capacity(q * n);
         for &i in rows {
             e_d.extend((0..n).map(|c| e[(i, c)]));
         }
         if !all_finite(&e_d) {
-            self.alg_rows.clear();
+            self.rows.clear();
             return Err(Singular);
         }
-        let r = algebraic_combinations(&e_d, n, q, &mut self.alg_v);
-        self.alg = r;
-        Ok(r)
+        self.r = algebraic_combinations(&e_d, n, q, &mut self.v);
+        Ok(self.r)
+    }
+
+    /// The combinations of the last [`Combinations::find`] (`r × q`,
+    /// row-major).
+    pub(crate) fn v(&self) -> &[f64] {
+        &self.v
     }
 }
 
@@ -1029,10 +1083,7 @@ impl StageSystems for ProjectedStages {
             cbuf: vec![Complex::new(0.0, 0.0); n],
             cre: vec![0.0; n],
             cim: vec![0.0; n],
-            alg: 0,
-            alg_v: Vec::new(),
-            alg_e: Vec::new(),
-            alg_rows: Vec::new(),
+            alg: Combinations::default(),
         }
     }
     fn factor(
@@ -1363,14 +1414,16 @@ mod tests {
     /// a constraint) make a condition on the unknowns alone: the projected
     /// systems hold it exactly, as they hold the constraint rows, and test
     /// only what is left in the least-squares sense.
-    #[test]
-    fn algebraic_combinations_of_differential_rows_are_held_exactly() {
-        let mut next = rng(5);
-        // Gear–Hsu–Petzold at t = 0.7, η = 1, with the constraint's
-        // derivative kept as a row holding derivatives (the derivation's
-        // ovd0 substitutes it): the constraint, that row and the dynamic
-        // equation; then a 5 × 4 system with a dependent pair of rows
-        // beside two independent ones.
+    /// `(E, J, exact rows, the algebraic combination)` of two systems with
+    /// one algebraic combination among their differential rows:
+    /// Gear–Hsu–Petzold at t = 0.7, η = 1, with the constraint's derivative
+    /// kept as a row holding derivatives (the derivation's ovd0 substitutes
+    /// it): the constraint, that row and the dynamic equation; then a 5 × 4
+    /// system with a dependent pair of rows beside two independent ones.
+    #[allow(clippy::type_complexity)]
+    fn combination_systems(
+        next: &mut impl FnMut() -> f64,
+    ) -> [(DMatrix<f64>, DMatrix<f64>, Vec<bool>, Vec<f64>); 2] {
         let ghp_e = DMatrix::from_row_slice(3, 2, &[0.0, 0.0, 1.0, 0.7, 1.0, 0.7]);
         let ghp_j = DMatrix::from_row_slice(3, 2, &[-1.0, -0.7, 0.0, -1.0, 0.0, -2.0]);
         let mut e5 = DMatrix::from_fn(5, 4, |_, _| next());
@@ -1379,7 +1432,7 @@ mod tests {
             e5[(4, c)] = -2.5 * e5[(2, c)];
         }
         let j5 = DMatrix::from_fn(5, 4, |_, _| next());
-        for (e, j, exact, combination) in [
+        [
             (ghp_e, ghp_j, vec![true, false, false], vec![0.0, 1.0, -1.0]),
             (
                 e5,
@@ -1387,7 +1440,13 @@ mod tests {
                 vec![true, false, false, false, false],
                 vec![0.0, 0.0, 2.5, 0.0, 1.0],
             ),
-        ] {
+        ]
+    }
+
+    #[test]
+    fn algebraic_combinations_of_differential_rows_are_held_exactly() {
+        let mut next = rng(5);
+        for (e, j, exact, combination) in combination_systems(&mut next) {
             let (m, n) = e.shape();
             let rows = rows(&exact, &mut next);
             let (g, a, b) = (3.7, 2.5, 1.5);
@@ -1401,7 +1460,7 @@ mod tests {
                 &rows,
             )
             .expect("nonsingular");
-            assert_eq!(ps.alg, 1, "{m}x{n}");
+            assert_eq!(ps.alg.r, 1, "{m}x{n}");
             let rhs: Vec<f64> = (0..2 * m).map(|_| next()).collect();
             // The constraint row and the combination hold exactly in the
             // real system and in the complex one.
@@ -1438,6 +1497,53 @@ mod tests {
                     "{m}x{n} complex: {r} {i}"
                 );
             }
+        }
+    }
+
+    /// `odbdf`'s corrector holds the algebraic combination of its
+    /// differential rows exactly (the plain least-squares solve does not),
+    /// on the two systems of the test above.
+    #[test]
+    fn lstsq_corrector_holds_algebraic_combinations_exactly() {
+        let mut next = rng(7);
+        for (e, j, exact, combination) in combination_systems(&mut next) {
+            let (m, n) = e.shape();
+            let rows = rows(&exact, &mut next);
+            let c = 3.7;
+            let (e, j) = (Matrix::Dense(e), Matrix::Dense(j));
+            let rhs: Vec<f64> = (0..m).map(|_| next()).collect();
+            let defect = |w: &[f64], x: &[f64]| {
+                let (e, j) = (e.dense(), j.dense());
+                let mut d = 0.0;
+                for (i, &wi) in w.iter().enumerate() {
+                    let ax: f64 = (0..n).map(|k| (c * e[(i, k)] - j[(i, k)]) * x[k]).sum();
+                    d += wi * (ax - rhs[i]);
+                }
+                d
+            };
+            let mut first = vec![0.0; m];
+            first[0] = 1.0;
+            let mut lc = LstsqCorrector::new(m, n);
+            assert!(lc.assemble(c, &e, &j, None));
+            lc.factor(&rows).expect("nonsingular");
+            let mut x = rhs.clone();
+            lc.solve(&mut x);
+            for w in [&first, &combination] {
+                let d = defect(w, &x[..n]);
+                assert!(d.abs() < 1e-12, "{m}x{n}: {d}");
+            }
+            let mut plain = ConstrainedLstsq::new(m, n);
+            write_dense(plain.matrix_mut(), c, &e, &j, None);
+            plain
+                .factor(&rows.exact, &rows.weight, &[])
+                .expect("nonsingular");
+            let mut x = rhs.clone();
+            plain.solve(&mut x);
+            let d = defect(&combination, &x[..n]);
+            assert!(
+                d.abs() > 1e-6,
+                "{m}x{n}: the plain solve holds it too ({d})"
+            );
         }
     }
 

@@ -293,8 +293,9 @@ impl Contraction {
 /// failed iteration; it answers `true` (and [`Stall::stalled`] stays `true`)
 /// once [`STALL_FAILURES`] failures in a row have increments between
 /// [`STALL_MIN`] and [`STALL_MAX`] (of the order of the tolerance: noise,
-/// not a gross divergence) that vary by at most [`STALL_SPREAD`] while the
-/// step has shrunk by [`STALL_SHRINK`] or more. Any other failure starts
+/// not a gross divergence) that vary by at most [`STALL_SPREAD`], or by the
+/// square root of the step's shrink when that is more, while the step has
+/// shrunk by [`STALL_SHRINK`] or more. Any other failure starts
 /// the count again, as does an accepted step or one rejected by its error
 /// test ([`Stall::converged`]).
 ///
@@ -418,12 +419,42 @@ impl Stall {
         }
         self.count += 1;
         self.h_last = h;
-        if self.hi > STALL_SPREAD * self.lo {
+        // Increments that scale with the step fall at least as it shrinks;
+        // noise at a floor spreads without following it. The spread
+        // allowed grows with the square root of the shrink: Andrews'
+        // squeezer, odradau(ovd0) at 1e-9 (EXTREMES.md §5, lit10), failed
+        // ten times in a row at t = 0.0203 from h = 1.8e-6 to 6.0e-9 with
+        // increments of 0.34–1.6 of the tolerance, never within
+        // [`STALL_SPREAD`] over eight halvings, and was called
+        // `newton_failure`.
+        let spread = STALL_SPREAD.max((self.h_first / h).sqrt());
+        if self.hi > spread * self.lo {
             // Increments that changed this much are not a floor: count
             // from this failure on.
             (self.count, self.h_first, self.lo, self.hi) = (1, h, norm, norm);
         }
         self.stalled()
+    }
+}
+
+/// [`crate::SolveError::RoundOffFloor`] at `t` with step `h`, the stall
+/// seen from `h_from`, naming the unknown `unknown` of `info` (the one with
+/// the largest weighted increment, `level`, of the last failed iteration).
+pub(crate) fn round_off_floor(
+    info: &dae_core::system::FormulationInfo,
+    (t, h, h_from): (f64, f64, f64),
+    unknown: usize,
+    level: f64,
+) -> crate::SolveError {
+    crate::SolveError::RoundOffFloor {
+        t,
+        h,
+        h_from,
+        unknown: info
+            .variables
+            .get(unknown)
+            .map_or_else(|| format!("#{unknown}"), |v| v.name.clone()),
+        level,
     }
 }
 
@@ -610,6 +641,38 @@ mod tests {
             s.converged(|| true, 2e-3);
         }
         assert!(!s.walked());
+    }
+
+    #[test]
+    fn a_noisy_stall_over_a_long_shrink_is_a_stall() {
+        // Andrews' squeezer, odradau(ovd0) at 1e-9, t = 0.0203: ten Newton
+        // failures in a row, the last increments (weighted) as the step
+        // was cut from 1.8e-6 to 6.0e-9; never within a factor 2 over
+        // eight halvings, within the square root of the shrink from the
+        // fourth on.
+        let trace = [
+            (1.773e-6, 0.371),
+            (8.609e-7, 0.340),
+            (4.304e-7, 0.534),
+            (2.152e-7, 1.096),
+            (1.122e-7, 1.005),
+            (5.852e-8, 1.263),
+            (3.788e-8, 0.710),
+            (1.975e-8, 1.058),
+            (1.087e-8, 0.770),
+            (5.977e-9, 1.585),
+        ];
+        let mut s = Stall::default();
+        let stalled: Vec<bool> = trace.iter().map(|&(h, n)| s.failed(h, n)).collect();
+        assert_eq!(
+            stalled,
+            [false, false, false, false, false, false, false, true, true, true]
+        );
+        // The same increments halving with the step are not one.
+        let mut s = Stall::default();
+        for (i, &(h, _)) in trace.iter().enumerate() {
+            assert!(!s.failed(h, 3.0 * h / trace[0].0), "{i}");
+        }
     }
 
     #[test]

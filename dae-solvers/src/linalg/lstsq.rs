@@ -116,11 +116,17 @@ pub(crate) struct ConstrainedLstsq {
     weighted_rows: Vec<usize>,
     /// ... and their weights.
     row_weight: Vec<f64>,
-    /// Length `M`: a row of `S D` times a reflector while factorising; `u`
+    /// Length `M + N`: a row of `S D` times a reflector while factorising; `u`
     /// then `r` while solving.
     work: Vec<f64>,
-    /// Number of exact rows of the current factorisation.
+    /// Number of exact rows of the current factorisation, the held
+    /// combinations included (see [`ConstrainedLstsq::factor`]) ...
     p: usize,
+    /// ... of which rows of `A` (the first `p_rows`); the others are the
+    /// combinations `held` (`(p − p_rows) × q`, row-major, in the order of
+    /// `weighted_rows`).
+    p_rows: usize,
+    held: Vec<f64>,
     /// Number of weighted rows of the current factorisation.
     q: usize,
     /// Norms of the columns of a factor before its QR (the rank test).
@@ -144,9 +150,11 @@ impl ConstrainedLstsq {
             exact_rows: vec![0; m],
             weighted_rows: vec![0; m],
             row_weight: vec![0.0; m],
-            work: vec![0.0; m],
+            work: vec![0.0; m + n],
             norms: vec![0.0; n],
             p: 0,
+            p_rows: 0,
+            held: Vec::new(),
             q: 0,
             factored: false,
         }
@@ -167,7 +175,20 @@ impl ConstrainedLstsq {
     /// # Panics
     ///
     /// If `exact` or `weight` is not of length `M`.
-    pub(crate) fn factor(&mut self, exact: &[bool], weight: &[f64]) -> Result<(), Singular> {
+    ///
+    /// With `held` non-empty, the combinations of the weighted rows it
+    /// holds are held exactly besides: each a row `v` of `held` (`r × q`
+    /// row-major, `q` the number of weighted rows, in their order in `A`),
+    /// the constraint `vᵀ D δ = vᵀ b_D`; the weighted rows stay in the
+    /// objective. Fails with [`Singular`] also when the exact rows and the
+    /// combinations number more than `N`, or when `held` is not a whole
+    /// number of rows of length `q`.
+    pub(crate) fn factor(
+        &mut self,
+        exact: &[bool],
+        weight: &[f64],
+        held: &[f64],
+    ) -> Result<(), Singular> {
         let (m, n) = (self.m, self.n);
         assert!(
             exact.len() == m && weight.len() == m,
@@ -186,14 +207,40 @@ impl ConstrainedLstsq {
             &mut self.weighted_rows,
             &mut self.row_weight,
         )?;
-        (self.p, self.q) = (p, q);
+        let r = if held.is_empty() {
+            0
+        } else if q > 0 && held.len().is_multiple_of(q) {
+            held.len() / q
+        } else {
+            return Err(Singular);
+        };
+        let p_rows = p;
+        let p = p_rows + r;
+        if p > n {
+            return Err(Singular);
+        }
+        (self.p, self.p_rows, self.q) = (p, p_rows, q);
+        self.held.clear();
+        self.held.extend_from_slice(held);
         let a = self.a.as_slice();
 
-        // Step 1: Cᵀ = Q [R; 0].
+        // Step 1: Cᵀ = Q [R; 0], the exact rows of A then the held
+        // combinations of its weighted rows.
         let ct = &mut self.ct[..n * p];
-        for (col, &i) in ct.chunks_exact_mut(n).zip(&self.exact_rows[..p]) {
+        let (ct_rows, ct_held) = ct.split_at_mut(n * p_rows);
+        for (col, &i) in ct_rows.chunks_exact_mut(n).zip(&self.exact_rows[..p_rows]) {
             for (j, c) in col.iter_mut().enumerate() {
                 *c = a[j * m + i];
+            }
+        }
+        for (col, v) in ct_held.chunks_exact_mut(n).zip(held.chunks_exact(q.max(1))) {
+            for (j, c) in col.iter_mut().enumerate() {
+                let aj = &a[j * m..(j + 1) * m];
+                *c = v
+                    .iter()
+                    .zip(&self.weighted_rows[..q])
+                    .map(|(&v, &i)| v * aj[i])
+                    .sum();
             }
         }
         column_norms(ct, n, &mut self.norms[..p]);
@@ -261,8 +308,16 @@ impl ConstrainedLstsq {
         let k = n - p;
         let (u, r) = self.work.split_at_mut(p);
         let r = &mut r[..q];
-        for (uj, &i) in u.iter_mut().zip(&self.exact_rows[..p]) {
+        let p_rows = self.p_rows;
+        for (uj, &i) in u.iter_mut().zip(&self.exact_rows[..p_rows]) {
             *uj = b[i];
+        }
+        for (uj, v) in u[p_rows..].iter_mut().zip(self.held.chunks_exact(q.max(1))) {
+            *uj = v
+                .iter()
+                .zip(&self.weighted_rows[..q])
+                .map(|(&v, &i)| v * b[i])
+                .sum();
         }
         for ((ri, &i), &w) in r
             .iter_mut()
@@ -393,7 +448,7 @@ pub(crate) fn lstsq(
     assert!(b.len() == m, "lstsq: b must have one entry per row of a");
     let mut ls = ConstrainedLstsq::new(m, n);
     ls.matrix_mut().copy_from(a);
-    ls.factor(exact, weight)?;
+    ls.factor(exact, weight, &[])?;
     let mut x = b.to_vec();
     ls.solve(&mut x);
     x.truncate(n);
@@ -791,9 +846,9 @@ mod tests {
         // stale solution.
         let mut ls = ConstrainedLstsq::new(m, n);
         ls.matrix_mut().copy_from(&a);
-        ls.factor(&pattern(m, &[1]), &weight).unwrap();
+        ls.factor(&pattern(m, &[1]), &weight, &[]).unwrap();
         ls.matrix_mut().copy_from(&twice);
-        assert!(ls.factor(&pattern(m, &[1, 5]), &weight).is_err());
+        assert!(ls.factor(&pattern(m, &[1, 5]), &weight, &[]).is_err());
         let mut x = b.clone();
         ls.solve(&mut x);
         assert!(x.iter().all(|v| v.is_nan()));
@@ -811,7 +866,7 @@ mod tests {
             let weight: Vec<f64> = (0..m).map(|_| 1.0 + 0.9 * next()).collect();
             let exact = pattern(m, rows);
             ls.matrix_mut().copy_from(&a);
-            ls.factor(&exact, &weight).unwrap();
+            ls.factor(&exact, &weight, &[]).unwrap();
             // Two right-hand sides with the same factors.
             for _ in 0..2 {
                 let b: Vec<f64> = (0..m).map(|_| next()).collect();
