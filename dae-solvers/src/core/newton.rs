@@ -458,6 +458,56 @@ pub(crate) fn round_off_floor(
     }
 }
 
+/// A walk down a round-off floor as a multistep corrector sees it:
+/// [`WALK_FAILURES`] Newton failures in a row on one step, none after a
+/// step longer than the walk's first, the step cut [`WALK_SHRINK`]-fold, and
+/// the last weighted increment at least [`STALL_MIN`] of the tolerance
+/// (the collocation engine follows the same walk with [`Stall`], which also
+/// watches the converged iterations in between). Used by mebdf; a service
+/// for any corrector that sees only its failures.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct FloorWalk {
+    h_from: f64,
+    count: usize,
+}
+
+impl FloorWalk {
+    /// Before an attempt with step `h`: a step longer than the walk's
+    /// first ends the walk.
+    pub(crate) fn attempt(&mut self, h: f64) {
+        if h > self.h_from {
+            *self = Self::default();
+        }
+    }
+
+    /// After a Newton failure at `(t, h)` with last increments `delta`:
+    /// the typed error once the walk is long enough.
+    pub(crate) fn failed<S: crate::core::weights::Sum>(
+        &mut self,
+        (t, h): (f64, f64),
+        delta: &[f64],
+        weights: &crate::core::weights::Weights<S>,
+        info: &dae_core::system::FormulationInfo,
+    ) -> Result<(), crate::SolveError> {
+        if self.count == 0 || h > self.h_from {
+            *self = Self {
+                h_from: h,
+                count: 0,
+            };
+        }
+        self.count += 1;
+        let level = weights.norm(delta);
+        if self.count < WALK_FAILURES || h * WALK_SHRINK > self.h_from || !(level >= STALL_MIN) {
+            return Ok(());
+        }
+        let w = weights.get();
+        let unknown = (0..delta.len())
+            .max_by(|&a, &b| (delta[a] * w[a]).abs().total_cmp(&(delta[b] * w[b]).abs()))
+            .unwrap_or(0);
+        Err(round_off_floor(info, (t, h, self.h_from), unknown, level))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -7,7 +7,7 @@ use crate::core::attempt::{Outcome, Policy, Retry};
 use crate::core::control::Failure;
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::JacState;
-use crate::core::newton::{round_off_floor, STALL_MIN, WALK_SHRINK};
+use crate::core::newton::FloorWalk;
 use crate::core::shifted::Shifted;
 use crate::core::weights::{self, Weights};
 use crate::init::{initial_derivative_with, DerivativeRule};
@@ -36,19 +36,6 @@ const STALLED_FALL: f64 = 0.5;
 /// pendulum at tol 1e-10 (rcd1, ggl1) falling at the first cost 45 % more
 /// steps (824 → 1223, the solver harness).
 const STALLED_STEPS: usize = 3;
-
-/// Newton failures of a walk down the round-off floor that end the run
-/// ([`Integrator::floor_walked`]): failures between attempts none of which
-/// is longer than the walk's first, ...
-const FLOOR_FAILURES: usize = 8;
-/// ... over which the step has shrunk this many times. Increments that
-/// scale with any power of the step would have fallen as much; on Andrews'
-/// squeezer in `rcd0` at 1e-10 (EXTREMES.md §5, lit10) the stage
-/// increments stayed at 0.02–0.27 of the tolerance from h = 1.1e-10 down
-/// to h = 2.7e-17, where the run ended in `newton_failure` (its floor
-/// exit, [`super::stages`]' `ROUND_OFF_FLOOR`, is 0.01). As radau5's walk
-/// ([`crate::core::newton::WALK_SHRINK`]).
-const FLOOR_SHRINK: f64 = WALK_SHRINK;
 
 /// Steps accepted the usual way before another [`Integrator::restart`]: a
 /// stalled estimate that returns within them is not one stale value but
@@ -122,10 +109,12 @@ pub(super) struct Integrator<'a> {
     /// [`STALLED_STEPS`]), and whether this step had one.
     stalls: usize,
     stalled_this_step: bool,
-    /// A walk of Newton failures down the round-off floor (see
-    /// [`FLOOR_SHRINK`]): the longest step of the walk and its failures;
-    /// `(0, 0)` outside one.
-    floor_walk: (f64, usize),
+    /// A walk of Newton failures down the round-off floor ([`FloorWalk`]).
+    /// On Andrews' squeezer in `rcd0` at 1e-10 (EXTREMES.md §5, lit10) the
+    /// stage increments stayed at 0.02–0.27 of the tolerance from
+    /// h = 1.1e-10 down to 2.7e-17, where the run ended in `newton_failure`
+    /// (the floor exit, [`super::stages`]' `ROUND_OFF_FLOOR`, was then 0.01).
+    floor_walk: FloorWalk,
 }
 
 impl Family for Integrator<'_> {
@@ -203,7 +192,7 @@ impl<'a> Integrator<'a> {
             first_rejection: None,
             stalls: 0,
             stalled_this_step: false,
-            floor_walk: (0.0, 0),
+            floor_walk: FloorWalk::default(),
         }
     }
 
@@ -233,50 +222,10 @@ impl<'a> Integrator<'a> {
         self.hist.start_from_values(values, h);
     }
 
-    /// A Newton failure of the current attempt: it continues the walk down
-    /// the round-off floor (or starts one), and ends the run with
-    /// [`SolveError::RoundOffFloor`] once the walk has [`FLOOR_FAILURES`]
-    /// failures and the step is [`FLOOR_SHRINK`] times shorter than its
-    /// longest, the last increment still at least [`STALL_MIN`] of the
-    /// tolerance: increments that no step size reduces.
-    fn floor_walked(&mut self) -> Result<(), SolveError> {
-        let h = self.ms.h;
-        let (h_from, count) = &mut self.floor_walk;
-        if *count == 0 || h > *h_from {
-            (*h_from, *count) = (h, 0);
-        }
-        *count += 1;
-        let level = self.ms.weights.norm(&self.delta);
-        if *count < FLOOR_FAILURES
-            || h * FLOOR_SHRINK > *h_from
-            || level.is_nan()
-            || level < STALL_MIN
-        {
-            return Ok(());
-        }
-        let w = self.ms.weights.get();
-        let unknown = (0..self.ms.n)
-            .max_by(|&a, &b| {
-                (self.delta[a] * w[a])
-                    .abs()
-                    .total_cmp(&(self.delta[b] * w[b]).abs())
-            })
-            .unwrap_or(0);
-        Err(round_off_floor(
-            self.sys.info(),
-            (self.ms.t, h, *h_from),
-            unknown,
-            level,
-        ))
-    }
-
     /// One attempt from `t` with `h` and order `p`; after a rejected
     /// error test, the order and step of the retry.
     fn attempt_step(&mut self) -> Result<Outcome, SolveError> {
-        if self.ms.h > self.floor_walk.0 {
-            // The step has recovered: no walk.
-            self.floor_walk = (0.0, 0);
-        }
+        self.floor_walk.attempt(self.ms.h);
         self.ms.weights.update_scaled(self.hist.y(), self.ms.h);
         let err = match self.attempt() {
             Ok(()) if self.ms.cfg.fixed_step => {
@@ -286,7 +235,9 @@ impl<'a> Integrator<'a> {
             Ok(()) => self.error_estimate(),
             Err(failure) => {
                 if failure == Failure::Newton {
-                    self.floor_walked()?;
+                    let at = (self.ms.t, self.ms.h);
+                    let (w, info) = (&self.ms.weights, self.sys.info());
+                    self.floor_walk.failed(at, &self.delta, w, info)?;
                 }
                 self.ms.ramp = false;
                 return Ok(Outcome::Failed {
