@@ -497,7 +497,11 @@ impl FloorWalk {
         }
         self.count += 1;
         let level = weights.norm(delta);
-        if self.count < WALK_FAILURES || h * WALK_SHRINK > self.h_from || !(level >= STALL_MIN) {
+        if self.count < WALK_FAILURES
+            || h * WALK_SHRINK > self.h_from
+            || level.is_nan()
+            || level < STALL_MIN
+        {
             return Ok(());
         }
         let w = weights.get();
