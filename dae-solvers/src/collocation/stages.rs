@@ -581,18 +581,3 @@ impl<K: Collocation> Integrator<'_, K> {
         kernels::advance::<K>(&w.z, h, &mut w.y, y_lo, &mut w.yp, &mut w.cont);
     }
 }
-
-/// The unknown with the largest weighted entry in the three stage blocks
-/// of `dw` (`m` rows each; rows beyond the weights' length count as none).
-pub(super) fn largest_weighted(dw: &[f64], weights: &[f64], m: usize) -> usize {
-    let mut best = (0, 0.0);
-    for block in dw.chunks(m).take(3) {
-        for (j, (d, w)) in block.iter().zip(weights).enumerate() {
-            let v = (d * w).abs();
-            if v > best.1 {
-                best = (j, v);
-            }
-        }
-    }
-    best.0
-}

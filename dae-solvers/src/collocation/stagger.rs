@@ -416,7 +416,7 @@ impl<K: Collocation> Integrator<'_, K> {
                 } else {
                     (
                         dyno,
-                        super::stages::largest_weighted(&self.w.dw, self.w.weights.get(), m),
+                        weights::largest_weighted(&self.w.dw, self.w.weights.get(), m, 3),
                     )
                 };
             }

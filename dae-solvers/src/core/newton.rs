@@ -504,10 +504,7 @@ impl FloorWalk {
         {
             return Ok(());
         }
-        let w = weights.get();
-        let unknown = (0..delta.len())
-            .max_by(|&a, &b| (delta[a] * w[a]).abs().total_cmp(&(delta[b] * w[b]).abs()))
-            .unwrap_or(0);
+        let unknown = crate::core::weights::largest_weighted(delta, weights.get(), delta.len(), 1);
         Err(round_off_floor(info, (t, h, self.h_from), unknown, level))
     }
 }

@@ -196,6 +196,23 @@ impl<S: Sum> Weights<S> {
 /// `1e-58` of it.
 const UNDERFLOW_SAFE: f64 = 1e-250;
 
+/// The unknown with the largest weighted entry `|v_j w_j|` over the first
+/// `blocks` blocks of `m` rows of `v` (rows beyond the weights' length
+/// count as none; the first of equal entries, NaN passed over): the one a
+/// stalled Newton iteration names ([`crate::SolveError::RoundOffFloor`]).
+pub(crate) fn largest_weighted(v: &[f64], weights: &[f64], m: usize, blocks: usize) -> usize {
+    let mut best = (0, 0.0);
+    for block in v.chunks(m).take(blocks) {
+        for (j, (d, w)) in block.iter().zip(weights).enumerate() {
+            let x = (d * w).abs();
+            if x > best.1 {
+                best = (j, x);
+            }
+        }
+    }
+    best.0
+}
+
 /// [`Plain`] for `n` weights (a constant where the caller can make it
 /// one): one pass; a sum that overflowed, may have underflowed, or is NaN
 /// is measured again by [`scaled_norm`].
