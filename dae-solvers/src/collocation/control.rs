@@ -5,8 +5,8 @@
 use super::step::Integrator;
 use super::tableau::Collocation;
 use super::{FACL, FACR, QUOT1, QUOT2, SAFE};
-use crate::core::attempt::Steps;
 use crate::core::newton::Stall;
+use crate::core::onestep::OneStep;
 
 /// What the step loop does next (RADAU5's labels 10, 20, 30).
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -20,35 +20,20 @@ pub(super) enum Next {
 }
 
 /// RADAU5's controller state (its `FIRST`, `REJECT`, `CALJAC`, `HOLD`,
-/// `HACC`, `ERRACC`, `LAST`) between and within steps.
+/// `HACC`, `ERRACC`, `LAST`) between and within steps: the core's
+/// one-step state ([`OneStep`]: `t`, `h`, `FIRST`, `REJECT`, `LAST`, the
+/// attempt loop's state) and RADAU5's own.
 pub(super) struct Control {
-    /// Time of the last accepted step (`t₀` at first).
-    pub(super) t: f64,
-    /// Rounding error of `t` (compensated summation of the steps).
-    pub(super) t_lo: f64,
-    /// Step size of the next attempt.
-    pub(super) h: f64,
-    /// Constant step size (no error control), if any.
-    pub(super) fixed: Option<f64>,
-    /// The next attempt reaches `t_end`.
-    pub(super) last: bool,
-    /// `t_end` reached.
-    pub(super) done: bool,
-    /// No step accepted yet (`FIRST`).
-    pub(super) first: bool,
-    /// The last attempt was rejected (`REJECT`).
-    pub(super) reject: bool,
+    /// The step point, the steps, the first, last and rejected flags, the
+    /// attempt loop's state.
+    pub(super) one: OneStep,
     /// The Jacobian was evaluated for the current step (`CALJAC`).
     pub(super) caljac: bool,
-    /// Size of the last accepted step.
-    pub(super) h_old: f64,
     /// Size of the previous accepted step, for the predictive controller
     /// (`HACC`).
     pub(super) h_acc: f64,
     /// Its error norm, at least `10⁻²` (`ERRACC`).
     pub(super) err_acc: f64,
-    /// The attempt loop's state: budgets, limits, the end rule.
-    pub(super) steps: Steps,
     /// What the step loop does next.
     pub(super) next: Next,
     /// The quasi-constant step rule of a symmetric method.
@@ -180,7 +165,7 @@ impl Hold {
 impl<K: Collocation> Integrator<'_, K> {
     /// Size of the next step after one accepted with proposal `h_new`, and
     /// whether the factorisation (or the Jacobian) can be kept.
-    pub(super) fn next_step(&mut self, mut h_new: f64) {
+    pub(super) fn next_step(&mut self, h_new: f64) {
         let theta = if K::POLICY.newton.slow_exit() {
             self.newton.theta
         } else {
@@ -189,12 +174,13 @@ impl<K: Collocation> Integrator<'_, K> {
         };
         let small_theta = theta <= K::POLICY.thet;
         let c = &mut self.c;
-        let (t, h) = (c.t, c.h);
-        if let Some(hf) = c.fixed {
-            let (h_next, last) = c.steps.toward_end(t, hf);
-            c.last = last;
+        let one = &mut c.one;
+        let (t, h) = (one.t, one.h);
+        if let Some(hf) = one.fixed {
+            let (h_next, last) = one.steps.toward_end(t, hf);
+            one.last = last;
             let new_h = h_next != h;
-            c.h = h_next;
+            one.h = h_next;
             c.next = match (small_theta, new_h) {
                 (true, false) => Next::Step,
                 (true, true) => Next::Factor,
@@ -202,12 +188,9 @@ impl<K: Collocation> Integrator<'_, K> {
             };
             return;
         }
-        if c.reject {
-            h_new = h_new.min(h);
-        }
-        c.reject = false;
-        let (h_end, last) = c.steps.toward_end(t, h_new);
-        c.last = last;
+        let h_new = one.after_accept(h, h_new);
+        let (h_end, last) = one.steps.toward_end(t, h_new);
+        one.last = last;
         if !last {
             let qt = h_end / h;
             if small_theta && (QUOT1..=QUOT2).contains(&qt) {
@@ -215,7 +198,7 @@ impl<K: Collocation> Integrator<'_, K> {
                 return;
             }
         }
-        c.h = h_end;
+        one.h = h_end;
         c.next = if small_theta {
             Next::Factor
         } else {

@@ -8,12 +8,13 @@ use super::stages::{Newton, Work};
 use super::stagger::rhs_for_error;
 use super::tableau::{dense, Collocation, NewtonStop, StepRule};
 use super::{smallest_tolerance, TIGHT_NEWTON, TIGHT_TOL, UROUND};
-use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
-use crate::core::control::{self, Budget, Failure};
+use crate::core::attempt::{self, Attempts, Outcome, Retry, Steps};
+use crate::core::control::{Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
 use crate::core::newton::{Contraction, Rule, Stall};
-use crate::linalg::{all_finite, two_sum};
+use crate::core::onestep::OneStep;
+use crate::linalg::all_finite;
 use crate::options::Options;
 use crate::{Problem, SolveError, Stats};
 
@@ -27,16 +28,12 @@ const ROUND_OFF: f64 = 1e3;
 pub(super) struct Integrator<'a, K> {
     /// The formulation.
     pub(super) sys: Formulation<'a>,
-    /// The caller's options.
-    pub(super) options: &'a Options,
     /// Unknowns `N`.
     pub(super) n: usize,
     /// Equations `M` (`M = N` unless the stage systems are least squares).
     pub(super) m: usize,
     /// Start of the horizon.
     pub(super) t0: f64,
-    /// End of the horizon.
-    pub(super) t_end: f64,
     /// `E` does not depend on `y`.
     pub(super) constant_leading: bool,
     /// Every buffer of the step loop.
@@ -65,7 +62,7 @@ pub(super) struct Integrator<'a, K> {
 
 impl<K: Collocation> Method for Integrator<'_, K> {
     fn t(&self) -> f64 {
-        self.c.t
+        self.c.one.t
     }
     fn y(&self) -> &[f64] {
         &self.w.y
@@ -74,9 +71,9 @@ impl<K: Collocation> Method for Integrator<'_, K> {
         dense::<K>(
             self.n,
             &self.w.cont,
-            tau - self.c.t_lo,
-            self.c.t,
-            self.c.h_old,
+            tau - self.c.one.t_lo,
+            self.c.one.t,
+            self.c.one.h_old,
             out,
         )
     }
@@ -91,7 +88,7 @@ impl<K: Collocation> Method for Integrator<'_, K> {
         3
     }
     fn finished(&self) -> bool {
-        self.c.done
+        self.c.one.done
     }
     fn step(&mut self) -> Result<(), SolveError> {
         attempt::step(self)
@@ -105,21 +102,21 @@ impl<K: Collocation> Method for Integrator<'_, K> {
 
 impl<K: Collocation> Attempts for Integrator<'_, K> {
     fn steps(&mut self) -> &mut Steps {
-        &mut self.c.steps
+        &mut self.c.one.steps
     }
     fn stats_mut(&mut self) -> &mut Stats {
         &mut self.stats
     }
     fn point(&self) -> (f64, f64) {
-        (self.c.t, self.c.h)
+        (self.c.one.t, self.c.one.h)
     }
     fn set_step(&mut self, h: f64, last: bool) {
         let c = &mut self.c;
-        if h != c.h && c.next == Next::Step {
+        if h != c.one.h && c.next == Next::Step {
             c.next = Next::Factor;
         }
-        c.h = h;
-        c.last = last;
+        c.one.h = h;
+        c.one.last = last;
     }
     fn attempt(&mut self) -> Result<Outcome, SolveError> {
         Integrator::attempt(self)
@@ -225,11 +222,9 @@ impl<'a, K: Collocation> Integrator<'a, K> {
         }
         Integrator {
             sys: sys.clone(),
-            options,
             n,
             m,
             t0: problem.t0,
-            t_end: problem.t_end,
             constant_leading: info.constant_leading,
             compensated,
             method: std::marker::PhantomData,
@@ -240,26 +235,13 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             stats: Stats::default(),
             newton,
             c: Control {
-                t: problem.t0,
-                t_lo: 0.0,
-                h: 0.0,
-                fixed: options.fixed_step,
-                last: false,
-                done: false,
-                first: true,
-                reject: false,
+                one: OneStep {
+                    compensated,
+                    ..OneStep::new(problem, options, 1.0)
+                },
                 caljac: false,
-                h_old: 0.0,
                 h_acc: 0.0,
                 err_acc: 1e-2,
-                steps: Steps::new(
-                    Policy::HALVE,
-                    options.max_steps,
-                    problem.t_end,
-                    span,
-                    options.h_max.unwrap_or(span).min(span),
-                    options.fixed_step.is_some(),
-                ),
                 next: Next::Jacobian,
                 hold: Hold::default(),
                 stall: Stall::default(),
@@ -297,27 +279,21 @@ impl<'a, K: Collocation> Integrator<'a, K> {
 
     /// Evaluate at `t₀` and choose the first step.
     pub(super) fn start(&mut self) -> Result<(), SolveError> {
-        let (t0, t_end) = (self.t0, self.t_end);
-        let span = t_end - t0;
+        let t0 = self.t0;
         self.evaluate_at_step_point(t0, true)?;
         let sys = self.sys.clone();
         self.find_algebraic_rows(sys.info())?;
         let c = &mut self.c;
-        c.h = match c.fixed {
-            Some(hf) => hf,
-            None => control::first_step(self.options.h0, c.steps.h_max, t0, span),
-        };
-        (c.h, c.last) = c.steps.toward_end(t0, c.h);
-        c.h_old = c.h;
-        c.h_acc = c.h;
+        (c.one.h, c.one.last) = c.one.steps.toward_end(t0, c.one.h);
+        c.one.h_old = c.one.h;
+        c.h_acc = c.one.h;
         Ok(())
     }
 
-    /// One attempt from `c.t` with `c.h` (RADAU5's loop from label 10 to
+    /// One attempt from `c.one.t` with `c.one.h` (RADAU5's loop from label 10 to
     /// the acceptance of a step); when accepted, the size of the next one.
     fn attempt(&mut self) -> Result<Outcome, SolveError> {
-        let t_end = self.t_end;
-        let (t, h, fixed) = (self.c.t, self.c.h, self.c.fixed);
+        let (t, h, fixed) = (self.c.one.t, self.c.one.h, self.c.one.fixed);
         if self.c.next == Next::Jacobian {
             self.jacobian(t)?;
             self.c.caljac = true;
@@ -326,20 +302,16 @@ impl<'a, K: Collocation> Integrator<'a, K> {
         if self.c.next == Next::Factor {
             if self.factor(h).is_err() {
                 let c = &mut self.c;
-                c.reject = true;
+                c.one.reject = true;
                 c.next = c.after_failure();
-                return Ok(Outcome::Failed {
-                    failure: Failure::Singular,
-                    retry: Retry::Policy,
-                    iterations: 0,
-                });
+                return Ok(Outcome::failed(Failure::Singular, 0));
             }
             self.stats.factorizations += 1;
         }
 
         // ---- one step attempt from t with h ----
         self.w.weights.update_scaled(&self.w.y, h);
-        self.starting_values(self.c.first, h / self.c.h_old);
+        self.starting_values(self.c.one.first, h / self.c.one.h_old);
 
         let outcome = self.newton(t, h, fixed.is_none());
         let newt = match outcome {
@@ -361,7 +333,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
         let mut non_finite = matches!(outcome, Newton::NonFinite(_));
         let mut retry = retry;
         if retry.is_none() && fixed.is_none() {
-            err = self.error_norm(t, h, self.c.first || self.c.reject);
+            err = self.error_norm(t, h, self.c.one.first || self.c.one.reject);
             if err.is_finite() {
                 h_new = h / classical_quotient(err, newt, K::POLICY.max_newton);
             } else {
@@ -398,7 +370,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
                 if matches!(K::POLICY.step, StepRule::Held) {
                     c.hold.rejected();
                 }
-                c.reject = true;
+                c.one.reject = true;
                 c.next = c.after_failure();
             }
             return Ok(Outcome::Failed {
@@ -411,8 +383,8 @@ impl<'a, K: Collocation> Integrator<'a, K> {
         c.stall.converged(|| self.newton.stagnant(), h);
         if err >= 1.0 {
             // ---- rejected by the error test ----
-            c.reject = true;
-            let h = if c.first { 0.1 * h } else { h_new };
+            c.one.reject = true;
+            let h = if c.one.first { 0.1 * h } else { h_new };
             if matches!(K::POLICY.step, StepRule::Held) {
                 c.hold.rejected();
             }
@@ -432,19 +404,11 @@ impl<'a, K: Collocation> Integrator<'a, K> {
                 h_new = c.hold.accepted(h, err, h_new);
             }
         }
-        c.first = false;
-        if c.last {
-            (c.t, c.t_lo) = (t_end, 0.0);
-        } else if self.compensated {
-            (c.t, c.t_lo) = two_sum(t, h + c.t_lo);
-        } else {
-            c.t = t + h;
-        }
-        c.h_old = h;
+        c.one.accept(h);
         c.caljac = false;
         self.advance(h);
         self.stats.steps += 1;
-        let t = self.c.t;
+        let t = self.c.one.t;
         if !all_finite(&self.w.y) {
             return Err(SolveError::NonFinite {
                 t,
@@ -468,7 +432,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             for _ in 0..PROJECTION_STEPS {
                 let (again, size) = self.project(t, h)?;
                 let converged = size <= self.newton_floor;
-                if !again || (converged && self.c.last) {
+                if !again || (converged && self.c.one.last) {
                     break;
                 }
                 self.evaluate_at_step_point(t, false)?;
@@ -477,8 +441,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
                 }
             }
         }
-        if self.c.last {
-            self.c.done = true;
+        if self.c.one.done {
             return Ok(Outcome::Accepted);
         }
         if !K::TABLEAU.end.projected() {

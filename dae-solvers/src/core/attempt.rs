@@ -52,6 +52,19 @@ pub(crate) enum Outcome {
     },
 }
 
+impl Outcome {
+    /// Failed before the error test with `failure` after `iterations`
+    /// Newton iterations, retried with the step shortened by the policy's
+    /// factor for it ([`Retry::Policy`]).
+    pub(crate) fn failed(failure: Failure, iterations: usize) -> Self {
+        Outcome::Failed {
+            failure,
+            retry: Retry::Policy,
+            iterations,
+        }
+    }
+}
+
 /// How to retry after a failure before the error test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Retry {

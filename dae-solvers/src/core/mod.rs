@@ -19,6 +19,9 @@
 //!   (`attempt::Attempts`) and says how it ended; the retries, the shrink
 //!   factors of its policy, the budgets, the smallest step and the one
 //!   end-of-horizon rule are there.
+//! - `onestep`: the state a one-step method carries between its attempts
+//!   (step point, steps, first/last/rejected, the loop's state), shared by
+//!   the collocation engine and idec.
 //! - `lagrange`: the Lagrange polynomial on equally spaced nodes of a
 //!   step (its derivative at the nodes, its value anywhere).
 //! - `output`: the output grid (one rule for `t0`, `t_end` and the times
@@ -52,6 +55,7 @@ pub mod events;
 pub(crate) mod lagrange;
 pub(crate) mod matrix;
 pub(crate) mod newton;
+pub(crate) mod onestep;
 pub(crate) mod output;
 pub mod policy;
 pub(crate) mod shifted;

@@ -9,7 +9,7 @@
 use super::control::Failure;
 use super::matrix::{Corrector, Rows, SquareLu};
 use crate::linalg::all_finite;
-use crate::Stats;
+use crate::{SolveError, Stats};
 use dae_core::system::DaeSystem;
 use nalgebra::DMatrix;
 
@@ -36,6 +36,40 @@ impl Shifted {
             jac: DMatrix::zeros(n, n),
             lu: SquareLu::new(n, n),
             factored: None,
+        }
+    }
+
+    /// `E` at `(t, y)`, once (it is constant); a non-finite entry is
+    /// [`SolveError::NonFinite`] naming the leading matrix.
+    pub(crate) fn leading(
+        &mut self,
+        sys: &dyn DaeSystem,
+        t: f64,
+        y: &[f64],
+    ) -> Result<(), SolveError> {
+        sys.leading(t, y, &mut self.lead);
+        if !all_finite(self.lead.as_slice()) {
+            return Err(SolveError::NonFinite {
+                t,
+                what: "leading matrix",
+            });
+        }
+        Ok(())
+    }
+
+    /// [`Shifted::jacobian`], a non-finite entry the failure naming the
+    /// Jacobian.
+    pub(crate) fn checked_jacobian(
+        &mut self,
+        sys: &dyn DaeSystem,
+        stats: &mut Stats,
+        t: f64,
+        y: &[f64],
+    ) -> Result<(), Failure> {
+        if self.jacobian(sys, stats, t, y) {
+            Ok(())
+        } else {
+            Err(Failure::NonFinite("Jacobian"))
         }
     }
 

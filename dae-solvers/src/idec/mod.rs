@@ -94,9 +94,10 @@
 //! correction reached a round-off floor (about 1e-8, growing like `1/h`
 //! with the number of steps) before its order 4 showed; with the
 //! compensated sums it falls to 1e-12 and below (docs/bench_idec.md §5).
-//! The interval ends are `t₀ + n m h`, not a running sum: summed over
-//! 10⁵ intervals the drift made the last interval look shorter than
-//! `m h`, which restarted every level from the best value there.
+//! The interval ends are summed with compensation (`core::onestep`, as
+//! the collocation engine's steps at tight tolerances; before, `t₀ + n m h`):
+//! a plain sum over 10⁵ intervals drifted until the last interval looked
+//! shorter than `m h`, which restarted every level from the best value there.
 //!
 //! # Variable steps (the default)
 //!

@@ -4,11 +4,13 @@
 
 use super::sweep::Sweep;
 use super::{Idec, FAC, RATIO_MAX, RATIO_MIN};
-use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
-use crate::core::control::{self, Failure};
+use crate::core::attempt::{self, Attempts, Outcome, Steps};
+use crate::core::control::{Budget, Failure};
 use crate::core::driver::Method;
 use crate::core::eliminate::Formulation;
+use crate::core::onestep::OneStep;
 use crate::core::weights::Weights;
+use crate::linalg::small;
 use crate::{Options, Problem, SolveError, Stats};
 
 /// State of one IDeC integration.
@@ -18,51 +20,39 @@ pub(super) struct Integrator<'a> {
     n: usize,
     m: usize,
     corrections: usize,
-    t0: f64,
-    t_end: f64,
     /// The interval workspace.
     pub(super) sweep: Sweep,
     weights: Weights,
     stats: Stats,
-    /// The attempt loop's state (its steps are intervals of `m` Euler
-    /// steps).
-    steps: Steps,
-    /// Constant Euler step, if any.
-    fixed: Option<f64>,
-    /// Intervals of the constant step accepted so far: their end is
-    /// `t₀ + count · m h`, not a running sum (which drifts by round-off
-    /// over the 10⁵ intervals of a long run and then makes the last
-    /// interval look shorter than `m h`, a restart).
-    fixed_count: u64,
-    /// End of the last accepted interval and the best value there.
-    t: f64,
-    y: Vec<f64>,
+    /// The step point and the attempt loop's state; its steps are
+    /// intervals of `m` Euler steps, its constant steps summed with
+    /// compensation (over the 10⁵ intervals of a long run a plain sum
+    /// drifts and makes the last interval look shorter than `m h`, a
+    /// restart).
+    one: OneStep,
     /// Euler step of the next attempt.
     h: f64,
-    /// Start and Euler step of the last accepted interval, and the best
-    /// level at its nodes (dense output).
+    /// The best value at the end of the last accepted interval.
+    y: Vec<f64>,
+    /// Start of the last accepted interval, and the best level at its
+    /// nodes (dense output).
     t_prev: f64,
-    h_prev: f64,
     dense_nodes: Vec<f64>,
     /// Scratch for the error estimate.
     diff: Vec<f64>,
-    /// The next interval reaches `t_end`; `t_end` reached; the Jacobian
-    /// at `t` is evaluated; the last attempt was rejected.
-    last: bool,
-    done: bool,
+    /// The Jacobian for the next attempt is evaluated.
     have_jacobian: bool,
-    reject: bool,
 }
 
 impl Method for Integrator<'_> {
     fn t(&self) -> f64 {
-        self.t
+        self.one.t
     }
     fn y(&self) -> &[f64] {
         &self.y
     }
     fn dense(&self, tau: f64, out: &mut [f64]) {
-        let theta = (tau - self.t_prev) / self.h_prev;
+        let theta = (tau - self.t_prev) / (self.one.h_old / self.m as f64);
         let n = self.n;
         let nodes = |l: usize| &self.dense_nodes[l * n..(l + 1) * n];
         self.sweep.nodes.evaluate(theta, nodes, out);
@@ -71,7 +61,7 @@ impl Method for Integrator<'_> {
         self.m
     }
     fn finished(&self) -> bool {
-        self.done
+        self.one.done
     }
     fn step(&mut self) -> Result<(), SolveError> {
         attempt::step(self)
@@ -83,31 +73,96 @@ impl Method for Integrator<'_> {
 
 impl Attempts for Integrator<'_> {
     fn steps(&mut self) -> &mut Steps {
-        &mut self.steps
+        &mut self.one.steps
     }
     fn stats_mut(&mut self) -> &mut Stats {
         &mut self.stats
     }
     /// The interval `m h` is the loop's step.
     fn point(&self) -> (f64, f64) {
-        (self.t, self.m as f64 * self.h)
+        (self.one.t, self.one.h)
     }
     fn set_step(&mut self, interval: f64, last: bool) {
         // An interval that differs from the current one by round-off only
         // (the last, brought to `t_end`) keeps its step: a constant step
         // keeps its factorisation and carries its levels over.
-        let round_off = 100.0 * f64::EPSILON * self.t.abs().max(self.t_end.abs());
-        let lands = last && (interval - self.m as f64 * self.h).abs() <= round_off;
-        if !lands {
-            self.h = interval / self.m as f64;
+        let one = &mut self.one;
+        let round_off = 100.0 * f64::EPSILON * one.t.abs().max(one.steps.t_end.abs());
+        if !last || (interval - self.m as f64 * self.h).abs() > round_off {
+            let h = interval / self.m as f64;
+            if one.fixed.is_some() && h != self.h {
+                // A shorter last interval of constant steps: the levels
+                // carried over hold the error expansion of the old step,
+                // which a new step would mix with its own (the index-2
+                // unknowns go wrong by O(1)); it starts afresh from the
+                // best value instead.
+                self.sweep.restart_at(&self.y);
+                self.have_jacobian = false;
+            }
+            (one.h, self.h) = (interval, h);
         }
-        self.last = last;
+        one.last = last;
     }
+    /// Constant steps: the seed's scheme, the Jacobian evaluated once at
+    /// `t₀`, every level and neighbouring problem carried from interval to
+    /// interval. Error control: the Jacobian at the start of each
+    /// interval, every level started from the accepted value, the
+    /// difference of the last two corrections at the end of the interval as
+    /// error estimate.
     fn attempt(&mut self) -> Result<Outcome, SolveError> {
-        match self.fixed {
-            Some(_) => self.attempt_fixed(),
-            None => self.attempt_adaptive(),
+        let (t, h, fixed) = (self.one.t, self.h, self.one.fixed.is_some());
+        if !self.have_jacobian {
+            let matrix = &mut self.sweep.matrix;
+            (matrix.checked_jacobian(&*self.sys, &mut self.stats, t, &self.y))
+                .map_err(|failure| Budget::error(failure, t, h, 0))?;
+            self.have_jacobian = true;
         }
+        if !fixed {
+            self.sweep.restart_at(&self.y);
+        }
+        let outcome = (self.sweep.matrix.factor(1.0, h, &mut self.stats))
+            .and_then(|_| self.sweep.run(&*self.sys, &mut self.stats, t, h));
+        let err = match outcome {
+            Ok(()) if fixed => 0.0,
+            Ok(()) => self.error_norm(h),
+            Err(_) => f64::NAN,
+        };
+        if !err.is_finite() {
+            self.one.reject = true;
+            let failure = outcome.err().unwrap_or(Failure::NonFinite("solution"));
+            return Ok(Outcome::failed(failure, 0));
+        }
+        let order = self.corrections.min(self.m) as f64;
+        let ratio = if err == 0.0 {
+            RATIO_MAX
+        } else {
+            (FAC * err.powf(-1.0 / (order + 1.0))).clamp(RATIO_MIN, RATIO_MAX)
+        };
+        let m = self.m as f64;
+        if err > 1.0 {
+            self.one.reject = true;
+            return Ok(Outcome::ErrorTest { h: m * h * ratio });
+        }
+        // Accepted: the best level is the solution, its nodes the dense
+        // output.
+        self.stats.steps += self.m;
+        self.t_prev = t;
+        let best = self.corrections;
+        for k in 0..=self.m {
+            let dst = &mut self.dense_nodes[k * self.n..(k + 1) * self.n];
+            dst.copy_from_slice(self.sweep.node(best, k));
+        }
+        self.y.copy_from_slice(self.sweep.node(best, self.m));
+        self.one.accept(self.one.h);
+        if fixed {
+            self.sweep.carry_over();
+        } else if !self.one.done {
+            let h_next = self.one.after_accept(h, h * ratio);
+            self.have_jacobian = false;
+            self.h = h_next.min(self.one.steps.h_max / m);
+            self.one.h = m * self.h;
+        }
+        Ok(Outcome::Accepted)
     }
 }
 
@@ -123,184 +178,34 @@ impl<'a> Integrator<'a> {
         let info = sys.info();
         let n = info.unknowns();
         let (m, corrections) = (idec.m, idec.j);
-        let span = problem.t_end - problem.t0;
-        let mut sweep = Sweep::new(info, corrections, m);
+        let fixed = options.fixed_step.is_some();
+        let mut sweep = Sweep::new(info, corrections, m, fixed);
         // `E` is constant in `t` and `y` (`eliminate::constant_leading`):
         // evaluated once, at the start.
-        sys.leading(problem.t0, problem.y0, &mut sweep.matrix.lead);
-        if sweep.matrix.lead.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFinite {
-                t: problem.t0,
-                what: "leading matrix",
-            });
-        }
+        sweep.matrix.leading(&*sys, problem.t0, problem.y0)?;
         sweep.restart_at(problem.y0);
-        // Constant steps carry every level over the whole horizon: its
-        // running sums are compensated (`Sweep::compensated`).
-        sweep.compensated = options.fixed_step.is_some();
-        // Error control samples the defect at the end of each Euler step
-        // (module documentation, "Variable steps").
-        sweep.at_end = options.fixed_step.is_none();
         // Error control takes index 1 only: no index scaling.
         let weights = Weights::new(&options.tol, |_| 1.0, vec![true; n], vec![0; n]);
-        let h_max = options.h_max.unwrap_or(span).min(span / m as f64);
-        let steps = Steps::new(
-            Policy::HALVE,
-            options.max_steps,
-            problem.t_end,
-            span,
-            m as f64 * h_max,
-            options.fixed_step.is_some(),
-        );
-        let h = match options.fixed_step {
-            Some(h) => h,
-            None => control::first_step(options.h0, h_max, problem.t0, span),
+        let one = OneStep {
+            compensated: fixed,
+            ..OneStep::new(problem, options, m as f64)
         };
         Ok(Integrator {
             sys: sys.clone(),
             n,
             m,
             corrections,
-            t0: problem.t0,
-            t_end: problem.t_end,
             sweep,
             weights,
             stats: Stats::default(),
-            steps,
-            fixed: options.fixed_step,
-            fixed_count: 0,
-            t: problem.t0,
+            h: one.h / m as f64,
+            one,
             y: problem.y0.to_vec(),
-            h,
             t_prev: problem.t0,
-            h_prev: h,
             dense_nodes: vec![0.0; (m + 1) * n],
             diff: vec![0.0; n],
-            last: false,
-            done: false,
             have_jacobian: false,
-            reject: false,
         })
-    }
-
-    /// `J = ∂f/∂y` at `(t, y)`, counted.
-    fn jacobian(&mut self, t: f64) -> Result<(), SolveError> {
-        let matrix = &mut self.sweep.matrix;
-        if matrix.jacobian(&*self.sys, &mut self.stats, t, &self.y) {
-            Ok(())
-        } else {
-            Err(SolveError::NonFinite {
-                t,
-                what: "Jacobian",
-            })
-        }
-    }
-
-    /// Factorise `E − hJ` (unless it is for this `h` and Jacobian) and run
-    /// one interval from `t`.
-    fn interval(&mut self, t: f64, h: f64) -> Result<(), Failure> {
-        self.sweep.factor(&mut self.stats, h)?;
-        self.sweep.run(&*self.sys, &mut self.stats, t, h)
-    }
-
-    /// Record the interval just computed as accepted.
-    fn accept(&mut self, t: f64, h: f64) {
-        self.stats.steps += self.m;
-        self.t_prev = t;
-        self.h_prev = h;
-        let best = self.corrections;
-        for k in 0..=self.m {
-            let dst = &mut self.dense_nodes[k * self.n..(k + 1) * self.n];
-            dst.copy_from_slice(self.sweep.node(best, k));
-        }
-        self.y.copy_from_slice(self.sweep.node(best, self.m));
-        self.t = if self.last {
-            self.t_end
-        } else if self.fixed == Some(h) {
-            self.fixed_count += 1;
-            self.t0 + self.fixed_count as f64 * self.m as f64 * h
-        } else {
-            t + self.m as f64 * h
-        };
-        self.done = self.last;
-    }
-
-    /// Constant steps: the seed's scheme, the Jacobian evaluated once at
-    /// `t₀`, every level and neighbouring problem carried from interval to
-    /// interval.
-    fn attempt_fixed(&mut self) -> Result<Outcome, SolveError> {
-        let (t, h) = (self.t, self.h);
-        if !self.have_jacobian {
-            self.jacobian(t)?;
-            self.have_jacobian = true;
-        }
-        if let Err(failure) = self.interval(t, h) {
-            return Ok(Outcome::Failed {
-                failure,
-                retry: Retry::Policy,
-                iterations: 0,
-            });
-        }
-        self.accept(t, h);
-        if !self.done {
-            let (interval, last) = self.steps.toward_end(self.t, self.m as f64 * h);
-            self.set_step(interval, last);
-        }
-        if self.h == h {
-            self.sweep.carry_over();
-        } else {
-            // A shorter last interval: the levels carried over hold the
-            // error expansion of the old step, which a new step would mix
-            // with its own (the index-2 unknowns go wrong by O(1)); it
-            // starts afresh from the best value instead.
-            self.sweep.restart_at(&self.y);
-            self.have_jacobian = false;
-        }
-        Ok(Outcome::Accepted)
-    }
-
-    /// Error control: the Jacobian at the start of each interval, every
-    /// level started from the accepted value, the difference of the last
-    /// two corrections at the end of the interval as error estimate.
-    fn attempt_adaptive(&mut self) -> Result<Outcome, SolveError> {
-        let order = self.corrections.min(self.m) as f64;
-        let (t, h) = (self.t, self.h);
-        if !self.have_jacobian {
-            self.jacobian(t)?;
-            self.have_jacobian = true;
-        }
-        self.sweep.restart_at(&self.y);
-        let outcome = self.interval(t, h);
-        let err = match outcome {
-            Ok(()) => self.error_norm(h),
-            Err(_) => f64::NAN,
-        };
-        if !err.is_finite() {
-            self.reject = true;
-            return Ok(Outcome::Failed {
-                failure: outcome.err().unwrap_or(Failure::NonFinite("solution")),
-                retry: Retry::Policy,
-                iterations: 0,
-            });
-        }
-        let ratio = if err == 0.0 {
-            RATIO_MAX
-        } else {
-            (FAC * err.powf(-1.0 / (order + 1.0))).clamp(RATIO_MIN, RATIO_MAX)
-        };
-        let m = self.m as f64;
-        if err > 1.0 {
-            self.reject = true;
-            return Ok(Outcome::ErrorTest { h: m * h * ratio });
-        }
-        self.accept(t, h);
-        if !self.done {
-            let ratio = if self.reject { ratio.min(1.0) } else { ratio };
-            self.reject = false;
-            self.have_jacobian = false;
-            self.h = (h * ratio).min(self.steps.h_max / m);
-        }
-        Ok(Outcome::Accepted)
     }
 
     /// `‖η^[J] − η^[J−1]‖` at the end of the interval, weighted at the
@@ -311,9 +216,7 @@ impl<'a> Integrator<'a> {
         // core's.
         self.weights.update_scaled(&self.y, m as f64 * h);
         let (best, prev) = (self.sweep.node(jj, m), self.sweep.node(jj - 1, m));
-        for ((d, a), b) in self.diff[..n].iter_mut().zip(best).zip(prev) {
-            *d = a - b;
-        }
+        small::difference(&mut self.diff[..n], best, prev);
         self.weights.norm(&self.diff)
     }
 

@@ -69,18 +69,22 @@ pub(super) struct Sweep {
     /// constant-step scheme, whose levels run over the whole horizon. Off
     /// with error control, where every interval restarts from the accepted
     /// value after `m` steps (its results are those of plain sums).
-    pub(super) compensated: bool,
+    compensated: bool,
     /// Evaluate `f` of each Euler step at the step's end time and sample
     /// the defect at the step's end node (error control), instead of both
     /// at its start (the seed's scheme): the corrections then tend to
     /// collocation at the nodes `1 … m`, stiffly accurate, not at `0 …
     /// m − 1` (module documentation, "Variable steps").
-    pub(super) at_end: bool,
+    at_end: bool,
 }
 
 impl Sweep {
-    /// Buffers for `info` with `corrections` corrections and degree `m`.
-    pub(super) fn new(info: &FormulationInfo, corrections: usize, m: usize) -> Self {
+    /// Buffers for `info` with `corrections` corrections and degree `m`,
+    /// for constant steps (`fixed`: the running sums compensated, since
+    /// every level runs over the whole horizon) or error control (the
+    /// defect sampled at the end of each Euler step, module documentation,
+    /// "Variable steps").
+    pub(super) fn new(info: &FormulationInfo, corrections: usize, m: usize, fixed: bool) -> Self {
         let n = info.unknowns();
         Sweep {
             n,
@@ -103,8 +107,8 @@ impl Sweep {
             rhs: vec![0.0; n],
             matrix: Shifted::new(n),
             every_step: false,
-            compensated: false,
-            at_end: false,
+            compensated: fixed,
+            at_end: !fixed,
         }
     }
 
@@ -143,28 +147,9 @@ impl Sweep {
         self.np_start_lo.copy_from_slice(&self.np_end_lo);
     }
 
-    /// Factorise `E − h J` (unless it is for this `h` and `J`), counted.
-    pub(super) fn factor(&mut self, stats: &mut Stats, h: f64) -> Result<(), Failure> {
-        self.matrix.factor(1.0, h, stats).map(|_| ())
-    }
-
-    /// `J` at `(t, y)` and `E − hJ` factorised, both counted
-    /// ([`Sweep::every_step`]).
-    fn step_matrix(
-        matrix: &mut Shifted,
-        sys: &dyn DaeSystem,
-        stats: &mut Stats,
-        (t, y, h): (f64, &[f64], f64),
-    ) -> Result<(), Failure> {
-        if !matrix.jacobian(sys, stats, t, y) {
-            return Err(Failure::NonFinite("Jacobian"));
-        }
-        matrix.factor(1.0, h, stats).map(|_| ())
-    }
-
-    /// One interval of `m` Euler steps of size `h` from `t`, with the
-    /// factorisation of [`Sweep::factor`] for this `h`: every level `η^[l]`
-    /// at the `m + 1` nodes, from [`Sweep::start`] and
+    /// One interval of `m` Euler steps of size `h` from `t`, with `E − hJ`
+    /// factorised for this `h` (or, [`Sweep::every_step`], at each step):
+    /// every level `η^[l]` at the `m + 1` nodes, from [`Sweep::start`] and
     /// [`Sweep::np_start`]; `π^[j]` at the end into [`Sweep::np_end`].
     pub(super) fn run(
         &mut self,
@@ -186,7 +171,8 @@ impl Sweep {
             let (done, next) = self.eta.split_at_mut((k + 1) * n);
             let eta_k = &done[k * n..];
             if self.every_step {
-                Self::step_matrix(&mut self.matrix, sys, stats, (tk, eta_k, h))?;
+                self.matrix.checked_jacobian(sys, stats, tk, eta_k)?;
+                self.matrix.factor(1.0, h, stats)?;
             }
             let f_k = &mut self.f_eta[k * n..(k + 1) * n];
             let tf = if self.at_end { tk + h } else { tk };
@@ -256,7 +242,8 @@ impl Sweep {
                 mat_vec(&self.matrix.lead, &self.dp, &mut self.edp);
                 eval::rhs(sys, stats, tf, &self.pi, &mut self.f)?;
                 if self.every_step {
-                    Self::step_matrix(&mut self.matrix, sys, stats, (tk, &self.pi, h))?;
+                    self.matrix.checked_jacobian(sys, stats, tk, &self.pi)?;
+                    self.matrix.factor(1.0, h, stats)?;
                 }
                 let f_k = &self.f_eta[k * n..(k + 1) * n];
                 for (i, r) in self.rhs.iter_mut().enumerate() {
