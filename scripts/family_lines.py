@@ -35,13 +35,11 @@ ENGINES = ["core", "collocation", "multistep", "linalg"]
 BOUND = 500
 # Families above the bound and the code lines they have (branch fold10,
 # BENCHMARKS.md §12g): not to grow; lower each entry as code moves out, and
-# drop it at 500. mebdf 615 -> 625 in session 10's merge of lit10: its
-# typed stop for a walk down the round-off floor (the walk itself is
-# core::newton::FloorWalk; the ten lines are mebdf's call and state). idec
-# dropped in session 11 (branch idec11, BENCHMARKS.md §12h): 592 -> 496
-# with the one-step state core::onestep::OneStep shared with the
-# collocation engine.
-OVER = {"mebdf": 625}
+# drop it at 500. Session 11 dropped both: idec 592 -> 496 (branch
+# idec11, BENCHMARKS.md §12h: the one-step state core::onestep::OneStep
+# shared with the collocation engine) and mebdf 625 -> 497 (branch mebdf11,
+# BENCHMARKS.md §12i).
+OVER: dict = {}
 
 
 def strip_code(line):

@@ -370,7 +370,7 @@ fn andrews_rcd0_at_the_newton_round_off_floor() {
 /// order-one error estimate then stayed at 2.48 for every step from 1e-6
 /// down to 3e-17 and the run stopped (`step_size_too_small` at t = 0.021).
 /// mebdf now restarts from its order-one attempt once the estimate stops
-/// falling with the step (`mebdf::step`, `restart`). And at 1e-9, where
+/// falling with the step (`multistep::stale`, `restart`). And at 1e-9, where
 /// its Newton iteration meets the arithmetic's floor.
 #[test]
 fn mebdf_restarts_when_its_estimate_stops_falling_with_the_step() {

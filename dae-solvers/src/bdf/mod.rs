@@ -122,7 +122,7 @@ mod step;
 use crate::core::block::Block;
 use crate::core::matrix::{Corrector, SquareLu};
 use crate::core::policy;
-use crate::multistep::run::{self, Orders, Setup};
+use crate::multistep::run::{self, Orders};
 use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 use step::Integrator;
@@ -195,14 +195,12 @@ pub(crate) fn integrator<'a, L: Corrector + 'a>(
     let mut in_test = policy::bdf_error_test(info, options);
     crate::core::block::restrict_error_test(&mut in_test, sys.blocks());
 
-    let setup = Setup::new(&*sys, problem, options)?;
     let orders = Orders {
         of_option: |k| k,
         formula_steps: |k| k,
         startup: MAX_ORDER,
     };
-    let method = run::integrate(setup, orders, move |cfg| {
-        Integrator::<L>::new(sys.clone(), &options.tol, &in_test, cfg)
-    })?;
-    Ok(crate::Integrator::new(method, problem, options))
+    run::integrator(sys, problem, options, orders, move |sys, cfg| {
+        Integrator::<L>::new(sys, &options.tol, &in_test, cfg)
+    })
 }

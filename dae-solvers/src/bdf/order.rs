@@ -3,6 +3,7 @@
 //! order and step size proposed after an accepted step.
 
 use super::step::Integrator;
+use crate::core::control;
 use crate::core::matrix::Corrector;
 use crate::linalg::small;
 
@@ -33,7 +34,7 @@ impl<L: Corrector> Integrator<'_, L> {
         let erk = self.hist.sigma[k] * enorm;
         let terk = (k + 1) as f64 * erk;
         let mut test = ErrorTest {
-            err: self.ck * enorm,
+            err: control::error_norm(self.ck * enorm),
             est: erk,
             knew: k,
             terk,
@@ -58,9 +59,6 @@ impl<L: Corrector> Integrator<'_, L> {
                 test.knew = k - 1;
                 test.est = erkm1;
             }
-        }
-        if test.err.is_nan() {
-            test.err = f64::INFINITY;
         }
         test
     }

@@ -5,7 +5,7 @@
 
 use super::corrector::Convergence;
 use super::NCOL;
-use crate::core::attempt::{Outcome, Policy, Retry};
+use crate::core::attempt::{Outcome, Policy};
 use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, JacState, Matrix, Rows, Structure};
 use crate::core::weights::Weights;
@@ -166,13 +166,8 @@ impl<'a, L: Corrector> Integrator<'a, L> {
         // Block 6: the step failed.
         self.ms.t = t_old;
         self.hist.restore(self.ms.h, self.k);
-        self.ms.ramp = false;
         match failure {
-            Ok(failure) => Outcome::Failed {
-                failure,
-                retry: Retry::Policy,
-                iterations: self.ms.last_iterations,
-            },
+            Ok(failure) => self.ms.failed(failure),
             Err(test) => {
                 let nef = self.ms.error_test_failed();
                 let h = if nef >= FALL_BACK_AFTER {

@@ -31,6 +31,17 @@ pub(crate) fn first_step(h0: Option<f64>, h_max: f64, t0: f64, span: f64) -> f64
         .max(100.0 * h_min(t0, span))
 }
 
+/// An error norm as an error test takes it: a NaN (a NaN in the solution
+/// or in its estimate) rejects the attempt as an infinite norm does, since
+/// every comparison with a NaN is false. bdf's and mebdf's error tests.
+pub(crate) fn error_norm(err: f64) -> f64 {
+    if err.is_nan() {
+        f64::INFINITY
+    } else {
+        err
+    }
+}
+
 /// Newton failures tolerated on one step.
 pub(crate) const MAX_NEWTON_FAILURES: usize = 10;
 /// Singular iteration matrices tolerated on one step.

@@ -25,6 +25,7 @@ pub(super) const MAX_ORDER: usize = 8;
 const MAX_K: usize = MAX_ORDER;
 
 /// The coefficients of every step number (index `k`, 1 … [`MAX_K`]).
+#[derive(Default)]
 pub(super) struct Coefficients {
     /// `α_j` of BDF-`k` (`α_0 = 1` at index 0).
     pub(super) bdf_alpha: [[f64; MAX_K + 1]; MAX_K + 1],
@@ -82,14 +83,7 @@ fn solve_small(a: &mut [[f64; MAX_K + 2]; MAX_K + 2], b: &mut [f64; MAX_K + 2], 
 impl Coefficients {
     /// Solve the order conditions of every formula.
     pub(super) fn new() -> Self {
-        let mut c = Coefficients {
-            bdf_alpha: [[0.0; MAX_K + 1]; MAX_K + 1],
-            bdf_beta: [0.0; MAX_K + 1],
-            ebdf_a: [[0.0; MAX_K + 1]; MAX_K + 1],
-            ebdf_b0: [0.0; MAX_K + 1],
-            ebdf_b1: [0.0; MAX_K + 1],
-            error_constant: [0.0; MAX_K + 2],
-        };
+        let mut c = Coefficients::default();
         for k in 1..=MAX_K {
             // BDF-k in backward differences (exact, no linear solve):
             // Σ_{i=1}^{k} ∇^i y_{n+1}/i = h y'_{n+1}, ∇^i y_{n+1} =

@@ -22,6 +22,7 @@
 
 use super::coeffs::MAX_ORDER;
 use super::step::Integrator;
+use crate::core::control;
 
 /// Step ratio `1/(bias · est^(1/(q+1)) + 10⁻⁶ bias)` for an error `est` at
 /// order `q`.
@@ -30,19 +31,21 @@ fn ratio(est: f64, q: usize, bias: f64) -> f64 {
 }
 
 impl Integrator<'_> {
-    /// The solution of the current attempt.
-    fn solution(&self) -> &[f64] {
+    /// The stage whose value is the solution of the current attempt.
+    pub(super) fn solution(&self) -> usize {
         if self.p == 1 {
-            &self.y1
+            0
         } else {
-            &self.y3
+            2
         }
     }
 
-    /// `|C_q| ‖y_{n+1} − P_q(t_{n+1})‖` for the current attempt.
-    fn estimate_at(&mut self, q: usize) -> f64 {
+    /// `|C_q| ‖y_{n+1} − P_q(t_{n+1})‖` for the current attempt (at `q = p`
+    /// its error norm, accepted when at most one).
+    pub(super) fn estimate_at(&mut self, q: usize) -> f64 {
         let mut d = std::mem::take(&mut self.delta);
-        self.hist.difference_to(self.solution(), q, &mut d);
+        self.hist
+            .difference_to(&self.stage[self.solution()], q, &mut d);
         for (di, &inside) in d.iter_mut().zip(&self.estimated) {
             if !inside {
                 *di = 0.0;
@@ -50,16 +53,7 @@ impl Integrator<'_> {
         }
         let est = self.coef.error_constant[q] * self.estimate_scale * self.ms.weights.norm(&d);
         self.delta = d;
-        if est.is_nan() {
-            f64::INFINITY
-        } else {
-            est
-        }
-    }
-
-    /// The error norm of the current attempt (accepted when at most one).
-    pub(super) fn error_estimate(&mut self) -> f64 {
-        self.estimate_at(self.p)
+        control::error_norm(est)
     }
 
     /// Order and step ratio after an accepted step with error `err`.

@@ -38,7 +38,7 @@
 //! the step, the estimate measures the last accepted value, whose algebraic
 //! unknowns miss their equations. The attempt is then accepted and the
 //! method starts afresh from it, at most once every 20 steps
-//! (`step::Integrator::restart`; on Andrews' squeezer in rcd0 at 1e-5 this
+//! (the engine's `multistep::stale`; on Andrews' squeezer in rcd0 at 1e-5 this
 //! turned `step_size_too_small` at t = 0.021 into a run to the end).
 //!
 //! **Error estimate and order selection** (see [`control`](self)): the local
@@ -139,9 +139,8 @@ mod control;
 mod stages;
 mod step;
 
-use crate::core::driver::Method;
 use crate::core::policy;
-use crate::multistep::run::{self, Orders, Setup};
+use crate::multistep::run::{self, Orders};
 use crate::{NotApplicable, Options, Problem, SolveError, Solver};
 use dae_core::system::FormulationInfo;
 use step::Integrator;
@@ -167,31 +166,21 @@ impl Solver for Mebdf {
     ) -> Result<crate::Integrator<'a>, SolveError> {
         self.accepts(problem.system.info())?;
         policy::hessenberg(problem.system, problem.t0, problem.y0, options)?;
-        let method = start(problem, options)?;
-        Ok(crate::Integrator::new(method, problem, options))
+        problem.check(problem.system.info().unknowns(), options)?;
+        let sys = crate::core::eliminate::constant_leading(problem)?;
+        // The options count steps k: order k + 1 ≤ MAX_ORDER.
+        options.check_orders(
+            coeffs::MAX_ORDER - 1,
+            "mebdf (the step number k, order k + 1)",
+        )?;
+        let orders = Orders {
+            // The options count steps k: order k + 1.
+            of_option: |k| (k + 1).min(coeffs::MAX_ORDER),
+            formula_steps: Integrator::steps_of,
+            startup: coeffs::MAX_ORDER.min(6),
+        };
+        run::integrator(sys, problem, options, orders, move |sys, cfg| {
+            Integrator::new(sys, &options.tol, cfg)
+        })
     }
-}
-
-/// The integration of `problem` (accepted) with the options, started.
-fn start<'a>(
-    problem: &Problem<'a>,
-    options: &'a Options,
-) -> Result<Box<dyn Method + 'a>, SolveError> {
-    problem.check(problem.system.info().unknowns(), options)?;
-    let sys = crate::core::eliminate::constant_leading(problem)?;
-    // The options count steps k: order k + 1 ≤ MAX_ORDER.
-    options.check_orders(
-        coeffs::MAX_ORDER - 1,
-        "mebdf (the step number k, order k + 1)",
-    )?;
-    let setup = Setup::new(&*sys, problem, options)?;
-    let orders = Orders {
-        // The options count steps k: order k + 1.
-        of_option: |k| (k + 1).min(coeffs::MAX_ORDER),
-        formula_steps: Integrator::steps_of,
-        startup: coeffs::MAX_ORDER.min(6),
-    };
-    run::integrate(setup, orders, move |cfg| {
-        Integrator::new(sys.clone(), &options.tol, cfg)
-    })
 }

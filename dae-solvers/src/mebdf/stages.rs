@@ -25,7 +25,7 @@ use crate::core::control::Failure;
 use crate::core::eval;
 use crate::core::matrix::JacState;
 use crate::core::newton::{Contraction, Rule};
-use crate::multistep::corrector::{self, Iteration, Reuse};
+use crate::multistep::corrector::{self, Iteration};
 use crate::multistep::{Common, UNKNOWN_RATE};
 
 /// Newton iterations per stage.
@@ -52,14 +52,6 @@ const ROUND_OFF_FLOOR: f64 = 0.3;
 /// accepted alone only when it is below `KAPPA/ETA_MIN`.
 const ETA_MIN: f64 = 0.05;
 
-/// Which stage buffer a Newton iteration works on.
-#[derive(Clone, Copy)]
-enum Stage {
-    One,
-    Two,
-    Three,
-}
-
 /// `c += Σ_j coef[j] · back_j`, `back_j` the `j`-th column of `back` (the
 /// back values `y_n, y_{n−1}, …`).
 fn accumulate(c: &mut [f64], coef: &[f64], back: &[f64]) {
@@ -76,14 +68,10 @@ impl Integrator<'_> {
         p.saturating_sub(1).max(1)
     }
 
-    /// The stages of the current attempt from `t` to `t + h`, retried once
-    /// with a fresh `J` when an old one fails (MEBDF's reuse).
-    pub(super) fn attempt(&mut self) -> Result<(), Failure> {
-        corrector::solve_reusing(self, Reuse::MEBDF, Self::stages)
-    }
-
-    /// Solve the three stages (one for `p = 1`).
-    fn stages(&mut self) -> Result<(), Failure> {
+    /// Solve the three stages of the current attempt from `t` to `t + h`
+    /// (one for `p = 1`); the engine retries them once with a fresh `J`
+    /// when an old one fails (MEBDF's reuse, [`corrector::solve_reusing`]).
+    pub(super) fn stages(&mut self) -> Result<(), Failure> {
         let n = self.ms.n;
         let p = self.p;
         let k = Self::steps_of(p);
@@ -102,40 +90,45 @@ impl Integrator<'_> {
         self.c.fill(0.0);
         accumulate(&mut self.c, &alpha[1..=k], &self.back);
         self.hist.eval(1.0, p, &mut self.ypred);
-        self.y1.copy_from_slice(&self.ypred);
+        self.stage[0].copy_from_slice(&self.ypred);
         self.ensure_matrix(t1, hb)?;
-        self.newton(t1, hb, Stage::One)?;
+        self.iterate(t1, hb, 0)?;
         if p == 1 {
             return Ok(());
         }
-        for ((d, y), c) in self.d1.iter_mut().zip(&self.y1).zip(&self.c) {
-            *d = y + c;
-        }
+        self.known_part_out(0);
 
-        // Stage 2: ȳ_{n+1} is the newest value.
-        for (c, y) in self.c.iter_mut().zip(&self.y1) {
+        // Stage 2: ȳ_{n+1} is the newest value (stage 3 starts from it too).
+        let [y1, y2, y3] = &mut self.stage;
+        for (c, y) in self.c.iter_mut().zip(&*y1) {
             *c = alpha[1] * y;
         }
         accumulate(&mut self.c, &alpha[2..=k], &self.back);
-        self.hist.eval(2.0, p, &mut self.y2);
-        for ((y2, y1), yp) in self.y2.iter_mut().zip(&self.y1).zip(&self.ypred) {
+        self.hist.eval(2.0, p, y2);
+        for ((y2, y1), yp) in y2.iter_mut().zip(&*y1).zip(&self.ypred) {
             *y2 += y1 - yp;
         }
-        self.newton(t2, hb, Stage::Two)?;
-        for ((d, y), c) in self.d2.iter_mut().zip(&self.y2).zip(&self.c) {
-            *d = y + c;
-        }
+        y3.copy_from_slice(y1);
+        self.iterate(t2, hb, 1)?;
+        self.known_part_out(1);
 
         // Stage 3: the modified extended formula.
         let a = self.coef.ebdf_a[k];
         let w1 = (self.coef.ebdf_b0[k] - beta) / beta;
         let w2 = self.coef.ebdf_b1[k] / beta;
-        for ((c, d1), d2) in self.c.iter_mut().zip(&self.d1).zip(&self.d2) {
+        let [d1, d2] = &self.d;
+        for ((c, d1), d2) in self.c.iter_mut().zip(d1).zip(d2) {
             *c = -w1 * d1 - w2 * d2;
         }
         accumulate(&mut self.c, &a[1..=k], &self.back);
-        self.y3.copy_from_slice(&self.y1);
-        self.newton(t1, hb, Stage::Three)
+        self.iterate(t1, hb, 2)
+    }
+
+    /// `d_i = ȳ_{n+i} + c_i` after stage `i + 1` (`E d_i = hβ f̄_{n+i}`).
+    fn known_part_out(&mut self, i: usize) {
+        for ((d, y), c) in self.d[i].iter_mut().zip(&self.stage[i]).zip(&self.c) {
+            *d = y + c;
+        }
     }
 
     /// Evaluate `J` at the predictor when due, and factor `E/(hβ) − J`
@@ -144,7 +137,7 @@ impl Integrator<'_> {
         if self.ms.jac == JacState::Needed {
             // A non-finite `J` is found in the matrix below.
             self.matrix
-                .jacobian(&*self.sys, &mut self.ms.stats, t, &self.y1);
+                .jacobian(&*self.sys, &mut self.ms.stats, t, &self.stage[0]);
             self.ms.jac = JacState::Fresh;
         }
         if self.matrix.factor(1.0 / hb, 1.0, &mut self.ms.stats)? {
@@ -153,77 +146,49 @@ impl Integrator<'_> {
         Ok(())
     }
 
-    /// `δ = F(t, y, y')` for the stage iterate `y`, counted.
-    fn evaluate_residual(&mut self, t: f64, y: &[f64]) -> Result<(), Failure> {
-        eval::residual(
-            &*self.sys,
-            &mut self.ms.stats,
-            (t, y, &self.yp),
-            &mut self.delta,
-        )
+    /// `δ = F(t, y, y')` for the iterate `y` of the stage being solved,
+    /// counted.
+    fn evaluate_residual(&mut self) -> Result<(), Failure> {
+        let (s, t, _) = self.solving;
+        let point = (t, &self.stage[s][..], &self.yp[..]);
+        eval::residual(&*self.sys, &mut self.ms.stats, point, &mut self.delta)
     }
 
     /// Simplified Newton iteration on `F(t, y, (y + c)/(hβ)) = 0` from the
-    /// stage's current value.
-    fn newton(&mut self, t: f64, hb: f64, stage: Stage) -> Result<(), Failure> {
-        let mut y = std::mem::take(match stage {
-            Stage::One => &mut self.y1,
-            Stage::Two => &mut self.y2,
-            Stage::Three => &mut self.y3,
-        });
-        let result = self.iterate(t, hb, &mut y);
-        match stage {
-            Stage::One => self.y1 = y,
-            Stage::Two => self.y2 = y,
-            Stage::Three => self.y3 = y,
-        }
-        result
-    }
-
-    /// The iteration of [`Self::newton`] on `y`.
-    fn iterate(&mut self, t: f64, hb: f64, y: &mut [f64]) -> Result<(), Failure> {
+    /// current value `y` of stage `s`.
+    fn iterate(&mut self, t: f64, hb: f64, s: usize) -> Result<(), Failure> {
         let inv = 1.0 / hb;
-        for ((yp, yi), c) in self.yp.iter_mut().zip(y.iter()).zip(&self.c) {
+        self.solving = (s, t, inv);
+        for ((yp, yi), c) in self.yp.iter_mut().zip(&self.stage[s]).zip(&self.c) {
             *yp = (yi + c) * inv;
         }
         self.ms.last_iterations = 0;
-        self.evaluate_residual(t, y)?;
-        let tiny = 100.0 * f64::EPSILON * self.ms.weights.norm(y);
+        self.evaluate_residual()?;
+        let tiny = 100.0 * f64::EPSILON * self.ms.weights.norm(&self.stage[s]);
         let maxit = corrector::max_iterations(&self.ms, MAX_ITER);
         let mut monitor = Contraction::new(Rule::Dassl, maxit, KAPPA, self.ms.rate.max(ETA_MIN));
         monitor.floor = ROUND_OFF_FLOOR;
-        let mut stage = StageIteration {
-            integ: self,
-            y,
-            t,
-            inv,
-        };
-        corrector::iterate(&mut stage, monitor, tiny)
+        corrector::iterate(self, monitor, tiny)
     }
 }
 
-/// A stage's Newton iteration on its iterate `y` at `t`, `1/(hβ)` = `inv`.
-struct StageIteration<'s, 'a> {
-    integ: &'s mut Integrator<'a>,
-    y: &'s mut [f64],
-    t: f64,
-    inv: f64,
-}
-
-impl Iteration for StageIteration<'_, '_> {
+/// The Newton iteration of the stage being solved
+/// ([`Integrator::solving`]).
+impl Iteration for Integrator<'_> {
     fn ms(&mut self) -> &mut Common {
-        &mut self.integ.ms
+        &mut self.ms
     }
     fn update(&mut self) -> f64 {
-        let integ = &mut *self.integ;
-        integ.matrix.solve(&mut integ.delta);
-        for ((yi, yp), d) in self.y.iter_mut().zip(integ.yp.iter_mut()).zip(&integ.delta) {
+        let (s, _, inv) = self.solving;
+        self.matrix.solve(&mut self.delta);
+        let y = &mut self.stage[s];
+        for ((yi, yp), d) in y.iter_mut().zip(self.yp.iter_mut()).zip(&self.delta) {
             *yi -= d;
-            *yp -= d * self.inv;
+            *yp -= d * inv;
         }
-        integ.ms.weights.norm(&integ.delta)
+        self.ms.weights.norm(&self.delta)
     }
     fn residual(&mut self) -> bool {
-        self.integ.evaluate_residual(self.t, self.y).is_ok()
+        self.evaluate_residual().is_ok()
     }
 }

@@ -26,6 +26,9 @@
 //! - [`backward`]: backward differences on an equally spaced grid — the
 //!   history of MEBDF, and the start of a constant-step BDF run from
 //!   equally spaced values.
+//! - [`stale`]: an error estimate that stops falling with the step, and
+//!   its cures (the fall-back to order one, a restart from the attempt's
+//!   value).
 //!
 //! Where the families differ the engine takes values: the attempt loop's
 //! [`Policy`] (`DASSL`, `MEBDF`), the matrix reuse ([`corrector::Reuse`]),
@@ -78,8 +81,10 @@ pub(crate) mod backward;
 pub(crate) mod corrector;
 pub(crate) mod divided;
 pub(crate) mod run;
+pub(crate) mod stale;
 
-use crate::core::attempt::{self, Attempts, Outcome, Policy, Steps};
+use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
+use crate::core::control::Failure;
 use crate::core::driver::Method;
 use crate::core::matrix::JacState;
 use crate::core::weights::Weights;
@@ -187,6 +192,18 @@ impl Common {
     pub(crate) fn fall_back(&self, order: &mut usize) -> f64 {
         *order = 1;
         0.25 * self.h
+    }
+
+    /// The outcome of an attempt that failed before its error test with
+    /// `failure`: the initial phase ends, and the attempt loop retries with
+    /// the step its policy gives.
+    pub(crate) fn failed(&mut self, failure: Failure) -> Outcome {
+        self.ramp = false;
+        Outcome::Failed {
+            failure,
+            retry: Retry::Policy,
+            iterations: self.last_iterations,
+        }
     }
 
     /// The time the current attempt reaches from `t`: `t + h`, or `t_end`

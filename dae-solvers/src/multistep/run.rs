@@ -7,13 +7,14 @@
 
 use super::{Config, Family};
 use crate::core::driver::Method;
+use crate::core::eliminate::Formulation;
 use crate::core::startup;
 use crate::init::{check_residuals, initial_derivative_with, DerivativeRule};
 use crate::{Options, Problem, SolveError, Stats};
 use dae_core::system::DaeSystem;
 
 /// Everything a run needs beyond the family's integrator.
-pub(crate) struct Setup<'a> {
+struct Setup<'a> {
     /// The caller's options.
     options: &'a Options,
     /// Start of the horizon.
@@ -33,7 +34,7 @@ impl<'a> Setup<'a> {
     /// The initial derivative of `sys` (the formulation the family
     /// integrates) at the problem's initial values, which are then checked
     /// (see the [module documentation](super)).
-    pub(crate) fn new(
+    fn new(
         sys: &dyn DaeSystem,
         problem: &Problem<'a>,
         options: &'a Options,
@@ -67,10 +68,26 @@ pub(crate) struct Orders {
     pub(crate) startup: usize,
 }
 
+/// The integration of `problem` by a family in the formulation `sys`, for
+/// the driver: the initial derivative and the check ([`Setup`]), then the
+/// run ([`integrate`]) with the family's integrators built by `make` from
+/// the formulation and the settings of each run.
+pub(crate) fn integrator<'a, F: Family + 'a>(
+    sys: Formulation<'a>,
+    problem: &Problem<'a>,
+    options: &'a Options,
+    orders: Orders,
+    make: impl Fn(Formulation<'a>, Config) -> F + Clone + 'a,
+) -> Result<crate::Integrator<'a>, SolveError> {
+    let setup = Setup::new(&*sys, problem, options)?;
+    let method = integrate(setup, orders, move |cfg| make(sys.clone(), cfg))?;
+    Ok(crate::Integrator::new(method, problem, options))
+}
+
 /// The run of a family on `setup`: its integrators built by `make` (with
 /// the settings of each run, counters zero), error-controlled or — with
 /// [`Options::fixed_step`] — at a constant step after a start-up; started.
-pub(crate) fn integrate<'a, F: Family + 'a>(
+fn integrate<'a, F: Family + 'a>(
     setup: Setup<'a>,
     orders: Orders,
     make: impl Fn(Config) -> F + Clone + 'a,
