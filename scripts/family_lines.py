@@ -39,7 +39,13 @@ BOUND = 500
 # idec11, BENCHMARKS.md §12h: the one-step state core::onestep::OneStep
 # shared with the collocation engine) and mebdf 625 -> 497 (branch mebdf11,
 # BENCHMARKS.md §12i).
-OVER: dict = {}
+OVER = {"mebdf": 596}
+# Files inside an engine that a single family uses: that family's own code,
+# wherever it lives. multistep/stale.rs (mebdf11: the cures for an error
+# estimate that stops falling with the step) is called by mebdf alone — bdf
+# and odbdf keep DASSL's rules — so its 99 code lines count as mebdf's, which
+# puts mebdf at 596 (497 in its own directory), still above the bound.
+ATTRIBUTED = {"multistep/stale.rs": "mebdf"}
 
 
 def strip_code(line):
@@ -127,10 +133,14 @@ def unit_path(src, name):
 
 
 def count_unit(src, name):
-    """Summed counts of a unit, and per-file counts."""
+    """Summed counts of a unit, and per-file counts: a family's with the
+    engine files ATTRIBUTED to it, an engine's without them."""
     per_file = []
     sums = [0] * 5
-    for path in rust_files(unit_path(src, name)):
+    paths = [p for p in rust_files(unit_path(src, name))
+             if os.path.relpath(p, src) not in ATTRIBUTED]
+    paths += [os.path.join(src, f) for f, fam in sorted(ATTRIBUTED.items()) if fam == name]
+    for path in paths:
         c = count_file(path)
         per_file.append((os.path.relpath(path, src), c))
         sums = [a + b for a, b in zip(sums, c)]

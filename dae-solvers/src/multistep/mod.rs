@@ -83,7 +83,7 @@ pub(crate) mod divided;
 pub(crate) mod run;
 pub(crate) mod stale;
 
-use crate::core::attempt::{self, Attempts, Outcome, Policy, Retry, Steps};
+use crate::core::attempt::{self, Attempts, Outcome, Policy, Steps};
 use crate::core::control::Failure;
 use crate::core::driver::Method;
 use crate::core::matrix::JacState;
@@ -199,11 +199,7 @@ impl Common {
     /// the step its policy gives.
     pub(crate) fn failed(&mut self, failure: Failure) -> Outcome {
         self.ramp = false;
-        Outcome::Failed {
-            failure,
-            retry: Retry::Policy,
-            iterations: self.last_iterations,
-        }
+        Outcome::failed(failure, self.last_iterations)
     }
 
     /// The time the current attempt reaches from `t`: `t + h`, or `t_end`
