@@ -490,3 +490,43 @@ mod preference_tests {
         }
     }
 }
+
+#[cfg(test)]
+mod error_test_tests {
+    use super::collocation_error_test;
+    use crate::Options;
+    use dae_core::sensitivity::Sensitivities;
+    use dae_core::system::DaeSystem;
+
+    /// The pendulum's `ggl1` (`x, y, v, w` differential, `λ, μ` of index
+    /// 2) with the sensitivities of `l`: the state's unknowns all in the
+    /// test; the sensitivities' differential ones in, their index-2 ones
+    /// out unless the option keeps them; every sensitivity out when they
+    /// leave the error test.
+    #[test]
+    fn collocation_leaves_the_sensitivities_index2_unknowns_out() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/pendulum.dae");
+        let src = std::fs::read_to_string(path).unwrap();
+        let mut sys = Sensitivities::from_str(&src, &["l"])
+            .unwrap()
+            .formulation("ggl1")
+            .unwrap();
+        let index2: Vec<bool> = sys.info().variables.iter().map(|v| v.index >= 2).collect();
+        assert_eq!(index2[..6], [false, false, false, false, true, true]);
+        let mask = |sys: &dyn DaeSystem, options: &Options| {
+            collocation_error_test(sys.info(), sys.blocks(), options)
+        };
+        let plain = Options::default();
+        let want: Vec<bool> = (0..12).map(|i| i < 6 || !index2[i]).collect();
+        assert_eq!(mask(&sys, &plain), want);
+        let keep = Options {
+            index2_in_error_test: Some(true),
+            ..Options::default()
+        };
+        assert_eq!(mask(&sys, &keep), [true; 12]);
+        sys.set_error_control(false);
+        let off: Vec<bool> = (0..12).map(|i| i < 6).collect();
+        assert_eq!(mask(&sys, &plain), off);
+        assert_eq!(mask(&sys, &keep), off);
+    }
+}
