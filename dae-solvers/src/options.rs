@@ -297,10 +297,13 @@ pub struct Options {
     /// change in the steps taken). Long runs that need only the output
     /// times — the sweep, the benchmarks — switch it off.
     pub dense_output: bool,
-    /// BDF-type methods only: include index-2 (and higher) unknowns in the
+    /// BDF-type methods: include index-2 (and higher) unknowns in the
     /// error test. `None` (the default) leaves the decision to the
     /// formulation, in [`crate::core::policy::bdf_error_test`]: they are
     /// left out, DASPK's option that lets index-2 formulations run.
+    /// Radau-type methods keep a state's in any case and leave the
+    /// index-2 unknowns of its forward sensitivities out unless this is
+    /// `Some(true)` ([`crate::core::policy::collocation_error_test`]).
     pub index2_in_error_test: Option<bool>,
     /// Integrate with this constant step size and no error control
     /// (convergence studies).

@@ -9,7 +9,7 @@ use super::solve::{StageSolve, StageSolveKind};
 use super::stagger::{rhs_for_error, Phase, Stagger};
 use super::step::Integrator;
 use super::tableau::Collocation;
-use crate::core::block::{self, Part};
+use crate::core::block::Part;
 use crate::core::matrix::{Matrix, Rows, Structure};
 use crate::core::weights::{self, Plain, Weights};
 use crate::linalg::{all_finite, mat_vec, two_sum, DenseLu, Pivoting, Singular};
@@ -150,7 +150,7 @@ impl Work {
             weights: Weights::new(
                 &options.tol,
                 |i| (K::POLICY.tolerance_factor)(options.tol.rtol(i), options.tol.atol(i)),
-                block::in_error_test(n, blocks),
+                crate::core::policy::collocation_error_test(info, blocks, options),
                 weights::index_powers(info),
             ),
             rows: Rows::new(info),

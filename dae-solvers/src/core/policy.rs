@@ -9,8 +9,9 @@
 //!   `INFO(16)`; Brenan, Campbell & Petzold ch. 3 and 5). Unless
 //!   [`Options::index2_in_error_test`] says otherwise, BDF-type methods
 //!   leave unknowns of index ≥ 2 out of the error test and the Newton norm.
-//!   Radau-type methods keep every unknown and scale index-`k` components by
-//!   `h^(k−1)` instead (Hairer & Wanner VII.8).
+//!   Radau-type methods keep every unknown of a state and scale index-`k`
+//!   components by `h^(k−1)` instead (Hairer & Wanner VII.8) — but not the
+//!   index-2 unknowns of its forward sensitivities ([`collocation_error_test`]).
 //! - **What a method accepts**: [`square`], [`overdetermined`],
 //!   [`constant_leading`], [`max_index`] — the typed reasons of
 //!   [`crate::Solver::accepts`] — and, from the problem and the options,
@@ -22,7 +23,7 @@
 use crate::core::matrix::algebraic_combinations;
 use crate::error::NotApplicable;
 use crate::{Options, Problem};
-use dae_core::system::{DaeSystem, FormulationInfo, RowKind, VarKind};
+use dae_core::system::{Blocks, DaeSystem, FormulationInfo, RowKind, VarKind};
 use nalgebra::DMatrix;
 
 /// Components in the error test of a BDF-type method: all, except the
@@ -40,6 +41,41 @@ pub fn bdf_error_test(info: &FormulationInfo, options: &Options) -> Vec<bool> {
     } else {
         vec![true; mask.len()]
     }
+}
+
+/// Components in the error test of a collocation (Radau-type) method:
+/// all, except for a state and its forward sensitivities
+/// ([`DaeSystem::blocks`]) the sensitivities' unknowns of index ≥ 2
+/// unless [`Options::index2_in_error_test`] is `Some(true)` — and every
+/// sensitivity when they are out of the error test
+/// ([`Blocks::error_control`](dae_core::system::Blocks)).
+///
+/// Why the sensitivities' index-2 unknowns leave the test where the
+/// state's stay: a sensitivity grows along the run (the pendulum's
+/// `∂x/∂l` like `t`, its phase drifting), and the estimate of each of its
+/// components grows with it; a differential component's weight grows too
+/// (`rtol |sᵢ|`), but a multiplier whose exact sensitivity is zero — the
+/// GGL multiplier `μ ≡ 0` of `ggl1`, and so `∂μ/∂p ≡ 0` — is measured
+/// against `atol` alone. On the pendulum (S01, tol 1e-8, radau5(ggl1)) the
+/// weighted estimate of `∂μ/∂l` grew from 1.0 to 3.6 (mean square) over
+/// t ∈ [0, 20], dominated the error norm at 8 803 of 11 287 steps and took
+/// the run from the plain 6 601 steps to 11 269 (BENCHMARKS.md §13g). The
+/// sensitivities' accuracy is that of their differential unknowns, which
+/// stay in the test (as a BDF method leaves every index-2 unknown out:
+/// [`bdf_error_test`]).
+pub fn collocation_error_test(
+    info: &FormulationInfo,
+    blocks: Option<Blocks>,
+    options: &Options,
+) -> Vec<bool> {
+    let mut mask = crate::core::block::in_error_test(info.unknowns(), blocks);
+    let keep_index2 = options.index2_in_error_test == Some(true);
+    if let Some(b) = blocks.filter(|b| b.error_control && b.unknowns() == mask.len()) {
+        for (m, v) in mask[b.size..].iter_mut().zip(&info.variables[b.size..]) {
+            *m &= keep_index2 || v.index < 2;
+        }
+    }
+    mask
 }
 
 /// A method for square systems: `M = N ≥ 1`.
@@ -452,5 +488,45 @@ mod preference_tests {
                 assert!(!order[..i].contains(f), "{solver}: {f} twice");
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod error_test_tests {
+    use super::collocation_error_test;
+    use crate::Options;
+    use dae_core::sensitivity::Sensitivities;
+    use dae_core::system::DaeSystem;
+
+    /// The pendulum's `ggl1` (`x, y, v, w` differential, `λ, μ` of index
+    /// 2) with the sensitivities of `l`: the state's unknowns all in the
+    /// test; the sensitivities' differential ones in, their index-2 ones
+    /// out unless the option keeps them; every sensitivity out when they
+    /// leave the error test.
+    #[test]
+    fn collocation_leaves_the_sensitivities_index2_unknowns_out() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/pendulum.dae");
+        let src = std::fs::read_to_string(path).unwrap();
+        let mut sys = Sensitivities::from_str(&src, &["l"])
+            .unwrap()
+            .formulation("ggl1")
+            .unwrap();
+        let index2: Vec<bool> = sys.info().variables.iter().map(|v| v.index >= 2).collect();
+        assert_eq!(index2[..6], [false, false, false, false, true, true]);
+        let mask = |sys: &dyn DaeSystem, options: &Options| {
+            collocation_error_test(sys.info(), sys.blocks(), options)
+        };
+        let plain = Options::default();
+        let want: Vec<bool> = (0..12).map(|i| i < 6 || !index2[i]).collect();
+        assert_eq!(mask(&sys, &plain), want);
+        let keep = Options {
+            index2_in_error_test: Some(true),
+            ..Options::default()
+        };
+        assert_eq!(mask(&sys, &keep), [true; 12]);
+        sys.set_error_control(false);
+        let off: Vec<bool> = (0..12).map(|i| i < 6).collect();
+        assert_eq!(mask(&sys, &plain), off);
+        assert_eq!(mask(&sys, &keep), off);
     }
 }
