@@ -18,7 +18,9 @@ beyond the shared engines". For every family (`bdf`, `odbdf`, `mebdf`,
 It exits with status 1 when a family's code lines exceed the bound (500),
 else 0 — except that a family in `OVER` (the families still above the
 bound, issue 26 open) may keep the code lines it has there but not grow;
-`--strict` ignores `OVER`. `.ci/run` runs it. Deterministic (files in
+`--strict` ignores `OVER`. A file inside an engine that one family alone
+uses (`ATTRIBUTED`) counts as that family's code, not the engine's: code
+does not become shared by moving. `.ci/run` runs it. Deterministic (files in
 sorted order), standard library only.
 
 Usage: `python3 scripts/family_lines.py [--strict] [--files] [--bound N]
