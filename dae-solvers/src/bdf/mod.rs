@@ -70,6 +70,16 @@
 //! `core::control` (ten Newton failures, five singular matrices, ten
 //! non-finite residuals on one step).
 //!
+//! *An estimate that stops falling with the step* (not in DASSL; the
+//! engine's `multistep::stale`, shared with `mebdf`): an order-one attempt
+//! whose estimate stays put while the step is cut below 0.3 of the last
+//! rejected one measures a stale value, not the step — the run restarts at
+//! order one from the attempt's value (where DASSL ends with a step size
+//! too small); three steps in a row whose second rejection did not bring
+//! the estimate down fall to order one. Neither fires on S02, the solver
+//! harness, the DASSL reproduction (`examples/bdf_s02`) or the literature
+//! map's bdf/odbdf cells: every step count there is DASSL's, unchanged.
+//!
 //! *Dense output* (DASSL's DDATRP): between steps the solution is the
 //! polynomial of degree `k` through the last `k+1` solution values,
 //! `y(t) = Σ_{i=1}^{k+1} c_i(t) φ_i(n+1)`.

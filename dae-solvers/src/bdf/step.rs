@@ -10,6 +10,7 @@ use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, JacState, Matrix, Rows, Structure};
 use crate::core::weights::Weights;
 use crate::multistep::divided::Divided;
+use crate::multistep::stale::{self, Stale};
 use crate::multistep::{Common, Config, Family, FALL_BACK_AFTER};
 use crate::options::Tolerances;
 use crate::SolveError;
@@ -58,6 +59,8 @@ pub(super) struct Integrator<'a, L> {
     pub(super) rhs_jac: Matrix,
     /// `∂(E(y) y')/∂y`.
     pub(super) lead_jac: Matrix,
+    /// An error estimate that stops falling with the step ([`Stale`]).
+    pub(super) stale: Stale,
 }
 
 impl<L: Corrector> Family for Integrator<'_, L> {
@@ -76,6 +79,7 @@ impl<L: Corrector> Family for Integrator<'_, L> {
     }
     fn begin_step(&mut self) {
         self.ms.weights.update(self.hist.col(0));
+        self.stale.begin_step();
     }
     fn step_changed(&mut self, h_before: f64) {
         // Before the first step `φ_2 = h y'₀` follows the step.
@@ -85,7 +89,7 @@ impl<L: Corrector> Family for Integrator<'_, L> {
     }
     #[inline(always)]
     fn attempt_once(&mut self) -> Result<Outcome, SolveError> {
-        Ok(self.attempt())
+        self.attempt()
     }
     fn start(&mut self, t0: f64, y0: &[f64], yp0: &[f64], h: f64) {
         Integrator::start(self, t0, y0, yp0, h)
@@ -131,12 +135,13 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             lead: matrix(),
             rhs_jac: matrix(),
             lead_jac: matrix(),
+            stale: Stale::default(),
         }
     }
 
     /// One attempt from `t` with `h` and order `k` (DDASTP's blocks 1–5;
     /// block 6 after a failure: the order and step of the retry).
-    fn attempt(&mut self) -> Outcome {
+    fn attempt(&mut self) -> Result<Outcome, SolveError> {
         let t_old = self.ms.t;
         self.set_coefficients();
         self.ms.t = self.ms.t_next();
@@ -150,13 +155,19 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                     // way. A fresh one each step.
                     self.ms.jac = JacState::Needed;
                 }
-                return Outcome::Accepted;
+                return Ok(Outcome::Accepted);
             }
             Ok(()) => {
                 let test = self.error_test();
                 if test.err <= 1.0 {
                     self.accept(Some(test));
-                    return Outcome::Accepted;
+                    self.stale.accepted();
+                    return Ok(Outcome::Accepted);
+                }
+                if self.stale.restart_due(self.ms.h, test.err, self.k) {
+                    let (sys, y) = (self.sys.clone(), self.y.clone());
+                    stale::restart(self, &*sys, self.ms.t, &y)?;
+                    return Ok(Outcome::Accepted);
                 }
                 Err(test)
             }
@@ -166,11 +177,12 @@ impl<'a, L: Corrector> Integrator<'a, L> {
         // Block 6: the step failed.
         self.ms.t = t_old;
         self.hist.restore(self.ms.h, self.k);
-        match failure {
+        Ok(match failure {
             Ok(failure) => self.ms.failed(failure),
             Err(test) => {
                 let nef = self.ms.error_test_failed();
-                let h = if nef >= FALL_BACK_AFTER {
+                let stalled = self.stale.fall_back_due(self.ms.h, test.err, self.k, nef);
+                let h = if stalled || nef >= FALL_BACK_AFTER {
                     self.ms.fall_back(&mut self.k)
                 } else if nef == 1 {
                     self.k = test.knew;
@@ -182,6 +194,6 @@ impl<'a, L: Corrector> Integrator<'a, L> {
                 };
                 Outcome::ErrorTest { h }
             }
-        }
+        })
     }
 }
