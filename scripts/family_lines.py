@@ -41,13 +41,12 @@ BOUND = 500
 # idec11, BENCHMARKS.md §12h: the one-step state core::onestep::OneStep
 # shared with the collocation engine) and mebdf 625 -> 497 (branch mebdf11,
 # BENCHMARKS.md §12i).
-OVER = {"mebdf": 596}
+OVER: dict = {}
 # Files inside an engine that a single family uses: that family's own code,
-# wherever it lives. multistep/stale.rs (mebdf11: the cures for an error
-# estimate that stops falling with the step) is called by mebdf alone — bdf
-# and odbdf keep DASSL's rules — so its 99 code lines count as mebdf's, which
-# puts mebdf at 596 (497 in its own directory), still above the bound.
-ATTRIBUTED = {"multistep/stale.rs": "mebdf"}
+# wherever it lives. None now: multistep/stale.rs (mebdf11), counted as
+# mebdf's while mebdf alone called it, is called by bdf and odbdf too since
+# the lead's merge of session 11 (branch stale11, BENCHMARKS.md §12i).
+ATTRIBUTED: dict = {}
 
 
 def strip_code(line):
