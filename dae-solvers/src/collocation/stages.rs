@@ -470,7 +470,7 @@ impl<K: Collocation> Integrator<'_, K> {
         w.projection.solve(&mut w.delta);
         check_projection(&w.delta, t)?;
         for k in 0..self.n {
-            w.correct(k, w.delta[k], self.compensated);
+            w.correct(k, w.delta[k], self.c.one.compensated);
         }
         let size = w.weights.norm(&w.delta[..self.n]);
         if !self.constant_leading {
@@ -563,7 +563,7 @@ impl<K: Collocation> Integrator<'_, K> {
         check_projection(mu, t)?;
         for a in 0..k {
             let (d, j) = (w.delta[a], w.algebraic_unknowns[a]);
-            w.correct(j, d, self.compensated);
+            w.correct(j, d, self.c.one.compensated);
             let col = &w.jac.values()[j * self.m..(j + 1) * self.m];
             for (f, &jij) in w.f0.iter_mut().zip(col) {
                 *f += jij * d;
@@ -577,7 +577,7 @@ impl<K: Collocation> Integrator<'_, K> {
     /// `y'_{n+1}`.
     pub(super) fn advance(&mut self, h: f64) {
         let w = &mut self.w;
-        let y_lo = self.compensated.then_some(&mut w.y_lo[..]);
+        let y_lo = self.c.one.compensated.then_some(&mut w.y_lo[..]);
         kernels::advance::<K>(&w.z, h, &mut w.y, y_lo, &mut w.yp, &mut w.cont);
     }
 }

@@ -45,9 +45,6 @@ pub(super) struct Integrator<'a, K> {
     pub(super) newton: Contraction,
     /// Step-size controller state.
     pub(super) c: Control,
-    /// Sum the step updates of `t` and `y` with compensation (tight
-    /// tolerances, [`super::TIGHT_TOL`]).
-    pub(super) compensated: bool,
     /// The tableau.
     pub(super) method: std::marker::PhantomData<K>,
     /// Newton bounds of a method iterating towards round-off: the floor,
@@ -226,7 +223,6 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             m,
             t0: problem.t0,
             constant_leading: info.constant_leading,
-            compensated,
             method: std::marker::PhantomData,
             newton_floor: fnewt,
             newton_drift,

@@ -28,7 +28,9 @@ pub(crate) struct OneStep {
     /// ([`OneStep::compensated`]), else zero.
     pub(crate) t_lo: f64,
     /// Sum the steps into `t` with compensation (a rounding of `ulp(t)`
-    /// per step is not small against the error after 10⁵–10⁷ steps).
+    /// per step is not small against the error after 10⁵–10⁷ steps); the
+    /// collocation engine sums its stage updates into `y` the same way
+    /// when this is set (tight tolerances, `collocation::TIGHT_TOL`).
     pub(crate) compensated: bool,
     /// Step of the next attempt, in the loop's unit.
     pub(crate) h: f64,
