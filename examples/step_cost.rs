@@ -10,9 +10,12 @@
 //!     target/release/examples/step_cost radau5 rcd1 1e-8
 //! ```
 //!
-//! Arguments: `SOLVER FORM TOL [T_END]` (T_END 20 is S01, 2000 is S02).
+//! Arguments: `SOLVER FORM TOL [T_END] [dassl]` (T_END 20 is S01, 2000 is
+//! S02; `dassl`: the BDF methods with DASSL's own error estimate,
+//! [`Estimate::Dassl`](dae::dae_solvers::options::Estimate)).
 //! The program prints the run's statistics; instructions per accepted step
 //! are callgrind's total `Ir` divided by `steps`.
+use dae::dae_solvers::options::Estimate;
 use dae::dae_solvers::{init, solver_by_name, Options, Problem, Solution, Solver};
 use dae::models::builtin::Pendulum;
 use dae::prelude::*;
@@ -29,9 +32,16 @@ fn integrate(solver: &dyn Solver, problem: &Problem<'_>, options: &Options) -> S
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let estimate = match args.iter().position(|a| a == "dassl") {
+        Some(i) => {
+            args.remove(i);
+            Estimate::Dassl
+        }
+        None => Options::default().estimate,
+    };
     if args.len() < 3 {
-        eprintln!("usage: step_cost SOLVER FORM TOL [T_END]");
+        eprintln!("usage: step_cost SOLVER FORM TOL [T_END] [dassl]");
         std::process::exit(2);
     }
     let Some(solver) = solver_by_name(&args[0]) else {
@@ -77,6 +87,7 @@ fn main() {
         output_times: checks,
         // Measures the step loop: no dense output kept.
         dense_output: false,
+        estimate,
         ..Options::with_tol(tol)
     };
     let problem = Problem {

@@ -4,8 +4,12 @@
 //! Fortran anchors.
 //!
 //! ```text
-//! cargo run --release -p dae-solvers --example bdf_s02 [formulation …]
+//! cargo run --release -p dae-solvers --example bdf_s02 [--propagated] [formulation …]
 //! ```
+//!
+//! The runs use DASSL's own error estimate ([`Estimate::Dassl`]), with
+//! which the port takes the Fortran DASSL's steps; `--propagated` runs the
+//! solver's default estimate instead (BENCHMARKS.md §18).
 //!
 //! Columns: `err_sum` = Σ over t = 2k, k = 1..1000 of
 //! |x−x*|+|y−y*|+|v−v*|+|w−w*|+|λ−λ*| (SPEC §3, the paper's ERR);
@@ -17,6 +21,7 @@ mod common;
 
 use common::{err_max, err_sum, reference, reference_path, Form, Pendulum};
 use dae_solvers::bdf::Bdf;
+use dae_solvers::options::Estimate;
 use dae_solvers::{Options, Problem, Solver};
 use std::collections::HashMap;
 use std::time::Instant;
@@ -55,7 +60,13 @@ fn anchors() -> HashMap<(String, String, String), Vec<String>> {
 }
 
 fn main() {
-    let filter: Vec<String> = std::env::args().skip(1).collect();
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let estimate = if args.iter().any(|a| a == "--propagated") {
+        Estimate::Propagated
+    } else {
+        Estimate::Dassl
+    };
+    let filter: Vec<String> = args.into_iter().filter(|a| a != "--propagated").collect();
     let exact = reference("pendulum_s02_periods_exact.csv");
     let checks: Vec<(f64, [f64; 5])> = exact.into_iter().filter(|(t, _)| *t > 0.0).collect();
     let times: Vec<f64> = checks.iter().map(|(t, _)| *t).collect();
@@ -86,6 +97,7 @@ fn main() {
         for (col, i) in (5..=12).enumerate() {
             let tol = 10f64.powi(-i);
             let mut options = Options::with_tol(tol);
+            options.estimate = estimate;
             options.index2_in_error_test = Some(!form.has_index2());
             options.output_times = times.clone();
             let problem = Problem {

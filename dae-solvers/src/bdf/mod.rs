@@ -55,6 +55,32 @@
 //! the weighted RMS norm `‖v‖ = (Σ (v_i w_i)²/N)^{1/2}` over the `N`
 //! components in the test, `w_i = 1/(atol_i + rtol_i |y_{n,i}|)`.
 //!
+//! *The propagated estimate* ([`Options::estimate`], not in DASSL). `e`
+//! measures a differential component's local error, but for an algebraic
+//! one it measures how wrongly that unknown's own history extrapolates —
+//! its curvature — while the step's error in it is the error the
+//! constraints carry over from the differential components. Each term `v`
+//! of the test and of the order selection (`e`, `φ*_k + e`, …) can
+//! therefore also be carried through the factored iteration matrix,
+//! `ṽ = G⁻¹ (c_J E v)` — for an index-1 DAE the linearised constraints'
+//! image of `v`'s differential part, RADAU5's filter (Hairer & Wanner
+//! IV.8; Shampine 1980) — and the norm taken of `max(|v_i|, |ṽ_i|)`,
+//! never below DASSL's. By default
+//! ([`Estimate::Checked`](crate::options::Estimate::Checked)) the first
+//! error test after each new iteration matrix compares the two norms of
+//! `e`; once the propagated one is more than ten times DASSL's, the run
+//! propagates every term to its end. On the IVP Test Set's transistor
+//! amplifier the amplifier's output is an algebraic combination `≈ 144 ×`
+//! the transistor's input: at equal steps DASSL's `e` of it misses the
+//! step's error thirtyfold, at a doubled step it sees much of it
+//! (BENCHMARKS.md §18), and DASSL's controller then alternates for the rest
+//! of the run between an accepted order-one step and a doubled, rejected
+//! one (1.4 M steps at 1e-10, 6 digits). Propagated, the estimate grows
+//! like `h^{k+1}` and the run takes 22 983 steps to 9.2 digits. On
+//! the pendulum the check never fires and the run is DASSL's.
+//! [`Estimate::Dassl`](crate::options::Estimate::Dassl) never checks (the
+//! Fortran reproduction, `examples/bdf_s02`).
+//!
 //! *Order and step selection* (BCP ch. 5, stepsize and order selection):
 //! the leading error terms at orders `k−2 … k+1` are estimated from `e` and
 //! the differences `φ*` (`TERK`, `TERKM1`, …). The order is lowered when the lower-order terms
@@ -211,6 +237,6 @@ pub(crate) fn integrator<'a, L: Corrector + 'a>(
         startup: MAX_ORDER,
     };
     run::integrator(sys, problem, options, orders, move |sys, cfg| {
-        Integrator::<L>::new(sys, &options.tol, &in_test, cfg)
+        Integrator::<L>::new(sys, &options.tol, &in_test, cfg, options.estimate)
     })
 }
