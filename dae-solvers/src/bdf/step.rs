@@ -10,6 +10,7 @@ use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, JacState, Matrix, Rows, Structure};
 use crate::core::weights::Weights;
 use crate::multistep::divided::Divided;
+use crate::multistep::propagate::Propagation;
 use crate::multistep::stale::{self, Stale};
 use crate::multistep::{Common, Config, Family, FALL_BACK_AFTER};
 use crate::options::{Estimate, Tolerances};
@@ -61,16 +62,8 @@ pub(super) struct Integrator<'a, L> {
     pub(super) lead_jac: Matrix,
     /// An error estimate that stops falling with the step ([`Stale`]).
     pub(super) stale: Stale,
-    /// Every estimate propagated (see `order.rs`): with
-    /// [`Estimate::Propagated`], or with [`Estimate::Checked`] once a check
-    /// found DASSL's estimate missing.
-    pub(super) propagate: bool,
-    /// [`Estimate::Checked`] on a DAE: check after each new matrix.
-    pub(super) check: bool,
-    /// The Jacobian count at the last check.
-    pub(super) checked: usize,
-    /// The propagated estimate `G⁻¹ (c_J E v)` (`M` rows, `N` used).
-    pub(super) propagated: Vec<f64>,
+    /// DASSL's estimate or the propagated one ([`Propagation`]).
+    pub(super) estimate: Propagation,
 }
 
 impl<L: Corrector> Family for Integrator<'_, L> {
@@ -147,11 +140,7 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             rhs_jac: matrix(),
             lead_jac: matrix(),
             stale: Stale::default(),
-            // An ODE has no algebraic part for the propagation to reach.
-            propagate: estimate == Estimate::Propagated && info.d_index != Some(0),
-            check: estimate == Estimate::Checked && info.d_index != Some(0),
-            checked: 0,
-            propagated: vec![0.0; m],
+            estimate: Propagation::new(estimate, info, m),
         }
     }
 

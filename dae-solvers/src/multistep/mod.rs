@@ -29,6 +29,9 @@
 //! - [`stale`]: an error estimate that stops falling with the step, and
 //!   its cures (the fall-back to order one, a restart from the attempt's
 //!   value).
+//! - [`propagate`]: the error estimate carried through the iteration
+//!   matrix onto the algebraic components, and the check that switches a
+//!   run to it ([`crate::options::Estimate`]).
 //!
 //! Where the families differ the engine takes values: the attempt loop's
 //! [`Policy`] (`DASSL`, `MEBDF`), the matrix reuse ([`corrector::Reuse`]),
@@ -80,6 +83,7 @@
 pub(crate) mod backward;
 pub(crate) mod corrector;
 pub(crate) mod divided;
+pub(crate) mod propagate;
 pub(crate) mod run;
 pub(crate) mod stale;
 
