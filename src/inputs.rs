@@ -81,6 +81,7 @@ impl Inputs {
             repeats: 1,
             max_steps: None,
             events: &scene.events,
+            estimate: Default::default(),
         }
     }
 }

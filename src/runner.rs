@@ -66,6 +66,9 @@ pub struct RunSpec<'a> {
     /// [`Options::events`]): each located event is listed in
     /// [`RunRecord::events`].
     pub events: &'a [dae_solvers::EventSpec],
+    /// The BDF methods' error estimate (`dae run --estimate`;
+    /// [`Options::estimate`]).
+    pub estimate: dae_solvers::options::Estimate,
 }
 
 /// Error information of a failed run.
@@ -778,6 +781,7 @@ fn run_with(spec: &RunSpec<'_>, numerical: bool) -> Result<(RunRecord, Option<Fa
         // step's dense output.
         dense_output: false,
         events: spec.events.to_vec(),
+        estimate: spec.estimate,
         ..defaults
     };
     let problem = Problem {

@@ -78,6 +78,7 @@ fn bdf_defaults_equal_the_runner_on_the_spherical_pendulum_ggl1() {
         repeats: 1,
         max_steps: None,
         events: &[],
+        estimate: Default::default(),
     })
     .expect("the runner runs");
     assert_eq!(record.status, "ok");

@@ -76,6 +76,33 @@ pub struct RunArgs {
     /// are then the state's; in the error test by default).
     #[arg(long)]
     pub no_sensitivity_error_control: bool,
+    /// The BDF methods' (`bdf`, `odbdf`, `mebdf`) error estimate: `checked`
+    /// (the default: the method's own, switched to the propagated one once
+    /// that is found ten times larger), `propagated` (always) or `dassl`
+    /// (the method's own: DASSL's step counts). Other solvers ignore it.
+    #[arg(long, value_enum, default_value = "checked")]
+    pub estimate: EstimateArg,
+}
+
+/// `dae run --estimate` ([`dae_solvers::options::Estimate`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EstimateArg {
+    /// The method's own estimate, checked against the propagated one.
+    Checked,
+    /// The propagated estimate at every step.
+    Propagated,
+    /// The method's own estimate (DASSL's).
+    Dassl,
+}
+
+impl From<EstimateArg> for dae_solvers::options::Estimate {
+    fn from(e: EstimateArg) -> Self {
+        match e {
+            EstimateArg::Checked => Self::Checked,
+            EstimateArg::Propagated => Self::Propagated,
+            EstimateArg::Dassl => Self::Dassl,
+        }
+    }
 }
 
 /// Check a tolerance given on the command line: the rule of the library
@@ -190,6 +217,7 @@ pub fn run(args: &RunArgs) -> Result<(String, i32), Failure> {
         },
         tolerances: (!uniform).then_some(&tolerances),
         record_steps: args.trajectory.is_some(),
+        estimate: args.estimate.into(),
         ..inputs.spec(&scene, &solver, &formulation, tolerances.rtol)
     };
     let record =
