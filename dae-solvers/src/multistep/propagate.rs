@@ -69,7 +69,7 @@ impl Propagation {
     /// `‖v‖` of a term of the order selection: the family's norm, or the
     /// propagated one once the run propagates. `carry(v, out)` writes
     /// `G⁻¹ (c E v)` into `out` (all rows).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn norm(
         &mut self,
         v: &[f64],
@@ -88,7 +88,7 @@ impl Propagation {
     /// [`Estimate::Checked`] the check at the first test after a new
     /// matrix, which may switch the run to the propagated estimate (this
     /// test included).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn error_norm(
         &mut self,
         v: &[f64],
@@ -113,6 +113,7 @@ impl Propagation {
     }
 
     /// The norm of `max(|v_i|, |ṽ_i|)`.
+    #[inline(never)]
     fn propagated(
         &mut self,
         v: &[f64],
