@@ -10,9 +10,10 @@
 //!     target/release/examples/step_cost radau5 rcd1 1e-8
 //! ```
 //!
-//! Arguments: `SOLVER FORM TOL [T_END] [dassl]` (T_END 20 is S01, 2000 is
-//! S02; `dassl`: the BDF methods with DASSL's own error estimate,
-//! [`Estimate::Dassl`](dae::dae_solvers::options::Estimate)).
+//! Arguments: `SOLVER FORM TOL [T_END] [dassl|propagated]` (T_END 20 is
+//! S01, 2000 is S02; `dassl`, `propagated`: the BDF methods' error
+//! estimate, [`Estimate`](dae::dae_solvers::options::Estimate), instead of
+//! the default).
 //! The program prints the run's statistics; instructions per accepted step
 //! are callgrind's total `Ir` divided by `steps`.
 use dae::dae_solvers::options::Estimate;
@@ -33,15 +34,18 @@ fn integrate(solver: &dyn Solver, problem: &Problem<'_>, options: &Options) -> S
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
-    let estimate = match args.iter().position(|a| a == "dassl") {
-        Some(i) => {
+    let mut estimate = Options::default().estimate;
+    for (name, value) in [
+        ("dassl", Estimate::Dassl),
+        ("propagated", Estimate::Propagated),
+    ] {
+        if let Some(i) = args.iter().position(|a| a == name) {
             args.remove(i);
-            Estimate::Dassl
+            estimate = value;
         }
-        None => Options::default().estimate,
-    };
+    }
     if args.len() < 3 {
-        eprintln!("usage: step_cost SOLVER FORM TOL [T_END] [dassl]");
+        eprintln!("usage: step_cost SOLVER FORM TOL [T_END] [dassl|propagated]");
         std::process::exit(2);
     }
     let Some(solver) = solver_by_name(&args[0]) else {

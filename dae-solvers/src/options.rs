@@ -348,7 +348,7 @@ pub struct Options {
 /// it is the one the constraints carry over from the differential
 /// components. The two differ where the constraints are strongly
 /// nonlinear or amplify: on the IVP Test Set's transistor amplifier
-/// DASSL's estimate of the amplifier's output misses by a factor of 30 at
+/// DASSL's estimate of the amplifier's output misses by a factor of 20–30 at
 /// equal steps, and its step control cycles at order one to the end of
 /// the run (1.4 M steps at 1e-10; BENCHMARKS.md §18). The iteration matrix
 /// `G = ∂F/∂y + c_J E` carries the differential part of `e` onto the

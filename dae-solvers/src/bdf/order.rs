@@ -42,7 +42,9 @@ impl<L: Corrector> Integrator<'_, L> {
         let k = self.k;
         let carry = through(&self.lead, &mut self.lu, self.cjold);
         let jacobians = self.ms.stats.jacobian_evals;
-        let enorm = (self.estimate).error_norm(&self.e, &self.ms.weights, jacobians, carry);
+        let enorm = self
+            .estimate
+            .error_norm(&self.e, &self.ms.weights, jacobians, carry);
         let erk = self.hist.sigma[k] * enorm;
         let terk = (k + 1) as f64 * erk;
         let mut test = ErrorTest {
