@@ -180,7 +180,7 @@ impl Solver for Mebdf {
             startup: coeffs::MAX_ORDER.min(6),
         };
         run::integrator(sys, problem, options, orders, move |sys, cfg| {
-            Integrator::new(sys, &options.tol, cfg)
+            Integrator::new(sys, options, cfg)
         })
     }
 }
