@@ -330,10 +330,10 @@ pub struct Options {
     /// directions. A rule naming no event of the model is
     /// [`SolveError::UnknownEvent`]. See [`crate::core::events`].
     pub events: Vec<crate::EventSpec>,
-    /// The BDF methods (`bdf`, `odbdf`): how the local error is estimated
-    /// ([`Estimate`]; the default checks DASSL's estimate against the
-    /// propagated one at each new iteration matrix). Other methods ignore
-    /// it.
+    /// The BDF methods (`bdf`, `odbdf`) and `mebdf`: how the local error
+    /// is estimated ([`Estimate`]; the default checks the family's
+    /// estimate against the propagated one at each new iteration matrix).
+    /// Other methods ignore it.
     pub estimate: Estimate,
 }
 

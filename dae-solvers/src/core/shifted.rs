@@ -116,6 +116,11 @@ impl Shifted {
         Ok(true)
     }
 
+    /// `(a, b)` of the factored matrix, if one is factored.
+    pub(crate) fn factored(&self) -> Option<(f64, f64)> {
+        self.factored
+    }
+
     /// `x ← (a E − b J)⁻¹ x` with the factored matrix.
     pub(crate) fn solve(&mut self, x: &mut [f64]) {
         self.lu.solve(x)

@@ -12,9 +12,8 @@ use crate::core::weights::{self, Weights};
 use crate::multistep::backward::History;
 use crate::multistep::corrector::{self, Reuse};
 use crate::multistep::stale::{self, Stale};
-use crate::multistep::{Common, Config, Family, FALL_BACK_AFTER};
-use crate::options::Tolerances;
-use crate::SolveError;
+use crate::multistep::{propagate::Propagation, Common, Config, Family, FALL_BACK_AFTER};
+use crate::{Options, SolveError};
 
 /// Columns of the difference table: `∇^0 … ∇^(MAX_ORDER+1)` (the order-raise
 /// estimate at the highest order needs `∇^(MAX_ORDER+2) y_{n+1}`, one more
@@ -70,6 +69,8 @@ pub(super) struct Integrator<'a> {
     /// Residual, then Newton update; scratch.
     pub(super) delta: Vec<f64>,
 
+    /// The family's estimate or the propagated one ([`Propagation`]).
+    pub(super) estimate: Propagation,
     /// An error estimate that stops falling with the step ([`Stale`]).
     stale: Stale,
     /// A walk of Newton failures down the round-off floor ([`FloorWalk`]).
@@ -174,8 +175,8 @@ impl Family for Integrator<'_> {
 impl<'a> Integrator<'a> {
     /// Allocate every buffer of the step loop; index-`k` unknowns are
     /// weighted by `h^(k−1)`.
-    pub(super) fn new(sys: Formulation<'a>, tol: &Tolerances, cfg: Config) -> Self {
-        let info = sys.info();
+    pub(super) fn new(sys: Formulation<'a>, options: &Options, cfg: Config) -> Self {
+        let (info, Options { tol, estimate, .. }) = (sys.info(), options);
         let n = info.unknowns();
         let estimated: Vec<bool> = info.variables.iter().map(|v| v.index <= 2).collect();
         let count = estimated.iter().filter(|&&b| b).count().max(1);
@@ -203,6 +204,7 @@ impl<'a> Integrator<'a> {
             solving: (0, 0.0, 0.0),
             yp: vec![0.0; n],
             delta: vec![0.0; n],
+            estimate: Propagation::new(*estimate, info, n),
             stale: Stale::default(),
             floor_walk: FloorWalk::default(),
         }

@@ -26,7 +26,9 @@
 //! one solve per Jacobian.
 
 use crate::core::matrix::{Corrector, Matrix};
+use crate::core::shifted::Shifted;
 use crate::core::weights::Weights;
+use crate::linalg::mat_vec;
 use crate::options::Estimate;
 use dae_core::system::FormulationInfo;
 
@@ -112,6 +114,23 @@ impl Propagation {
         own
     }
 
+    /// `‖v‖` of a term: with `test = Some(jacobians)` the error test's
+    /// ([`Propagation::error_norm`]), with `None` an order-selection
+    /// term's ([`Propagation::norm`]).
+    #[inline]
+    pub(crate) fn term_norm(
+        &mut self,
+        v: &[f64],
+        weights: &Weights,
+        test: Option<usize>,
+        carry: impl FnOnce(&[f64], &mut [f64]),
+    ) -> f64 {
+        match test {
+            Some(jacobians) => self.error_norm(v, weights, jacobians, carry),
+            None => self.norm(v, weights, carry),
+        }
+    }
+
     /// The norm of `max(|v_i|, |ṽ_i|)`.
     #[inline(never)]
     fn propagated(
@@ -143,5 +162,40 @@ pub(crate) fn through<'m, L: Corrector>(
             *x *= c;
         }
         lu.solve(out);
+    }
+}
+
+/// `carry` for a family whose iteration matrix `a E − b J` is a
+/// [`Shifted`] (`mebdf`: `a = 1/(hβ)`, `b = 1`): `out ← (a E − b J)⁻¹
+/// (a E v)` with the matrix as factored, then the entries outside `kept`
+/// zeroed (unknowns the family leaves out of its estimate stay out of the
+/// propagated one). With no matrix factored, `out ← v`.
+#[inline]
+pub(crate) fn through_shifted<'m>(
+    matrix: &'m mut Shifted,
+    kept: &'m [bool],
+) -> impl FnOnce(&[f64], &mut [f64]) + 'm {
+    move |v, out| {
+        let out = &mut out[..v.len()];
+        let Some((a, _)) = matrix.factored() else {
+            out.copy_from_slice(v);
+            return;
+        };
+        mat_vec(&matrix.lead, v, out);
+        for x in out.iter_mut() {
+            *x *= a;
+        }
+        matrix.solve(out);
+        keep(out, kept);
+    }
+}
+
+/// Zero the entries of `v` outside `kept`.
+#[inline]
+pub(crate) fn keep(v: &mut [f64], kept: &[bool]) {
+    for (x, &inside) in v.iter_mut().zip(kept) {
+        if !inside {
+            *x = 0.0;
+        }
     }
 }

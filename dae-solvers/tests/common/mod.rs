@@ -995,6 +995,33 @@ pub fn index1_exact(t: f64) -> [f64; 3] {
     [t.sin(), t.cos(), 1.0 + t.sin() * t.sin()]
 }
 
+/// The circle `y0' = −y1, y1' = y0` with the algebraic `z` its radius
+/// defect amplified a hundredfold, `0 = 100 (y0² + y1² − 1) − z`:
+/// `(cos t, sin t, 0)`. `z` is constant along the exact solution, so a
+/// multistep estimate by differences of `z` sees nothing of the radial
+/// error of `(y0, y1)` that the constraint carries into it.
+pub fn amplified_circle() -> Simple {
+    fn f(_t: f64, y: &[f64], f: &mut [f64]) {
+        f[0] = -y[1];
+        f[1] = y[0];
+        f[2] = 100.0 * (y[0] * y[0] + y[1] * y[1] - 1.0) - y[2];
+    }
+    fn jac(_t: f64, y: &[f64], j: &mut DMatrix<f64>) {
+        j[(0, 1)] = -1.0;
+        j[(1, 0)] = 1.0;
+        j[(2, 0)] = 200.0 * y[0];
+        j[(2, 1)] = 200.0 * y[1];
+        j[(2, 2)] = -1.0;
+    }
+    Simple::new(
+        "amplified_circle",
+        &[("y0", 1), ("y1", 1), ("z", 1)],
+        &[1.0, 1.0, 0.0],
+        f,
+        jac,
+    )
+}
+
 /// Semi-explicit index-1 DAE `y0' = z, y1' = y0 z, 0 = y0² + z² − 1`:
 /// `(sin t, sin²t / 2, cos t)` for `t < π/2`.
 pub fn dae1() -> Simple {
