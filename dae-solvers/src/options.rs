@@ -332,7 +332,8 @@ pub struct Options {
     pub events: Vec<crate::EventSpec>,
     /// The BDF methods (`bdf`, `odbdf`) and `mebdf`: how the local error
     /// is estimated ([`Estimate`]; the default checks the family's
-    /// estimate against the propagated one at each new iteration matrix).
+    /// estimate against the propagated one after each new iteration matrix
+    /// or rejected step).
     /// Other methods ignore it.
     pub estimate: Estimate,
 }
@@ -369,8 +370,9 @@ pub struct Options {
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Estimate {
-    /// DASSL's estimate, checked: the first error test after each new
-    /// iteration matrix also forms the propagated estimate of `e`, and
+    /// The method's own (DASSL's) estimate, checked: the first error test
+    /// after each new iteration matrix or rejected step also forms the
+    /// propagated estimate of `e`, and
     /// once that exceeds DASSL's tenfold the run propagates every estimate
     /// to its end. A check costs one solve with the factored matrix. Where
     /// the check never fires (the pendulum's formulations) the run is
@@ -380,7 +382,8 @@ pub enum Estimate {
     /// The propagated estimate at every step (one to four solves a step).
     /// Not applied to an ODE.
     Propagated,
-    /// DASSL's alone.
+    /// The method's own alone (DASSL's for `bdf`, ODASSL's for `odbdf`,
+    /// Cash's for `mebdf`).
     Dassl,
 }
 

@@ -67,7 +67,8 @@
 //! IV.8; Shampine 1980) — and the norm taken of `max(|v_i|, |ṽ_i|)`,
 //! never below DASSL's. By default
 //! ([`Estimate::Checked`](crate::options::Estimate::Checked)) the first
-//! error test after each new iteration matrix compares the two norms of
+//! error test after each new iteration matrix or rejected step compares
+//! the two norms of
 //! `e`; once the propagated one is more than ten times DASSL's, the run
 //! propagates every term to its end. On the IVP Test Set's transistor
 //! amplifier the amplifier's output is an algebraic combination `≈ 144 ×`
