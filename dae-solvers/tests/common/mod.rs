@@ -20,6 +20,7 @@
 use dae_core::system::{
     ConstraintInfo, DaeSystem, FormulationInfo, RowInfo, RowKind, VarInfo, VarKind,
 };
+use dae_solvers::options::Estimate;
 use dae_solvers::{Options, Problem, Solution, SolveError, Solver};
 use nalgebra::DMatrix;
 use std::f64::consts::PI;
@@ -1020,6 +1021,36 @@ pub fn amplified_circle() -> Simple {
         f,
         jac,
     )
+}
+
+/// `solver` on [`amplified_circle`] over `t ∈ [0, 10]`: with the default
+/// checked estimate `|z(10)|` within 200 tolerances in fewer than 2 000
+/// steps at tol 1e-5, 1e-7, 1e-9, and at 1e-5 the method's own estimate
+/// ([`Estimate::Dassl`]) a thousand times further off in ten times the
+/// steps.
+pub fn assert_checked_estimate_sees_amplified_circle(solver: &dyn Solver) {
+    let sys = amplified_circle();
+    let run_with = |tol, estimate| {
+        let options = Options {
+            estimate,
+            ..Options::with_tol(tol)
+        };
+        let sol = solve_with(solver, &sys, &[1.0, 0.0, 0.0], 10.0, &options).expect("run");
+        (sol.last().expect("output")[2].abs(), sol.stats.steps)
+    };
+    for tol in [1e-5, 1e-7, 1e-9] {
+        let (z, steps) = run_with(tol, Estimate::Checked);
+        assert!(
+            z < 200.0 * tol && steps < 2000,
+            "{tol:e}: |z| {z:e}, {steps} steps"
+        );
+    }
+    let (z_own, steps_own) = run_with(1e-5, Estimate::Dassl);
+    let (z, steps) = run_with(1e-5, Estimate::Checked);
+    assert!(
+        z_own > 1e3 * z && steps_own > 10 * steps,
+        "the method's own estimate: |z| {z_own:e} in {steps_own} steps"
+    );
 }
 
 /// Semi-explicit index-1 DAE `y0' = z, y1' = y0 z, 0 = y0² + z² − 1`:
