@@ -112,6 +112,12 @@ fn bdf_on_the_transistor_amplifier_does_not_crawl() {
     assert!(record.scd.is_some_and(|d| d >= 7.0), "scd {:?}", record.scd);
     let steps = record.stats.steps;
     assert!(steps < 30_000, "{steps} steps");
+    // The check fired, and the record says from which step on.
+    assert!(
+        record.stats.propagated_from.is_some_and(|s| s < steps),
+        "{:?}",
+        record.stats
+    );
 
     let sys = inputs
         .model

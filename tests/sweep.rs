@@ -50,6 +50,7 @@ fn rec(solver: &str, formulation: &str, tol: f64, tsim: f64, err: Option<f64>) -
             jacobian_evals: 90,
             factorizations: 95,
             newton_iterations: 300,
+            ..Stats::default()
         },
         residuals: Residuals(vec![Some(1e-9), Some(1e-8), None]),
         invariant_drift: Named(vec![("energy".into(), 1e-7)]),

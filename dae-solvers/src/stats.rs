@@ -18,12 +18,21 @@ pub struct Stats {
     pub factorizations: usize,
     /// Newton iterations, summed over all attempted steps.
     pub newton_iterations: usize,
+    /// The multistep methods (`bdf`, `odbdf`, `mebdf`) with the default
+    /// checked error estimate ([`crate::options::Estimate::Checked`]): the
+    /// number of accepted steps before the check switched the run to the
+    /// propagated estimate, if it did (omitted from the JSON otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub propagated_from: Option<usize>,
 }
 
 impl AddAssign for Stats {
     /// Add the counters of `part`, e.g. of a second run within one
     /// integration.
     fn add_assign(&mut self, part: Stats) {
+        if self.propagated_from.is_none() {
+            self.propagated_from = part.propagated_from.map(|s| self.steps + s);
+        }
         self.steps += part.steps;
         self.rejected += part.rejected;
         self.residual_evals += part.residual_evals;

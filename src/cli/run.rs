@@ -394,6 +394,13 @@ pub fn text(r: &RunRecord) -> String {
         st.factorizations,
         st.newton_iterations
     );
+    if let Some(step) = st.propagated_from {
+        let _ = writeln!(
+            s,
+            "  estimate: propagated from accepted step {step} on (the check found the method's \
+             own estimate missing the error of its algebraic unknowns; see --estimate)"
+        );
+    }
     let levels: Vec<String> = (0..r.residuals.levels())
         .map(|k| format!("level{k} {}", opt(r.residuals.level(k))))
         .collect();

@@ -6,7 +6,7 @@ use super::step::Integrator;
 use crate::core::control;
 use crate::core::matrix::Corrector;
 use crate::linalg::small;
-use crate::multistep::propagate::{check_key, through};
+use crate::multistep::propagate::through;
 
 /// Result of DASSL's error test (block 4), kept for order selection.
 #[derive(Clone, Copy, Debug)]
@@ -41,10 +41,9 @@ impl<L: Corrector> Integrator<'_, L> {
         let n = self.ms.n;
         let k = self.k;
         let carry = through(&self.lead, &mut self.lu, self.cjold);
-        let key = check_key(&self.ms.stats);
         let enorm = self
             .estimate
-            .error_norm(&self.e, &self.ms.weights, key, carry);
+            .error_norm(&self.e, &self.ms.weights, &mut self.ms.stats, carry);
         let erk = self.hist.sigma[k] * enorm;
         let terk = (k + 1) as f64 * erk;
         let mut test = ErrorTest {

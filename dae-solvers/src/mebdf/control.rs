@@ -59,7 +59,7 @@ impl Integrator<'_> {
         self.hist
             .difference_to(&self.stage[self.solution()], q, &mut d);
         propagate::keep(&mut d, &self.estimated);
-        let test = (q == self.p).then_some(propagate::check_key(&self.ms.stats));
+        let test = (q == self.p).then_some(&mut self.ms.stats);
         let carry = propagate::through_shifted(&mut self.matrix, &self.estimated);
         let norm = self.estimate.term_norm(&d, &self.ms.weights, test, carry);
         let est = self.coef.error_constant[q] * self.estimate_scale * norm;

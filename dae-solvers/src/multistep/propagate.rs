@@ -34,6 +34,7 @@ use crate::core::shifted::Shifted;
 use crate::core::weights::Weights;
 use crate::linalg::mat_vec;
 use crate::options::Estimate;
+use crate::Stats;
 use dae_core::system::FormulationInfo;
 
 /// The factor by which the propagated norm must exceed the family's own,
@@ -91,36 +92,39 @@ impl Propagation {
         }
     }
 
-    /// `‖v‖` of the error-test term `v` at [`check_key`] `key`
-    /// evaluations: as [`Propagation::norm`], and with
-    /// [`Estimate::Checked`] the check at the first test after a new
-    /// matrix, which may switch the run to the propagated estimate (this
-    /// test included).
-    #[inline(always)]
+    /// `‖v‖` of the error-test term `v` of a run with counters `stats`: as
+    /// [`Propagation::norm`], and with [`Estimate::Checked`] the check at
+    /// the first test after a new matrix or a rejected step
+    /// ([`check_key`]), which may switch the run to the propagated
+    /// estimate (this test included; recorded in
+    /// [`Stats::propagated_from`]).
+    #[inline]
     pub(crate) fn error_norm(
         &mut self,
         v: &[f64],
         weights: &Weights,
-        key: usize,
+        stats: &mut Stats,
         carry: impl FnOnce(&[f64], &mut [f64]),
     ) -> f64 {
         if self.propagate {
             return self.propagated(v, weights, carry);
         }
         let own = weights.norm(v);
+        let key = check_key(stats);
         if self.check && self.checked != key {
             self.checked = key;
             let propagated = self.propagated(v, weights, carry);
             if propagated > MISSED * own {
                 self.propagate = true;
                 self.check = false;
+                stats.propagated_from = Some(stats.steps);
                 return propagated;
             }
         }
         own
     }
 
-    /// `‖v‖` of a term: with `test = Some(key)` the error test's
+    /// `‖v‖` of a term: with `test = Some(stats)` the error test's
     /// ([`Propagation::error_norm`]), with `None` an order-selection
     /// term's ([`Propagation::norm`]).
     #[inline]
@@ -128,11 +132,11 @@ impl Propagation {
         &mut self,
         v: &[f64],
         weights: &Weights,
-        test: Option<usize>,
+        test: Option<&mut Stats>,
         carry: impl FnOnce(&[f64], &mut [f64]),
     ) -> f64 {
         match test {
-            Some(key) => self.error_norm(v, weights, key, carry),
+            Some(stats) => self.error_norm(v, weights, stats, carry),
             None => self.norm(v, weights, carry),
         }
     }
@@ -157,7 +161,7 @@ impl Propagation {
 /// The count that changes when a check is due: Jacobians evaluated plus
 /// steps rejected so far.
 #[inline]
-pub(crate) fn check_key(stats: &crate::Stats) -> usize {
+pub(crate) fn check_key(stats: &Stats) -> usize {
     stats.jacobian_evals + stats.rejected
 }
 

@@ -1036,6 +1036,8 @@ pub fn assert_checked_estimate_sees_amplified_circle(solver: &dyn Solver) {
             ..Options::with_tol(tol)
         };
         let sol = solve_with(solver, &sys, &[1.0, 0.0, 0.0], 10.0, &options).expect("run");
+        let switched = sol.stats.propagated_from.is_some();
+        assert_eq!(switched, estimate == Estimate::Checked, "{estimate:?}");
         (sol.last().expect("output")[2].abs(), sol.stats.steps)
     };
     for tol in [1e-5, 1e-7, 1e-9] {
