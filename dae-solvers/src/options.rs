@@ -330,15 +330,14 @@ pub struct Options {
     /// directions. A rule naming no event of the model is
     /// [`SolveError::UnknownEvent`]. See [`crate::core::events`].
     pub events: Vec<crate::EventSpec>,
-    /// The BDF methods (`bdf`, `odbdf`) and `mebdf`: how the local error
-    /// is estimated ([`Estimate`]; the default checks the family's
+    /// The multistep methods (`bdf`, `odbdf`, `mebdf`): how the local error
+    /// is estimated ([`Estimate`]; the default checks the method's own
     /// estimate against the propagated one after each new iteration matrix
-    /// or rejected step).
-    /// Other methods ignore it.
+    /// or rejected step). Other methods ignore it.
     pub estimate: Estimate,
 }
 
-/// How the BDF methods estimate the local error of a step
+/// How the multistep methods estimate the local error of a step
 /// ([`Options::estimate`]).
 ///
 /// DASSL estimates it by the corrector's distance from the predictor,
@@ -350,8 +349,8 @@ pub struct Options {
 /// components. The two differ where the constraints are strongly
 /// nonlinear or amplify: on the IVP Test Set's transistor amplifier
 /// DASSL's estimate of the amplifier's output misses by a factor of 20–30 at
-/// equal steps, and its step control cycles at order one to the end of
-/// the run (1.4 M steps at 1e-10; BENCHMARKS.md §18). The iteration matrix
+/// equal steps, and its step control cycles at order one in bursts over
+/// the rest of the run (1.4 M steps at 1e-10; BENCHMARKS.md §18). The iteration matrix
 /// `G = ∂F/∂y + c_J E` carries the differential part of `e` onto the
 /// algebraic components: `ẽ = G⁻¹ (c_J E e)`, RADAU5's filtered estimate
 /// (Hairer & Wanner, *Solving ODEs II*, §IV.8; Shampine 1980 for stiff
@@ -372,9 +371,8 @@ pub struct Options {
 pub enum Estimate {
     /// The method's own (DASSL's) estimate, checked: the first error test
     /// after each new iteration matrix or rejected step also forms the
-    /// propagated estimate of `e`, and
-    /// once that exceeds DASSL's tenfold the run propagates every estimate
-    /// to its end. A check costs one solve with the factored matrix. Where
+    /// propagated estimate of `e`, and once that exceeds DASSL's tenfold
+    /// the run propagates every estimate to its end. A check costs one solve with the factored matrix. Where
     /// the check never fires (the pendulum's formulations) the run is
     /// DASSL's, step for step. Not applied to an ODE (`d_index = 0`).
     #[default]

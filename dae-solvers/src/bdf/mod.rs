@@ -68,17 +68,17 @@
 //! never below DASSL's. By default
 //! ([`Estimate::Checked`](crate::options::Estimate::Checked)) the first
 //! error test after each new iteration matrix or rejected step compares
-//! the two norms of
-//! `e`; once the propagated one is more than ten times DASSL's, the run
-//! propagates every term to its end. On the IVP Test Set's transistor
-//! amplifier the amplifier's output is an algebraic combination `≈ 144 ×`
-//! the transistor's input: at equal steps DASSL's `e` of it misses the
-//! step's error 20–30-fold, at a doubled step it sees half of it
-//! (BENCHMARKS.md §18), and DASSL's controller then alternates, in bursts
-//! over the rest of the run, between an accepted order-one step and a
-//! doubled, rejected one (1.4 M steps at 1e-10, 6 digits). Propagated, the estimate grows
-//! like `h^{k+1}` and the run takes 22 983 steps to 9.2 digits. On
-//! the pendulum the check never fires and the run is DASSL's.
+//! the two norms of `e`; once the propagated one is more than ten times
+//! DASSL's, the run propagates every term to its end. On the IVP Test
+//! Set's transistor amplifier the amplifier's output is an algebraic
+//! combination `≈ 144 ×` the transistor's input: at equal steps DASSL's
+//! `e` of it misses the step's error 20–30-fold, at a doubled step it sees
+//! half of it (BENCHMARKS.md §18), and DASSL's controller then alternates,
+//! in bursts over the rest of the run, between an accepted order-one step
+//! and a doubled, rejected one (1.4 M steps at 1e-10, 6 digits).
+//! Propagated, the estimate grows like `h^{k+1}` and the run takes 22 983
+//! steps to 9.2 digits. On the pendulum the check never fires and the run
+//! is DASSL's.
 //! [`Estimate::Dassl`](crate::options::Estimate::Dassl) never checks (the
 //! Fortran reproduction, `examples/bdf_s02`).
 //!

@@ -19,10 +19,10 @@
 //!
 //! [`Estimate::Checked`] (the default) keeps the family's estimate and
 //! checks it: the first error test after each new iteration matrix or
-//! rejected step also
-//! forms the propagated norm of the error-test term, and once that is more
-//! than [`MISSED`] times the family's own the run propagates every term
-//! (error test and order selection alike) to its end. Where the check
+//! rejected step also forms the propagated norm of the error-test term,
+//! and once that is more than [`MISSED`] times the family's own the run
+//! propagates every term (error test and order selection alike) to its
+//! end. Where the check
 //! never fires the run is the family's own, step for step, at the cost of
 //! one solve per Jacobian and rejection. (The rejections count because a
 //! family may keep its matrix over many steps: MEBDF on an amplified
