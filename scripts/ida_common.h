@@ -44,7 +44,7 @@ struct ida_run {
 /* Integrate to the stop time t_end (set by the caller with IDASetStopTime)
  * one step at a time (IDA_ONE_STEP), counting the order of every accepted
  * step and keeping the roots. */
-static void ida_steps(void *mem, double t_end, N_Vector yy, N_Vector yp, struct ida_run *r) {
+static inline void ida_steps(void *mem, double t_end, N_Vector yy, N_Vector yp, struct ida_run *r) {
   long nst_prev = 0;
   r->tret = 0.0;
   r->nroots = 0;
