@@ -605,3 +605,25 @@ fn gauss_end_points_solve_the_algebraic_rows() {
         );
     }
 }
+
+/// Gear–Hsu–Petzold's `rcd0` keeps `E(t)` (`y1' + ηt y2'`): `gauss`'s
+/// frozen iteration matrix contracts at about 0.46 there, and steps of
+/// 0.48 at tol 1e-4 stopped after one increment on the contraction carried
+/// from the step before, `y1` 2.5·10⁻³ off (1.64 digits at 1e-4, 2.61 at
+/// 1e-5). With a leading matrix that is not constant the first increment
+/// no longer ends the iteration (issue 26, EXTREMES.md colloc13).
+#[test]
+fn gauss_iterates_past_the_first_increment_with_a_time_dependent_e() {
+    let scene = Scene::load(scenes_dir().join("gear_hsu_petzold.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    for tol in [1e-4, 1e-5] {
+        let r = runner::run(&inputs.spec(&scene, "gauss", "rcd0", tol)).unwrap();
+        assert_eq!(r.status, "ok", "tol {tol}: {:?}", r.error);
+        let needed = -tol.log10() - 2.0;
+        assert!(
+            r.scd.is_some_and(|d| d >= needed),
+            "gauss(rcd0) tol {tol}: {:?} digits, {needed} needed",
+            r.scd
+        );
+    }
+}

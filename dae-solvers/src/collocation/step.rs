@@ -452,7 +452,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             self.evaluate_at_step_point(t, false)?;
         }
         self.next_step(h_new);
-        if self.c.caljac && self.c.next == Next::Jacobian {
+        if K::TABLEAU.end.projected() && self.c.caljac && self.c.next == Next::Jacobian {
             self.c.next = Next::Factor;
         }
         Ok(Outcome::Accepted)
