@@ -426,9 +426,10 @@ impl<K: Collocation> Integrator<'_, K> {
     /// constant and its zero columns are the algebraic unknowns), by which
     /// the caller iterates to convergence: the iteration's `J` may be the
     /// one of the step's start (or older), and the algebraic rows may be
-    /// nonlinear in the unknowns, so one step is not exact in general (the reactor's `rcd0`, whose
-    /// coefficient of `TC` changes by a tenth over a step, and Jay's, with
-    /// `z²` in its constraint; see [`crate::gauss`]).
+    /// nonlinear in the unknowns, so one step is not exact in general (the
+    /// reactor's `rcd0`, whose coefficient of `TC` changes by a tenth over
+    /// a step, and Jay's, with `z²` in its constraint; see
+    /// [`crate::gauss`]).
     pub(super) fn project(
         &mut self,
         t: f64,

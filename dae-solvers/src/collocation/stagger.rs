@@ -416,8 +416,7 @@ impl<K: Collocation> Integrator<'_, K> {
             // worse on this step than on the last: Gear–Hsu–Petzold's
             // `rcd0` (`E(t)`) contracts at 0.46, stopped after one
             // increment with `y1` 2.5·10⁻³ off at tol 1e-4. A constant `E`
-            // keeps the old rule (the pendulum's `rcd0`, the solver
-            // harness, unchanged).
+            // keeps the old rule (the pendulum's `rcd0` unchanged).
             if matches!(K::POLICY.newton, NewtonStop::RoundOff { .. })
                 && !self.constant_leading
                 && verdict == Verdict::Converged
