@@ -569,9 +569,10 @@ fn mebdf_reaches_andrews_in_rcd1() {
 /// step) nor on Jay's (`z²` in its constraint): `TC` and `z` were up to
 /// 4.7·10⁻⁶ and 2.6·10⁻⁷ off at step points where the differential
 /// unknowns were right to 10⁻¹⁰ (here, at these end times: 3.0·10⁻⁸ and
-/// 4.4·10⁻⁹ before, 1.3·10⁻¹¹ and 2.5·10⁻¹⁰ now). The end point is now solved with the Jacobian taken there,
-/// or iterated (issue 26, EXTREMES.md colloc13). The run ends at a step
-/// point: the final values are end points, not the dense output.
+/// 4.4·10⁻⁹ before, 1.3·10⁻¹¹ and 2.5·10⁻¹⁰ now). The end point is now
+/// solved with the Jacobian taken there, or iterated (issue 26,
+/// EXTREMES.md colloc13). The run ends at a step point: the final values
+/// are end points, not the dense output.
 #[test]
 fn gauss_end_points_solve_the_algebraic_rows() {
     // (scene, tol, t_end, unknown, its closed form at t_end, bound)
