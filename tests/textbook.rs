@@ -559,3 +559,72 @@ fn mebdf_reaches_andrews_in_rcd1() {
     assert_eq!(r.status, "ok", "{:?}", r.error);
     assert!(r.scd.is_some_and(|d| d >= 6.0), "{:?}", r.scd);
 }
+
+/// `gauss` ends a step at the collocation polynomial's value, whose
+/// algebraic unknowns it recomputes from the algebraic rows (HW VI.1: they
+/// converge with the stage order otherwise). One simplified Newton step
+/// with the Jacobian of the step's start did it on the pendulum, whose
+/// coefficient of `λ` does not change along the motion, but not on the
+/// reactor's `rcd0` (the coefficient of `TC` changes by a tenth over a
+/// step) nor on Jay's (`z²` in its constraint): `TC` and `z` were up to
+/// 4.7·10⁻⁶ and 2.6·10⁻⁷ off at step points where the differential
+/// unknowns were right to 10⁻¹⁰ (here, at these end times: 3.0·10⁻⁸ and
+/// 4.4·10⁻⁹ before, 1.3·10⁻¹¹ and 2.5·10⁻¹⁰ now). The end point is now
+/// solved with the Jacobian taken there, or iterated (issue 26,
+/// EXTREMES.md colloc13). The run ends at a step point: the final values
+/// are end points, not the dense output.
+#[test]
+fn gauss_end_points_solve_the_algebraic_rows() {
+    // (scene, tol, t_end, unknown, its closed form at t_end, bound)
+    let cstr_tc = 0.967_469_423_464_424_3; // scenes/cstr_reference.csv, t = 0.2
+    let jay_z = 1.6f64.exp(); // z = exp(2t) at t = 0.8
+    for (name, tol, t_end, unknown, exact, bound) in [
+        ("cstr", 1e-8, 0.2, "TC", cstr_tc, 1e-9),
+        ("jay_index2", 1e-9, 0.8, "z", jay_z, 1e-9),
+    ] {
+        let scene = Scene::load(scenes_dir().join(format!("{name}.toml"))).unwrap();
+        let inputs = inputs(&scene).unwrap();
+        let spec = runner::RunSpec {
+            t_end,
+            check: &[],
+            reference: None,
+            ..inputs.spec(&scene, "gauss", "rcd0", tol)
+        };
+        let r = runner::run(&spec).unwrap();
+        assert_eq!(r.status, "ok", "{name}: {:?}", r.error);
+        let value = r
+            .final_values
+            .0
+            .iter()
+            .find(|(n, _)| n == unknown)
+            .map(|(_, v)| *v)
+            .unwrap_or_else(|| panic!("{name}: no `{unknown}`"));
+        let err = (value - exact).abs();
+        assert!(
+            err < bound,
+            "{name} gauss(rcd0) tol {tol}: {unknown} off by {err:.2e} at {t_end}"
+        );
+    }
+}
+
+/// Gear–Hsu–Petzold's `rcd0` keeps `E(t)` (`y1' + ηt y2'`): `gauss`'s
+/// frozen iteration matrix contracts at about 0.46 there, and steps of
+/// 0.48 at tol 1e-4 stopped after one increment on the contraction carried
+/// from the step before, `y1` 2.5·10⁻³ off (1.64 digits at 1e-4, 2.61 at
+/// 1e-5). With a leading matrix that is not constant the first increment
+/// no longer ends the iteration (issue 26, EXTREMES.md colloc13).
+#[test]
+fn gauss_iterates_past_the_first_increment_with_a_time_dependent_e() {
+    let scene = Scene::load(scenes_dir().join("gear_hsu_petzold.toml")).unwrap();
+    let inputs = inputs(&scene).unwrap();
+    for tol in [1e-4, 1e-5] {
+        let r = runner::run(&inputs.spec(&scene, "gauss", "rcd0", tol)).unwrap();
+        assert_eq!(r.status, "ok", "tol {tol}: {:?}", r.error);
+        let needed = -tol.log10() - 2.0;
+        assert!(
+            r.scd.is_some_and(|d| d >= needed),
+            "gauss(rcd0) tol {tol}: {:?} digits, {needed} needed",
+            r.scd
+        );
+    }
+}

@@ -99,18 +99,37 @@
 //! round-off: near round-off over S02's 2000 s, some sweeps earlier over
 //! S01's 20 s. It is not abandoned early for slow convergence; up to
 //! [`MAX_NEWTON`] iterations are allowed. A step still costs about twice
-//! the residual evaluations of a `radau5` step.
+//! the residual evaluations of a `radau5` step. With a leading matrix that
+//! is not constant (`E(t)`, or `E(y)` as in `psi0`, `mex0`), the first
+//! increment never ends the iteration, whatever the contraction carried
+//! from the step before: the iteration matrix holds `E` of the Jacobian's
+//! point, and on Gear–Hsu–Petzold's `rcd0` it contracts at 0.46, which a
+//! stop after one increment turned into 1.6 digits at tol 1e-4.
 
 //! # End points of index-1 formulations
 //!
 //! The algebraic unknowns at `y_{n+1}` (from `d` above, with `R(∞) = −1`)
 //! would carry an error that alternates in sign from step to step and
-//! inflates the error estimate. After each step one simplified Newton step
-//! makes the end point consistent: `E(y_{n+1}) δ = 0` on the differential
-//! rows (the differential part is kept) and `f_a(t, y_{n+1} + δ) = 0`
-//! linearised with the iteration's Jacobian on the algebraic rows (the
-//! constraint rows whose row of `E` is zero). For `rcd0` this recomputes
-//! `λ` alone.
+//! inflates the error estimate; and they converge only with the stage
+//! order unless they are recomputed from the algebraic rows (HW VI.1).
+//! After each step Newton steps make the end point consistent:
+//! `E(y_{n+1}) δ = 0` on the differential rows (the differential part is
+//! kept) and `f_a(t, y_{n+1} + δ) = 0` linearised on the algebraic rows
+//! (the constraint rows whose row of `E` is zero). For `rcd0` this
+//! recomputes `λ` alone.
+//!
+//! With a constant `E`, the Jacobian the next step would take anyway is
+//! taken at the end point before the projection, and one step solves rows
+//! linear in the algebraic unknowns exactly (quadratically otherwise);
+//! when the next step keeps an older Jacobian, `f` is evaluated again and
+//! the step repeated until a correction is a thousandth of the tolerance.
+//! One step with the Jacobian of the step's start was enough on the
+//! pendulum, whose coefficient of `λ` does not change along the motion,
+//! not on Pantelides' reactor (`rcd0`: the coefficient of `TC` changes by
+//! a tenth over a step, which left `TC` 4.7·10⁻⁶ off at tol 1e-8 where
+//! the differential unknowns were right to 3·10⁻¹¹) nor on Jay's
+//! (`z²` in its constraint: `z` 2.6·10⁻⁷ off at 1e-9); now 4·10⁻¹¹ and
+//! 4·10⁻¹⁰ (EXTREMES.md colloc13).
 //!
 //! # Dense output: projected the same way
 //!
@@ -122,7 +141,8 @@
 //! The values reported at output times ([`crate::Options::output_times`],
 //! [`crate::Integrator::advance_to`]) are therefore projected as the end point is
 //! (the same factorised matrix, up to three simplified Newton steps with
-//! `f` re-evaluated, each counted in `residual_evals`): the position
+//! `f` re-evaluated until a correction is a thousandth of the tolerance,
+//! each counted in `residual_evals`): the position
 //! residual of that run at `dae run`'s verification samples falls to
 //! 3.2e-9. On the pendulum's `psi0` the outputs lie on the circle to
 //! round-off; `rcd0`'s `λ` at the output times is the consistent one. The
@@ -132,6 +152,16 @@
 //! same `O(h⁴)`, and the projection needs the system, which a
 //! [`crate::Solution`] does not hold. Ask for the times you need as
 //! output times.
+//!
+//! The projection keeps the differential unknowns of the polynomial, whose
+//! own error between the step points is the collocation polynomial's,
+//! `O(h⁴)` against the step points' `O(h⁶)`: with the tolerance map
+//! (`h⁴ ∝ tol'` ∝ `tol^(2/3)`) it grows relative to the tolerance as the
+//! tolerance falls. On the literature map's short horizons that is the
+//! largest error at tight tolerances (Pantelides' reactor at 1e-10:
+//! 2.2·10⁻⁸ at the check times, 6·10⁻¹³ at the step points; EXTREMES.md
+//! colloc13); a step that ended at every output time would meet the step
+//! points' order, at the cost of the held step.
 
 //! # Example
 //!

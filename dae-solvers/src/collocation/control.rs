@@ -163,16 +163,22 @@ impl Hold {
 }
 
 impl<K: Collocation> Integrator<'_, K> {
-    /// Size of the next step after one accepted with proposal `h_new`, and
-    /// whether the factorisation (or the Jacobian) can be kept.
-    pub(super) fn next_step(&mut self, h_new: f64) {
+    /// The last Newton iteration contracted fast enough for its Jacobian
+    /// to be kept (`θ ≤ THET`).
+    pub(super) fn small_theta(&self) -> bool {
         let theta = if K::POLICY.newton.slow_exit() {
             self.newton.theta
         } else {
             // Iterated towards round-off: the last ratios are noise.
             self.newton.theta_first
         };
-        let small_theta = theta <= K::POLICY.thet;
+        theta <= K::POLICY.thet
+    }
+
+    /// Size of the next step after one accepted with proposal `h_new`, and
+    /// whether the factorisation (or the Jacobian) can be kept.
+    pub(super) fn next_step(&mut self, h_new: f64) {
+        let small_theta = self.small_theta();
         let c = &mut self.c;
         let one = &mut c.one;
         let (t, h) = (one.t, one.h);

@@ -410,28 +410,39 @@ impl<K: Collocation> Integrator<'_, K> {
         Ok(())
     }
 
-    /// Make the end point of an accepted step consistent (a method that is
-    /// not stiffly accurate, see [`crate::gauss`]): with `f` and `E`
-    /// already evaluated at `y_{n+1}`, one simplified Newton step for
-    /// `δ` with `E(y_{n+1}) δ = 0` (the differential part kept) and
+    /// One simplified Newton step that makes the end point of an accepted
+    /// step more consistent (a method that is not stiffly accurate, see
+    /// [`crate::gauss`]): with `f` and `E` evaluated at the current end
+    /// point, `δ` with `E(y_{n+1}) δ = 0` (the differential part kept) and
     /// `f_a(t, y_{n+1}) + J_a δ = 0` on the algebraic rows `a`, `J` the
-    /// iteration's Jacobian. Returns whether `f` and `E` must be evaluated
-    /// again at the new `y`: with a constant `E`, `f(t, y_{n+1})` is
-    /// updated to `f + J δ` instead (exact where `f` is linear in the
-    /// algebraic unknowns, as in `rcd0`; it only feeds the next error
-    /// estimate).
+    /// iteration's Jacobian; `first` says it is the step's first
+    /// projection (the matrix is factorised then and kept), `sized` that
+    /// the caller needs the size of the correction. With a constant
+    /// `E`, `f(t, y_{n+1})` is updated to `f + J δ`, exact where `f` is
+    /// linear in the algebraic unknowns and `J` is current; the caller
+    /// evaluates `f` again at the new point unless `δ` was negligible.
     ///
-    /// Also returns the weighted norm of `δ`, by which a caller iterates a
-    /// nonlinear algebraic part (constraints kept as rows, `psi0`, `mex0`)
-    /// to convergence.
-    pub(super) fn project(&mut self, t: f64, h: f64) -> Result<(bool, f64), SolveError> {
+    /// Returns the weighted norm of `δ` (0 unless `sized` where `E` is
+    /// constant and its zero columns are the algebraic unknowns), by which
+    /// the caller iterates to convergence: the iteration's `J` may be the
+    /// one of the step's start (or older), and the algebraic rows may be
+    /// nonlinear in the unknowns, so one step is not exact in general (the
+    /// reactor's `rcd0`, whose coefficient of `TC` changes by a tenth over
+    /// a step, and Jay's, with `z²` in its constraint; see
+    /// [`crate::gauss`]).
+    pub(super) fn project(
+        &mut self,
+        t: f64,
+        h: f64,
+        first: bool,
+        sized: bool,
+    ) -> Result<f64, SolveError> {
         let w = &mut self.w;
         if w.algebraic.is_empty() {
-            return Ok((false, 0.0));
+            return Ok(0.0);
         }
         if !w.algebraic_unknowns.is_empty() {
-            self.project_algebraic_unknowns(t, h)?;
-            return Ok((false, 0.0));
+            return self.project_algebraic_unknowns(t, h, first, sized);
         }
         // Column-major: the rows of `E`, then the algebraic rows of `J`.
         let n = self.n;
@@ -449,20 +460,22 @@ impl<K: Collocation> Integrator<'_, K> {
         } else {
             w.e_n.dense()
         };
-        w.projection
-            .matrix_mut()
-            .as_mut_slice()
-            .copy_from_slice(e.as_slice());
-        let p = w.projection.matrix_mut().as_mut_slice();
-        let jac = w.jac.values();
-        for &i in &w.algebraic {
-            for j in 0..n {
-                p[i + j * n] = jac[i + j * n];
+        if first || !self.constant_leading {
+            w.projection
+                .matrix_mut()
+                .as_mut_slice()
+                .copy_from_slice(e.as_slice());
+            let p = w.projection.matrix_mut().as_mut_slice();
+            let jac = w.jac.values();
+            for &i in &w.algebraic {
+                for j in 0..n {
+                    p[i + j * n] = jac[i + j * n];
+                }
             }
+            w.projection
+                .factor()
+                .map_err(|_| SolveError::SingularMatrix { t, h })?;
         }
-        w.projection
-            .factor()
-            .map_err(|_| SolveError::SingularMatrix { t, h })?;
         w.delta.fill(0.0);
         for &i in &w.algebraic {
             w.delta[i] = -w.f0[i];
@@ -473,14 +486,13 @@ impl<K: Collocation> Integrator<'_, K> {
             w.correct(k, w.delta[k], self.c.one.compensated);
         }
         let size = w.weights.norm(&w.delta[..self.n]);
-        if !self.constant_leading {
-            return Ok((true, size));
+        if self.constant_leading {
+            mat_vec(w.jac.dense(), &w.delta, &mut w.fm);
+            for (f, d) in w.f0.iter_mut().zip(&w.fm) {
+                *f += d;
+            }
         }
-        mat_vec(w.jac.dense(), &w.delta, &mut w.fm);
-        for (f, d) in w.f0.iter_mut().zip(&w.fm) {
-            *f += d;
-        }
-        Ok((false, size))
+        Ok(size)
     }
 
     /// Project a value `u` of the dense output at `tau` (inside the step
@@ -509,35 +521,36 @@ impl<K: Collocation> Integrator<'_, K> {
         for _ in 0..OUTPUT_PROJECTION_STEPS {
             self.sys.rhs(tau, u, f);
             *residual_evals += 1;
-            let k = w.algebraic.len();
             if w.algebraic_unknowns.is_empty() {
                 delta.fill(0.0);
                 for &i in &w.algebraic {
                     delta[i] = -f[i];
                 }
                 w.projection.solve(delta);
-                if !all_finite(delta) {
-                    return;
-                }
-                for (x, d) in u.iter_mut().zip(delta.iter()) {
-                    *x += d;
-                }
             } else {
-                let mu = &mut delta[..k];
-                for (m, &i) in mu.iter_mut().zip(&w.algebraic) {
+                let k = w.algebraic.len();
+                for (m, &i) in delta.iter_mut().zip(&w.algebraic) {
                     *m = -f[i];
                 }
-                w.projection_small.solve(mu);
-                if !all_finite(mu) {
-                    return;
+                w.projection_small.solve(&mut delta[..k]);
+                // Scattered to the algebraic unknowns (`f` is free until
+                // the next evaluation).
+                f[..k].copy_from_slice(&delta[..k]);
+                delta.fill(0.0);
+                for (&j, &d) in w.algebraic_unknowns.iter().zip(&f[..k]) {
+                    delta[j] = d;
                 }
-                for (&j, d) in w.algebraic_unknowns.iter().zip(mu.iter()) {
-                    u[j] += d;
-                }
-                // Linear in the algebraic unknowns (`rcd0`'s λ): one step
-                // is exact up to the iteration's `J`.
+            }
+            if !all_finite(delta) {
                 return;
             }
+            for (x, d) in u.iter_mut().zip(delta.iter()) {
+                *x += d;
+            }
+            // The factorised matrix holds `J` of the step's end (or older),
+            // not at `tau`: even where the rows are linear in the
+            // algebraic unknowns one step is not exact (the reactor's
+            // `rcd0`: a tenth of the correction left over a whole step).
             if w.weights.norm(&delta[..self.n]) <= OUTPUT_PROJECTION_FLOOR {
                 return;
             }
@@ -548,12 +561,20 @@ impl<K: Collocation> Integrator<'_, K> {
     /// are the algebraic unknowns `a` (as `λ` in `rcd0`): `E δ = 0` is
     /// `δ` zero outside `a`, and the algebraic rows `r` give the `k × k`
     /// system `J_ra δ_a = −f_r`; then `f += J_·a δ_a`.
-    fn project_algebraic_unknowns(&mut self, t: f64, h: f64) -> Result<(), SolveError> {
+    fn project_algebraic_unknowns(
+        &mut self,
+        t: f64,
+        h: f64,
+        first: bool,
+        sized: bool,
+    ) -> Result<f64, SolveError> {
         let w = &mut self.w;
         let (rows, cols, jac) = (&w.algebraic, &w.algebraic_unknowns, w.jac.dense());
-        w.projection_small
-            .factor_from(|a, b| jac[(rows[a], cols[b])])
-            .map_err(|_| SolveError::SingularMatrix { t, h })?;
+        if first {
+            w.projection_small
+                .factor_from(|a, b| jac[(rows[a], cols[b])])
+                .map_err(|_| SolveError::SingularMatrix { t, h })?;
+        }
         let k = rows.len();
         let mu = &mut w.delta[..k];
         for (m, &i) in mu.iter_mut().zip(rows) {
@@ -569,7 +590,16 @@ impl<K: Collocation> Integrator<'_, K> {
                 *f += jij * d;
             }
         }
-        Ok(())
+        if !sized {
+            return Ok(0.0);
+        }
+        // The correction's weighted norm, on all `N` unknowns (`tmp` is
+        // free after the step's error estimate).
+        w.tmp.fill(0.0);
+        for (&j, &d) in w.algebraic_unknowns.iter().zip(&w.delta[..k]) {
+            w.tmp[j] = d;
+        }
+        Ok(w.weights.norm(&w.tmp[..self.n]))
     }
 
     /// Accept the step: `y_{n+1} = y_n + Z_3` (or `Σ END_i Z_i`), the new
