@@ -149,8 +149,8 @@
 //! index-2 circuit (`scenes/mna_cv_loop.dae`, `ori2`) with the multiplier
 //! out of the Newton norm too, the iterations that converged in the node
 //! potentials left the source current `jv` with errors up to 3e-2 at tol
-//! 1e-6 (scd 1.2); on the pendulum's `rcd1`, `ggl1` and `psi1` the
-//! multiplier's unconverged part cost 31–58 % more steps (S01, S02;
+//! 1e-6 (scd 1.2); on the pendulum's `rcd1`, `ggl1` and `psi1` the runs
+//! take 31–60 % fewer steps with the multiplier in the norm (S01, S02;
 //! EXTREMES.md "ix2bdf13"). An update at the round-off floor of the
 //! index-scaled norm (`h^(k−1)` for index `k`, Hairer & Wanner VII.8) also
 //! counts as converged: round-off in the rows reaches an index-2 unknown
