@@ -264,6 +264,67 @@ fn differentiations_to_determine(
         .collect()
 }
 
+/// For each unknown of `model`, the differentiations of the formulation
+/// (which keeps `levels[c]` of chain `c`) before the first level that
+/// holds it — Hairer & Wanner's index of a variable for Hessenberg forms
+/// (the pendulum's positions 0, velocities 1) — counting only the levels
+/// that constrain it:
+///
+/// - a level below its chain's top constrains the unknowns it holds (the
+///   velocity constraint fixes the velocities' normal part);
+/// - a chain's top level is solved for the chain's own algebraic unknown
+///   (whose count is [`differentiations_to_determine`]); the other
+///   unknowns it holds are inputs to it. The double pendulum's second
+///   mass enters the first rod's top level through `λ2` but is a position
+///   of the second rod's (0, as the IVP Test Set's car axis counts its
+///   four positions), and a circuit's node potential entering a
+///   differentiated source constraint through the mass matrix is a state
+///   (`scenes/mna_cv_loop.dae`);
+/// - an unknown that only top levels hold is determined by one of them when
+///   that level's own unknown is fixed by a lower level elsewhere: the
+///   CSTR's temperature `T` is fixed by the rate law `R = k5 e^(−k4/T) C`
+///   once `R` is known from the derivative of `C`'s constraint, so `T`
+///   counts what `R` does (1 in `ori2`).
+fn differentiations_by_appearance(
+    model: &Model,
+    an: &Analysis,
+    levels: &[Vec<usize>],
+) -> Vec<usize> {
+    let n = model.vars.len();
+    let firsts: Vec<_> = an.chains.iter().map(|c| c.first_levels(model)).collect();
+    let kept = |c: usize| levels[c].iter().copied().max().unwrap_or(0);
+    let mut depth = vec![0usize; n];
+    let mut below_top = vec![false; n];
+    for (c, chain) in an.chains.iter().enumerate() {
+        for (j, (d, below)) in depth.iter_mut().zip(&mut below_top).enumerate() {
+            let Some(&first) = firsts[c].get(&Sym::Var(j as u32)) else {
+                continue;
+            };
+            if first < chain.top() {
+                *below = true;
+            }
+            if first == chain.top() && first > kept(c) {
+                continue;
+            }
+            *d = (*d).max(first.saturating_sub(kept(c)));
+        }
+    }
+    let owned = |j: usize| an.matching.contains(&j);
+    let mut out = depth.clone();
+    for (j, out) in out.iter_mut().enumerate() {
+        if below_top[j] || owned(j) {
+            continue;
+        }
+        for (c, &owner) in an.matching.iter().enumerate() {
+            let top = an.chains[c].top();
+            if owner < n && firsts[c].get(&Sym::Var(j as u32)) == Some(&top) {
+                *out = (*out).max(depth[owner]);
+            }
+        }
+    }
+    out
+}
+
 /// Build formulation `name` (must be applicable).
 pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, String> {
     let split = check(model, an, name)?;
@@ -292,31 +353,15 @@ pub fn build(model: &Model, an: &Analysis, name: &str) -> Result<Formulation, St
         .collect();
 
     let through = differentiations_to_determine(model, an, &levels);
-    let firsts: Vec<_> = an.chains.iter().map(|c| c.first_levels(model)).collect();
+    let appearance = differentiations_by_appearance(model, an, &levels);
     let mut vars: Vec<VarInfo> = model
         .vars
         .iter()
         .enumerate()
-        .map(|(j, v)| {
-            let s = Sym::Var(j as u32);
-            let first_appearance = an
-                .chains
-                .iter()
-                .zip(&levels)
-                .zip(&firsts)
-                .filter_map(|((_, ls), firsts)| {
-                    let first = *firsts.get(&s)?;
-                    let h = *ls.iter().max()?;
-                    Some(first.saturating_sub(h))
-                })
-                .max()
-                .unwrap_or(0);
-            let index = first_appearance.max(through[j]);
-            VarInfo {
-                name: v.name.clone(),
-                kind: v.kind,
-                index: (1 + index) as u8,
-            }
+        .map(|(j, v)| VarInfo {
+            name: v.name.clone(),
+            kind: v.kind,
+            index: (1 + appearance[j].max(through[j])) as u8,
         })
         .collect();
 

@@ -203,6 +203,44 @@ fn multipliers_behind_algebraic_accelerations_take_their_index() {
     );
 }
 
+/// An unknown that first appears at the top level of a chain — the level
+/// solved for that chain's own algebraic unknown — is an input to it, not
+/// determined by it: it keeps the index it has elsewhere. The double
+/// pendulum's second mass (`x2`, `y2`) enters the first rod's top level
+/// through `λ2` but is a position of the second rod's (index 1, as the
+/// IVP Test Set's car axis, `NIND1` = the four positions); the circuit's
+/// node potential `e2` (differential) and `e3` (fixed by an index-1 node
+/// equation) enter the source's differentiated constraint through the
+/// mass matrix and stay index 1, only the source current `jv` is index 2.
+/// They were 3 and 2 (session 13, EXTREMES.md "ix2bdf13"): `bdf` left
+/// `e2`, `e3` out of its error test and the run ended "ok" with e2 = 3 516.
+/// An unknown that only top levels hold takes the index of the unknown a
+/// lower level fixes in its place (the CSTR's `T`).
+#[test]
+fn unknowns_entering_a_top_level_only_keep_their_own_index() {
+    let indices = |src: &str, name: &str| -> Vec<(String, u8)> {
+        let d = derive(src);
+        let f = d.formulation(name).unwrap();
+        f.vars.iter().map(|v| (v.name.clone(), v.index)).collect()
+    };
+    let of = |v: &[(String, u8)]| -> Vec<u8> { v.iter().map(|x| x.1).collect() };
+    let double = indices(DOUBLE, "ori2");
+    assert_eq!(of(&double), [1, 1, 1, 1, 2, 2, 2, 2, 3, 3], "{double:?}");
+    assert_eq!(of(&indices(DOUBLE, "rcd1")), [1, 1, 1, 1, 1, 1, 1, 1, 2, 2]);
+    let circuit = include_str!("../../scenes/mna_cv_loop.dae");
+    let ori2 = indices(circuit, "ori2");
+    assert_eq!(of(&ori2), [1, 1, 1, 2], "{ori2:?}");
+    assert_eq!(ori2[3].0, "jv");
+    let caraxis = indices(include_str!("../../scenes/caraxis.dae"), "ori2");
+    assert_eq!(of(&caraxis), [1, 1, 1, 1, 2, 2, 2, 2, 3, 3], "{caraxis:?}");
+    // Only top levels hold the CSTR's temperature, and the rate law that
+    // fixes it is solved for `T` once `R` (index 2) is known: T counts as
+    // R (was 3 in ori2 and 2 in rcd1).
+    let cstr = include_str!("../../scenes/cstr.dae");
+    assert_eq!(of(&indices(cstr, "ori2")), [1, 2, 2, 3]);
+    assert_eq!(of(&indices(cstr, "rcd1")), [1, 1, 1, 2]);
+}
+
 #[test]
 fn double_pendulum_hidden_constraints_match_hand_derivation() {
     let d = derive(DOUBLE);

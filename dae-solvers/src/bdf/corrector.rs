@@ -93,7 +93,19 @@ impl<L: Corrector> Iteration for Integrator<'_, L> {
         }
         self.lu.solve(&mut self.delta);
         small::correct(&mut self.y, &mut self.yp, &mut self.e, &self.delta, self.cj);
-        self.ms.weights.norm(&self.delta)
+        match &self.newton {
+            None => self.ms.weights.norm(&self.delta),
+            Some(newton) => {
+                let norm = newton.full.norm(&self.delta);
+                // At the round-off floor of the scaled norm: converged (zero
+                // is below any bound of the convergence test).
+                if norm > 0.0 && newton.scaled.norm(&self.delta) <= newton.floor {
+                    0.0
+                } else {
+                    norm
+                }
+            }
+        }
     }
     #[inline(always)]
     fn residual(&mut self) -> bool {
@@ -147,7 +159,17 @@ impl<L: Corrector> Integrator<'_, L> {
     #[inline(always)]
     fn newton(&mut self) -> Result<(), Fail> {
         self.predict();
-        let pnorm = self.ms.weights.norm(&self.y);
+        let pnorm = match &mut self.newton {
+            None => self.ms.weights.norm(&self.y),
+            Some(newton) => {
+                // At every attempt (the scaled weights follow `h`): the
+                // weights of `y_n`, as the error test's.
+                newton.full.update(self.hist.col(0));
+                newton.scaled.update_scaled(self.hist.col(0), self.ms.h);
+                newton.floor = 100.0 * EPS * newton.scaled.norm(&self.y);
+                newton.full.norm(&self.y)
+            }
+        };
         self.e.fill(0.0);
         self.ms.last_iterations = 0;
         self.evaluate_residual()?;

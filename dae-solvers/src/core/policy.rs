@@ -8,7 +8,8 @@
 //!   `h^(k+1)`: kept in the test it drives the step size to zero (DASPK's
 //!   `INFO(16)`; Brenan, Campbell & Petzold ch. 3 and 5). Unless
 //!   [`Options::index2_in_error_test`] says otherwise, BDF-type methods
-//!   leave unknowns of index ≥ 2 out of the error test and the Newton norm.
+//!   leave unknowns of index ≥ 2 out of the error test; `bdf` keeps them
+//!   in its Newton norm (DASPK; `crate::bdf`, index-2 formulations).
 //!   Radau-type methods keep every unknown of a state and scale index-`k`
 //!   components by `h^(k−1)` instead (Hairer & Wanner VII.8) — but not the
 //!   index-2 unknowns of its forward sensitivities ([`collocation_error_test`]).
