@@ -95,16 +95,7 @@ impl<L: Corrector> Iteration for Integrator<'_, L> {
         small::correct(&mut self.y, &mut self.yp, &mut self.e, &self.delta, self.cj);
         match &self.newton {
             None => self.ms.weights.norm(&self.delta),
-            Some(newton) => {
-                let norm = newton.full.norm(&self.delta);
-                // At the round-off floor of the scaled norm: converged (zero
-                // is below any bound of the convergence test).
-                if norm > 0.0 && newton.scaled.norm(&self.delta) <= newton.floor {
-                    0.0
-                } else {
-                    norm
-                }
-            }
+            Some(newton) => newton.norm(&self.delta),
         }
     }
     #[inline(always)]
@@ -161,14 +152,7 @@ impl<L: Corrector> Integrator<'_, L> {
         self.predict();
         let pnorm = match &mut self.newton {
             None => self.ms.weights.norm(&self.y),
-            Some(newton) => {
-                // At every attempt (the scaled weights follow `h`): the
-                // weights of `y_n`, as the error test's.
-                newton.full.update(self.hist.col(0));
-                newton.scaled.update_scaled(self.hist.col(0), self.ms.h);
-                newton.floor = 100.0 * EPS * newton.scaled.norm(&self.y);
-                newton.full.norm(&self.y)
-            }
+            Some(newton) => newton.start(self.hist.col(0), self.ms.h, &self.y),
         };
         self.e.fill(0.0);
         self.ms.last_iterations = 0;

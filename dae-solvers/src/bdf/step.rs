@@ -10,6 +10,7 @@ use crate::core::eliminate::Formulation;
 use crate::core::matrix::{Corrector, JacState, Matrix, Rows, Structure};
 use crate::core::weights::Weights;
 use crate::multistep::divided::Divided;
+use crate::multistep::newton_norm::NewtonNorm;
 use crate::multistep::propagate::Propagation;
 use crate::multistep::stale::{self, Stale};
 use crate::multistep::{Common, Config, Family, FALL_BACK_AFTER};
@@ -26,9 +27,9 @@ pub(super) struct Integrator<'a, L> {
     pub(super) sys: Formulation<'a>,
     /// `E` does not depend on `y`.
     pub(super) constant_leading: bool,
-    /// The Newton norm's weights where they differ from the error test's
-    /// (index-2 unknowns: in the Newton norm, out of the test, as DASPK).
-    pub(super) newton: Option<Index2Newton>,
+    /// The Newton norm where it differs from the error test's (index-2
+    /// unknowns: in the Newton norm, out of the test, as DASPK).
+    pub(super) newton: Option<NewtonNorm>,
 
     /// Order of the next attempt.
     pub(super) k: usize,
@@ -67,24 +68,6 @@ pub(super) struct Integrator<'a, L> {
     pub(super) stale: Stale,
     /// DASSL's estimate or the propagated one ([`Propagation`]).
     pub(super) estimate: Propagation,
-}
-
-/// The Newton norm of a formulation with index-2 unknowns: they are out of
-/// the error test and in the Newton norm with their full weights (DASPK),
-/// and the iteration has converged also when the update is at the round-off
-/// floor of the index-scaled norm (Hairer & Wanner VII.8: an index-`k`
-/// unknown weighted by `h^(k−1)`). The round-off the residual's rows carry
-/// into an index-2 unknown grows like `ε/h`: on S02 at tol 1e-12 (pendulum,
-/// `rcd1` and `ggl1`) the full-weight test alone failed near t ≈ 1 200,
-/// the step collapsing to 3e-12 (EXTREMES.md "ix2bdf13").
-pub(super) struct Index2Newton {
-    /// Weights of every unknown in the Newton norm, unscaled.
-    pub(super) full: Weights,
-    /// The same scaled by `h^(k−1)` for an unknown of index `k`.
-    pub(super) scaled: Weights,
-    /// `100 ε ‖y⁽⁰⁾‖` in the scaled norm: an update below it (scaled) is
-    /// round-off.
-    pub(super) floor: f64,
 }
 
 impl<L: Corrector> Family for Integrator<'_, L> {
@@ -140,15 +123,10 @@ impl<'a, L: Corrector> Integrator<'a, L> {
             Structure::of(&*sys)
         };
         let matrix = || Matrix::new(m, n, structure.as_ref());
-        let weights = |mask: &[bool], powers| Weights::new(tol, |_| 1.0, mask.to_vec(), powers);
-        let newton = (in_newton != in_test).then(|| Index2Newton {
-            full: weights(in_newton, vec![0; n]),
-            scaled: weights(in_newton, crate::core::weights::index_powers(info)),
-            floor: 0.0,
-        });
+        let weights = Weights::new(tol, |_| 1.0, in_test.to_vec(), vec![0; n]);
         Integrator {
-            ms: Common::new(cfg, n, weights(in_test, vec![0; n]), Policy::DASSL),
-            newton,
+            ms: Common::new(cfg, n, weights, Policy::DASSL),
+            newton: NewtonNorm::of(tol, info, in_test, in_newton),
             sys: sys.clone(),
             constant_leading: info.constant_leading,
             k: 1,

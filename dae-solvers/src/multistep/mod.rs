@@ -32,6 +32,9 @@
 //! - [`propagate`]: the error estimate carried through the iteration
 //!   matrix onto the algebraic components, and the check that switches a
 //!   run to it ([`crate::options::Estimate`]).
+//! - [`newton_norm`]: the Newton norm of a corrector whose error test
+//!   leaves index-2 unknowns out (DASPK), with the round-off floor of the
+//!   index-scaled norm.
 //!
 //! Where the families differ the engine takes values: the attempt loop's
 //! [`Policy`] (`DASSL`, `MEBDF`), the matrix reuse ([`corrector::Reuse`]),
@@ -83,6 +86,7 @@
 pub(crate) mod backward;
 pub(crate) mod corrector;
 pub(crate) mod divided;
+pub(crate) mod newton_norm;
 pub(crate) mod propagate;
 pub(crate) mod run;
 pub(crate) mod stale;
