@@ -43,9 +43,10 @@ pub(super) struct Control {
 }
 
 impl Control {
-    /// After a failed attempt: factorise again with the Jacobian of this
-    /// step, or evaluate a new one if it is old.
-    pub(super) fn after_failure(&self) -> Next {
+    /// When the iteration matrix must change (a failed attempt, or a slow
+    /// contraction on an accepted step): factorise again with the Jacobian
+    /// of this step if it is fresh, else evaluate a new one.
+    pub(super) fn renewed(&self) -> Next {
         if self.caljac {
             Next::Factor
         } else {
@@ -190,7 +191,7 @@ impl<K: Collocation> Integrator<'_, K> {
             c.next = match (small_theta, new_h) {
                 (true, false) => Next::Step,
                 (true, true) => Next::Factor,
-                (false, _) => Next::Jacobian,
+                (false, _) => c.renewed(),
             };
             return;
         }
@@ -208,7 +209,7 @@ impl<K: Collocation> Integrator<'_, K> {
         c.next = if small_theta {
             Next::Factor
         } else {
-            Next::Jacobian
+            c.renewed()
         };
     }
 }

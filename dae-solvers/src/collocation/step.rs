@@ -304,7 +304,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             if self.factor(h).is_err() {
                 let c = &mut self.c;
                 c.one.reject = true;
-                c.next = c.after_failure();
+                c.next = c.renewed();
                 return Ok(Outcome::failed(Failure::Singular, 0));
             }
             self.stats.factorizations += 1;
@@ -372,7 +372,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
                     c.hold.rejected();
                 }
                 c.one.reject = true;
-                c.next = c.after_failure();
+                c.next = c.renewed();
             }
             return Ok(Outcome::Failed {
                 failure,
@@ -389,7 +389,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             if matches!(K::POLICY.step, StepRule::Held) {
                 c.hold.rejected();
             }
-            c.next = c.after_failure();
+            c.next = c.renewed();
             return Ok(Outcome::ErrorTest { h });
         }
 
@@ -441,7 +441,8 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             }
             self.project_end_point(t, h, fresh)?;
             if fresh {
-                // `next_step` below asks for the Jacobian just taken.
+                // The Jacobian is this end point's: `next_step` below
+                // factorises it rather than taking another.
                 self.c.caljac = true;
             }
         }
@@ -452,9 +453,6 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             self.evaluate_at_step_point(t, false)?;
         }
         self.next_step(h_new);
-        if K::TABLEAU.end.projected() && self.c.caljac && self.c.next == Next::Jacobian {
-            self.c.next = Next::Factor;
-        }
         Ok(Outcome::Accepted)
     }
 
