@@ -3,8 +3,8 @@
 
     python3 scripts/ida_derive.py SCENE FORMULATION > driver.c
 
-reads the scene (TOML: its model, parameters, initial values, horizon and
-check times) and the formulation's rows from `dae derive MODEL --format json`
+reads the scene (TOML: its model, parameters, initial values and guesses,
+horizon and check times) and the formulation's rows from `dae derive MODEL --format json`
 (DAE, default target/release/dae), and writes a C program in the shape of
 scripts/ida_index1.c: `driver TOL` runs SUNDIALS IDA (dense difference-quotient
 Jacobian, rtol = atol = TOL for every unknown) from the scene's start, the
@@ -99,7 +99,11 @@ def main():
     params.update(scene.get("parameters", {}))
     tr = ToC(unknowns, params)
     rows = [residual(row, tr) for row in formulation["rows"]]
-    start = [float(scene.get("initial", {}).get(name, 0.0)) for name in names]
+    # The start: the scene's initial values, else its guesses (where
+    # IDACalcIC starts its Newton iteration: Jay's constraint has two roots
+    # in z, 1 and 1/2, and from 0 it finds the wrong one), else 0.
+    given = {**scene.get("guess", {}), **scene.get("initial", {})}
+    start = [float(given.get(name, 0.0)) for name in names]
     diff = [1.0 if v["kind"] == "differential" else 0.0 for v in derived["variables"]]
     t_end = float(scene["time"]["end"])
     every = float(scene["time"].get("check_every", t_end))
