@@ -90,8 +90,8 @@ impl<K: Collocation> Method for Integrator<'_, K> {
     }
     fn dense_degree(&self) -> usize {
         if self.slopes.active() {
-            // The Hermite polynomial through three step points.
-            5
+            // The Hermite polynomial through the last step points.
+            2 * crate::core::hermite::POINTS - 1
         } else {
             // The collocation polynomial of three stages.
             3

@@ -1,6 +1,6 @@
 //! Dense output of the step points' order for a method whose own
 //! polynomial between the step points is of lower order: the Hermite
-//! polynomial through the values and slopes of the last three step points.
+//! polynomial through the values and slopes of the last four step points.
 //!
 //! A method of order `p` whose continuous extension is of a lower order
 //! `q` (Gauss–Legendre collocation: `p = 6` at the step points, `q = 4`
@@ -29,23 +29,30 @@
 //! once per step ([`StepHermite::push`]), so that each evaluation costs a
 //! Horner sweep of five products per unknown.
 
-/// The values and slopes of the last three step points of some unknowns,
-/// and the Newton form of their Hermite polynomial (see the
+use std::cell::RefCell;
+
+/// Step points held at most: the polynomial is of degree `2 POINTS − 1`.
+pub(crate) const POINTS: usize = 4;
+
+/// The values and slopes of the last [`POINTS`] step points of some
+/// unknowns, and the Newton form of their Hermite polynomial (see the
 /// [module documentation](self)).
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub(crate) struct StepHermite {
     /// The unknowns interpolated (positions in the method's `y`).
     unknowns: Vec<usize>,
     /// Step points, newest first (`len` of them valid).
-    t: [f64; 3],
-    /// Values at the step points, point-major, newest first (`3 k`).
+    t: [f64; POINTS],
+    /// Values at the step points, point-major, newest first (`POINTS k`).
     y: Vec<f64>,
     /// Slopes at the step points, likewise.
     yp: Vec<f64>,
-    /// Step points held (0 … 3).
+    /// Step points held (0 … `POINTS`).
     len: usize,
-    /// Divided differences `f[z₀ … z_i]`, `i = 1 … 5`, unknown-major (`5 k`).
-    coef: Vec<f64>,
+    /// The divided differences `f[z₀ … z_l]`, `l = 0 … 2 len − 1`,
+    /// unknown-major (`2 POINTS k`), computed at the first evaluation
+    /// after a new step point (none where no output is asked for).
+    coef: RefCell<(bool, Vec<f64>)>,
 }
 
 impl StepHermite {
@@ -54,11 +61,11 @@ impl StepHermite {
         let k = unknowns.len();
         StepHermite {
             unknowns,
-            t: [0.0; 3],
-            y: vec![0.0; 3 * k],
-            yp: vec![0.0; 3 * k],
+            t: [0.0; POINTS],
+            y: vec![0.0; POINTS * k],
+            yp: vec![0.0; POINTS * k],
             len: 0,
-            coef: vec![0.0; 5 * k],
+            coef: RefCell::new((false, vec![0.0; 2 * POINTS * k])),
         }
     }
 
@@ -84,52 +91,38 @@ impl StepHermite {
     /// step that ends at `t`.
     pub(crate) fn push(&mut self, t: f64, y: &[f64], yp: &[f64]) {
         let k = self.unknowns.len();
-        self.y.copy_within(0..2 * k, k);
-        self.yp.copy_within(0..2 * k, k);
-        self.t.copy_within(0..2, 1);
+        self.y.copy_within(0..(POINTS - 1) * k, k);
+        self.yp.copy_within(0..(POINTS - 1) * k, k);
+        self.t.copy_within(0..POINTS - 1, 1);
         self.t[0] = t;
         for (i, &j) in self.unknowns.iter().enumerate() {
             self.y[i] = y[j];
         }
         self.yp[..k].copy_from_slice(&yp[..k]);
-        self.len = (self.len + 1).min(3);
-        if self.len >= 2 {
-            self.coefficients();
-        }
+        self.len = (self.len + 1).min(POINTS);
+        self.coef.get_mut().0 = false;
     }
 
-    /// The divided differences on the doubled nodes.
-    fn coefficients(&mut self) {
-        let k = self.unknowns.len();
-        let (a, b) = (self.t[0], self.t[1]);
-        let ab = 1.0 / (b - a);
-        if self.len == 2 {
-            for i in 0..k {
-                let (ya, yb) = (self.y[i], self.y[k + i]);
-                let (pa, pb) = (self.yp[i], self.yp[k + i]);
-                let sab = (yb - ya) * ab;
-                let d2 = (sab - pa) * ab;
-                let d3 = ((pb - sab) * ab - d2) * ab;
-                self.coef[5 * i..5 * i + 5].copy_from_slice(&[pa, d2, d3, 0.0, 0.0]);
+    /// The divided differences on the doubled nodes `z = t₀, t₀, t₁, t₁,
+    /// …` (newest first) of every unknown, into `coef`.
+    fn coefficients(&self, coef: &mut [f64]) {
+        let (k, nodes) = (self.unknowns.len(), 2 * self.len);
+        let z = |i: usize| self.t[i / 2];
+        for u in 0..k {
+            let d = &mut coef[2 * POINTS * u..2 * POINTS * u + nodes];
+            for (i, di) in d.iter_mut().enumerate() {
+                *di = self.y[(i / 2) * k + u];
             }
-            return;
-        }
-        let c = self.t[2];
-        let (bc, ac) = (1.0 / (c - b), 1.0 / (c - a));
-        for i in 0..k {
-            let (ya, yb, yc) = (self.y[i], self.y[k + i], self.y[2 * k + i]);
-            let (pa, pb, pc) = (self.yp[i], self.yp[k + i], self.yp[2 * k + i]);
-            // First differences on z = a, a, b, b, c, c.
-            let (sab, sbc) = ((yb - ya) * ab, (yc - yb) * bc);
-            // Second.
-            let (q0, q1) = ((sab - pa) * ab, (pb - sab) * ab);
-            let (q2, q3) = ((sbc - pb) * bc, (pc - sbc) * bc);
-            // Third: z₃ − z₀ = b − a, z₄ − z₁ = c − a, z₅ − z₂ = c − b.
-            let (r0, r1, r2) = ((q1 - q0) * ab, (q2 - q1) * ac, (q3 - q2) * bc);
-            // Fourth and fifth: spans c − a.
-            let (u0, u1) = ((r1 - r0) * ac, (r2 - r1) * ac);
-            let v0 = (u1 - u0) * ac;
-            self.coef[5 * i..5 * i + 5].copy_from_slice(&[pa, q0, r0, u0, v0]);
+            for level in 1..nodes {
+                for i in (level..nodes).rev() {
+                    d[i] = if level == 1 && i % 2 == 1 {
+                        // A doubled node: the slope.
+                        self.yp[(i / 2) * k + u]
+                    } else {
+                        (d[i] - d[i - 1]) / (z(i) - z(i - level))
+                    };
+                }
+            }
         }
     }
 
@@ -138,13 +131,20 @@ impl StepHermite {
     /// [`StepHermite::ready`].
     pub(crate) fn eval(&self, tau: f64, out: &mut [f64]) {
         debug_assert!(self.ready());
-        let x = tau - self.t[0];
-        let xb = tau - self.t[1];
-        let xc = if self.len == 3 { tau - self.t[2] } else { 0.0 };
-        for (i, &j) in self.unknowns.iter().enumerate() {
-            let c = &self.coef[5 * i..5 * i + 5];
-            let p = c[2] + xb * (c[3] + xc * c[4]);
-            out[j] = self.y[i] + x * (c[0] + x * (c[1] + xb * p));
+        let mut cache = self.coef.borrow_mut();
+        let (valid, coef) = &mut *cache;
+        if !*valid {
+            self.coefficients(coef);
+            *valid = true;
+        }
+        let nodes = 2 * self.len;
+        for (u, &j) in self.unknowns.iter().enumerate() {
+            let c = &coef[2 * POINTS * u..2 * POINTS * u + nodes];
+            let mut p = c[nodes - 1];
+            for l in (0..nodes - 1).rev() {
+                p = c[l] + (tau - self.t[l / 2]) * p;
+            }
+            out[j] = p;
         }
     }
 }
@@ -160,44 +160,55 @@ mod tests {
     }
 
     #[test]
-    fn reproduces_quintics_on_a_variable_grid_and_cubics_from_two_points() {
-        let q = |t: f64| 0.3 - t * (1.1 - t * (0.7 + t * (0.2 - t * (0.05 + 0.4 * t))));
-        let qp = |t: f64| -1.1 + t * (1.4 + t * (-0.6 + t * (0.2 + 2.0 * t)));
+    fn reproduces_polynomials_of_degree_2k_minus_1_on_a_variable_grid() {
         let c = |t: f64| 2.0 + t * (0.5 - t * (1.5 + 0.25 * t));
         let cp = |t: f64| 0.5 - t * (3.0 + 0.75 * t);
+        let q = |t: f64| 0.3 - t * (1.1 - t * (0.7 + t * (0.2 - t * (0.05 + 0.4 * t))));
+        let qp = |t: f64| -1.1 + t * (1.4 + t * (-0.6 + t * (0.2 + 2.0 * t)));
+        let s = |t: f64| q(t) + t.powi(7) * 0.3 - t.powi(6) * 0.2;
+        let sp = |t: f64| qp(t) + 2.1 * t.powi(6) - 1.2 * t.powi(5);
+        let mut out = [7.0, 0.0];
+        // Two points: cubics.
         let mut h = StepHermite::new(vec![1]);
         assert!(!h.ready());
         push(&mut h, 0.1, c, cp);
         push(&mut h, 0.35, c, cp);
         assert!(h.ready());
-        let mut out = [7.0, 0.0];
         for tau in [0.1, 0.2, 0.3, 0.35] {
             h.eval(tau, &mut out);
             assert!((out[1] - c(tau)).abs() < 1e-14, "cubic at {tau}");
             assert_eq!(out[0], 7.0, "not interpolated");
         }
-        let mut h = StepHermite::new(vec![1]);
-        for t in [-0.4, 0.1, 0.35, 1.2] {
-            push(&mut h, t, q, qp);
-        }
-        for tau in [0.35, 0.5, 0.9, 1.2] {
-            h.eval(tau, &mut out);
-            assert!((out[1] - q(tau)).abs() < 1e-13, "quintic at {tau}");
+        // Three points: quintics; four (and on): degree 7.
+        for (f, fp, points) in [(q, qp, 3), (s, sp, 4)] {
+            let mut h = StepHermite::new(vec![1]);
+            let grid = [-0.4, 0.1, 0.35, 1.2, 1.3];
+            for &t in &grid[grid.len() - points - 1..] {
+                push(&mut h, t, f, fp);
+            }
+            for tau in [1.2, 1.22, 1.27, 1.3] {
+                h.eval(tau, &mut out);
+                assert!((out[1] - f(tau)).abs() < 1e-13, "{points} points at {tau}");
+            }
         }
         // Cleared: not ready until two points again.
-        h.clear();
+        let mut h = StepHermite::new(vec![1]);
+        push(&mut h, 1.0, q, qp);
         push(&mut h, 1.5, q, qp);
+        h.clear();
+        push(&mut h, 2.0, q, qp);
         assert!(!h.ready());
     }
 
     #[test]
-    fn error_on_the_last_step_is_of_order_six() {
+    fn error_on_the_last_step_is_of_order_2k() {
         // exp on the steps …, 1 − 2h, 1 − h, 1: the largest error on
-        // [1 − h, 1] falls 2⁶-fold as h halves.
-        let max_error = |step: f64| {
+        // [1 − h, 1] falls 2⁶-fold as h halves with three points, 2⁸-fold
+        // with four.
+        let max_error = |step: f64, points: usize| {
             let mut h = StepHermite::new(vec![1]);
-            for k in [2.0, 1.0, 0.0] {
-                push(&mut h, 1.0 - k * step, f64::exp, f64::exp);
+            for k in (0..points).rev() {
+                push(&mut h, 1.0 - k as f64 * step, f64::exp, f64::exp);
             }
             let mut out = [0.0; 2];
             (1..20)
@@ -208,10 +219,15 @@ mod tests {
                 })
                 .fold(0.0, f64::max)
         };
-        let (e1, e2) = (max_error(0.1), max_error(0.05));
-        let ratio = e1 / e2;
-        assert!((55.0..73.0).contains(&ratio), "{e1:e} / {e2:e} = {ratio}");
-        // The bound 2.1e-4 h⁶ max|y⁽⁶⁾| (e on [0.8, 1]).
-        assert!(e1 < 2.1e-4 * 0.1f64.powi(6) * 1f64.exp(), "{e1:e}");
+        for (points, order) in [(3, 6), (4, 8)] {
+            let (e1, e2) = (max_error(0.1, points), max_error(0.05, points));
+            let ratio = (e1 / e2).log2();
+            assert!(
+                (ratio - f64::from(order)).abs() < 0.2,
+                "{points} points: {e1:e} / {e2:e}: order {ratio}"
+            );
+        }
+        // The bound 2.1e-4 h⁶ max|y⁽⁶⁾| of three points (e on [0.8, 1]).
+        assert!(max_error(0.1, 3) < 2.1e-4 * 0.1f64.powi(6) * 1f64.exp());
     }
 }
