@@ -97,7 +97,11 @@ impl<K: Collocation> Integrator<'_, K> {
     /// rows (after [`Integrator::find_algebraic_rows`]), and take the
     /// first step point's where the split applies.
     pub(super) fn setup_slopes(&mut self) {
-        if !K::TABLEAU.end.projected() || self.w.stages.least_squares() || self.m != self.n {
+        if !self.interpolate
+            || !K::TABLEAU.end.projected()
+            || self.w.stages.least_squares()
+            || self.m != self.n
+        {
             return;
         }
         let (m, n) = (self.m, self.n);

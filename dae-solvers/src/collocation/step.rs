@@ -59,6 +59,9 @@ pub(super) struct Integrator<'a, K> {
     /// The step points' slopes and Hermite polynomial: the dense output
     /// of a method that is not stiffly accurate ([`super::slopes`]).
     pub(super) slopes: Slopes,
+    /// Whether a value between step points can be asked for (else the
+    /// step points' slopes are not taken).
+    pub(super) interpolate: bool,
 }
 
 impl<K: Collocation> Method for Integrator<'_, K> {
@@ -235,7 +238,17 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             // after a strong contraction: see `noise_floor`.
             newton.noise_floor = crate::core::newton::ROUND_OFF_FLOOR;
         }
+        // The Hermite dense output is kept only where a value between step
+        // points can be asked for: stored dense output, events, or an
+        // output time inside the horizon (not `t_end` alone, a step point).
+        let between = options.dense_output
+            || !problem.system.event_names().is_empty()
+            || options
+                .output_times
+                .iter()
+                .any(|&t| t > problem.t0 && t < problem.t_end);
         Integrator {
+            interpolate: between,
             sys: sys.clone(),
             n,
             m,
