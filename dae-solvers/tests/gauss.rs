@@ -155,7 +155,13 @@ fn between_step_errors(
 fn dense_output_between_steps_has_the_order_of_the_step_points() {
     let ode_exact = &ode_exact;
     let index1_exact = &|t: f64| index1_exact(t).to_vec();
-    type Case<'a> = (&'a str, Simple, f64, &'a [usize], &'a dyn Fn(f64) -> Vec<f64>);
+    type Case<'a> = (
+        &'a str,
+        Simple,
+        f64,
+        &'a [usize],
+        &'a dyn Fn(f64) -> Vec<f64>,
+    );
     let cases: [Case; 3] = [
         ("ode (sin, cos)", ode(), 2.0, &[0, 1], ode_exact),
         ("index 1 (p, q)", index1(), 1.0, &[0, 1], index1_exact),

