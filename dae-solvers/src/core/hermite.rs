@@ -5,29 +5,32 @@
 //! A method of order `p` whose continuous extension is of a lower order
 //! `q` (Gauss–Legendre collocation: `p = 6` at the step points, `q = 4`
 //! for its collocation polynomial, the stage order plus one) reports
-//! between the step points errors of `O(h^q)`. The step points' values
-//! `y_{n−1}, y_n, y_{n+1}` and slopes `y'_{n−1}, y'_n, y'_{n+1}` (each
-//! slope from the equations at its own step point, so of the step points'
-//! order) determine the polynomial of degree 5 through them; on the last
-//! step `[t_n, t_{n+1}]` its error is
+//! between the step points errors of `O(h^q)`. The values and slopes of
+//! the last `k` step points (each slope from the equations at its own step
+//! point, so of the step points' order) determine the Hermite polynomial
+//! of degree `2k − 1` through them; on the last step its interpolation
+//! error is `y⁽²ᵏ⁾(ξ)/(2k)! · Π (t − t_i)²`, at a constant step at most
 //!
 //! ```text
-//!     y⁽⁶⁾(ξ)/6! · (t − t_{n−1})² (t − t_n)² (t − t_{n+1})²  ≤  2.1·10⁻⁴ h⁶ |y⁽⁶⁾|
+//!     k = 3:  2.1·10⁻⁴ h⁶ |y⁽⁶⁾|      k = 4:  2.5·10⁻⁵ h⁸ |y⁽⁸⁾|
 //! ```
 //!
-//! at a constant step (the maximum of `s(1 − s)(1 + s)` on `[0, 1]` is
-//! `2/(3√3)`), plus the data's own errors, `O(h⁶)` for the values and
-//! `h · O(h⁵)` for the slopes: the order of the step points, with a
-//! constant small against that of the method's local error over a few
-//! steps. The grid may be variable: the divided differences are taken on
-//! the step points as they are. Before the second step (two points) it is
-//! the cubic Hermite polynomial of the first step, `O(h⁴)`; a method uses
-//! its own polynomial where it has fewer than two points.
+//! (the maxima of `s(1 − s)(1 + s)` and `s(1 − s)(1 + s)(2 + s)` on
+//! `[0, 1]`, squared, over `6!` and `8!`), plus the data's own errors,
+//! `O(h⁶)` for the values and `h · O(h⁵)` for the slopes, carried smoothly
+//! between the step points. With `k = 4` ([`POINTS`]) the interpolation
+//! error vanishes against the step points' own as `h → 0`: the output
+//! between the step points is then as accurate as at them. The grid may be
+//! variable: the divided differences are taken on the step points as they
+//! are. With two or three points held (the first steps of a run) the
+//! degree is 3 or 5; a method uses its own polynomial where it holds fewer
+//! than two.
 //!
-//! The polynomial is kept in Newton form on the nodes `t_{n+1}, t_{n+1},
-//! t_n, t_n, t_{n−1}, t_{n−1}` (newest first), its coefficients computed
-//! once per step ([`StepHermite::push`]), so that each evaluation costs a
-//! Horner sweep of five products per unknown.
+//! The polynomial is kept in Newton form on the doubled nodes `t_{n+1},
+//! t_{n+1}, t_n, t_n, …` (newest first); its divided differences are
+//! computed at the first evaluation after a step, so that a run that asks
+//! for no value between its step points pays only for the data, and each
+//! evaluation is a Horner sweep of `2k − 1` products per unknown.
 
 use std::cell::RefCell;
 
