@@ -224,7 +224,7 @@ const MAX_DEGREE: usize = 8;
 /// | solver | dense polynomial on a step | `d` |
 /// |---|---|---|
 /// | radau5, odradau | the collocation polynomial (RADAU5's `CONTR5`) | 3 |
-/// | gauss | the collocation polynomial | 3 |
+/// | gauss | the Hermite polynomial through the last four step points' values and slopes (`core::hermite`; the algebraic unknowns of a split formulation keep the collocation polynomial, see [`crate::gauss`]) | 7 |
 /// | bdf, odbdf | DASSL's interpolant through the last `k + 1` values | `max_order` (≤ 5) |
 /// | mebdf | the interpolant of the last step's order through the last values | order bound (≤ 8) |
 /// | idec | the degree-`m` polynomial on the interval's nodes | `m` |
@@ -235,8 +235,9 @@ const MAX_DEGREE: usize = 8;
 /// `at` at a step point returns the step point (a time shared by two steps
 /// is answered by the earlier one). Inside a step the value is the
 /// method's polynomial, also at its start: that is the previous step
-/// point up to rounding for every method but gauss, whose polynomial is
-/// shifted by the step's end-point correction.
+/// point up to rounding for every method but gauss's algebraic unknowns,
+/// whose collocation polynomial is shifted by the step's end-point
+/// correction.
 ///
 /// Memory: `(d + 1) · N + 1` doubles per accepted step (`N` unknowns);
 /// e.g. 21 per step for radau5 on the 5-unknown pendulum: 277 kB for the

@@ -19,6 +19,9 @@
 //!   unknowns (HW IV.8), plain or staggered for a state and its
 //!   sensitivities;
 //! - `kernels`: its per-unknown loops, instantiated for small sizes;
+//! - `slopes`: the slopes at the step points of a method that is not
+//!   stiffly accurate, for its dense output of the step points' order
+//!   (`core::hermite`);
 //! - `control`: the step-size controller state, RADAU5's classical and
 //!   predictive quotients and the held step of a symmetric method;
 //! - `step`: the integrator — the start at `t₀`, the one step attempt the
@@ -33,6 +36,7 @@
 
 mod control;
 mod kernels;
+mod slopes;
 mod solve;
 mod stages;
 mod stagger;

@@ -3,6 +3,7 @@
 //! retries, and the driver's view of it.
 
 use super::control::{classical_quotient, predictive_quotient, Control, Hold, Next};
+use super::slopes::Slopes;
 use super::solve::StageSolveKind;
 use super::stages::{Newton, Work};
 use super::stagger::rhs_for_error;
@@ -55,6 +56,12 @@ pub(super) struct Integrator<'a, K> {
     /// The last failed Newton iteration: its last increment's weighted
     /// norm and the unknown that dominated it.
     pub(super) newton_last: (f64, usize),
+    /// The step points' slopes and Hermite polynomial: the dense output
+    /// of a method that is not stiffly accurate ([`super::slopes`]).
+    pub(super) slopes: Slopes,
+    /// Whether a value between step points can be asked for (else the
+    /// step points' slopes are not taken).
+    pub(super) interpolate: bool,
 }
 
 impl<K: Collocation> Method for Integrator<'_, K> {
@@ -65,14 +72,18 @@ impl<K: Collocation> Method for Integrator<'_, K> {
         &self.w.y
     }
     fn dense(&self, tau: f64, out: &mut [f64]) {
+        let tau = tau - self.c.one.t_lo;
         dense::<K>(
             self.n,
             &self.w.cont,
-            tau - self.c.one.t_lo,
+            tau,
             self.c.one.t,
             self.c.one.h_old,
             out,
-        )
+        );
+        if self.slopes.hermite.ready() {
+            self.slopes.hermite.eval(tau, out);
+        }
     }
     fn output(&self, tau: f64, out: &mut [f64]) {
         self.dense(tau, out);
@@ -81,8 +92,13 @@ impl<K: Collocation> Method for Integrator<'_, K> {
         }
     }
     fn dense_degree(&self) -> usize {
-        // The collocation polynomial of three stages.
-        3
+        if self.slopes.active() {
+            // The Hermite polynomial through the last step points.
+            2 * crate::core::hermite::POINTS - 1
+        } else {
+            // The collocation polynomial of three stages.
+            3
+        }
     }
     fn finished(&self) -> bool {
         self.c.one.done
@@ -222,7 +238,17 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             // after a strong contraction: see `noise_floor`.
             newton.noise_floor = crate::core::newton::ROUND_OFF_FLOOR;
         }
+        // The Hermite dense output is kept only where a value between step
+        // points can be asked for: stored dense output, events, or an
+        // output time inside the horizon (not `t_end` alone, a step point).
+        let between = options.dense_output
+            || !problem.system.event_names().is_empty()
+            || options
+                .output_times
+                .iter()
+                .any(|&t| t > problem.t0 && t < problem.t_end);
         Integrator {
+            interpolate: between,
             sys: sys.clone(),
             n,
             m,
@@ -232,6 +258,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
             newton_floor: fnewt,
             newton_drift,
             newton_last: (0.0, 0),
+            slopes: Slopes::none(),
             w,
             stats: Stats::default(),
             newton,
@@ -284,6 +311,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
         self.evaluate_at_step_point(t0, true)?;
         let sys = self.sys.clone();
         self.find_algebraic_rows(sys.info())?;
+        self.setup_slopes();
         let c = &mut self.c;
         (c.one.h, c.one.last) = c.one.steps.toward_end(t0, c.one.h);
         c.one.h_old = c.one.h;
@@ -440,6 +468,7 @@ impl<'a, K: Collocation> Integrator<'a, K> {
                 self.jacobian(t)?;
             }
             self.project_end_point(t, h, fresh)?;
+            self.push_slopes();
             if fresh {
                 // The Jacobian is this end point's: `next_step` below
                 // factorises it rather than taking another.

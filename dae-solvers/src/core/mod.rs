@@ -24,6 +24,9 @@
 //!   the collocation engine and idec.
 //! - `lagrange`: the Lagrange polynomial on equally spaced nodes of a
 //!   step (its derivative at the nodes, its value anywhere).
+//! - `hermite`: dense output of the step points' order, the Hermite
+//!   polynomial through the last three step points' values and slopes
+//!   (the collocation engine's, for a method not stiffly accurate).
 //! - `output`: the output grid (one rule for `t0`, `t_end` and the times
 //!   between) and dense output.
 //! - `startup`: the constant-step start-up of a multistep method (its
@@ -52,6 +55,7 @@ pub(crate) mod driver;
 pub(crate) mod eliminate;
 pub(crate) mod eval;
 pub mod events;
+pub(crate) mod hermite;
 pub(crate) mod lagrange;
 pub(crate) mod matrix;
 pub(crate) mod newton;
