@@ -199,7 +199,7 @@ fn mebdf_on_index2_forms_as_written_leaves_the_algebraic_unknown_out() {
         ("jay_index2.toml", &[1e-6, 1e-8, 1e-9, 1e-10][..], 1_000),
     ];
     for (file, tols, max_steps) in cases {
-        let scene = Scene::load(&dir.join(file)).unwrap_or_else(|e| panic!("{e}"));
+        let scene = Scene::load(dir.join(file)).unwrap_or_else(|e| panic!("{e}"));
         let inputs = inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
         for &tol in tols {
             let record =
