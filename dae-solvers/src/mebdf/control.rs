@@ -7,8 +7,10 @@
 //! `∇^(p+1) y_{n+1} ≈ h^(p+1) y^(p+1)`, `C_p` the error constant of the
 //! formula ([`super::coeffs`]). The same with `p ∓ 1` estimates the errors
 //! the neighbouring orders would have made. The norm is the root mean
-//! square over the unknowns of index at most two; index-3 unknowns are left
-//! out (the module documentation of [`super`] gives the measurements).
+//! square over the unknowns of index at most one and the differential ones
+//! of index two; the algebraic index-2 unknowns and every index-3 unknown
+//! are left out (`core::policy::index_scaled_error_test` and the module
+//! documentation of [`super`] give the measurements).
 //!
 //! *Step and order*: after `p + 1` steps at the same order and step size,
 //! the ratios `r_q = 1/(c_q est_q^(1/(q+1)) + 10⁻⁶)` of orders

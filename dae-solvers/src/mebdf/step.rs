@@ -7,6 +7,7 @@ use crate::core::attempt::{Outcome, Policy};
 use crate::core::control::Failure;
 use crate::core::eliminate::Formulation;
 use crate::core::newton::FloorWalk;
+use crate::core::policy;
 use crate::core::shifted::Shifted;
 use crate::core::weights::{self, Weights};
 use crate::multistep::backward::History;
@@ -30,8 +31,8 @@ pub(super) struct Integrator<'a> {
     pub(super) sys: Formulation<'a>,
     /// The formulas.
     pub(super) coef: Coefficients,
-    /// Unknowns in the error estimate: index at most two (the index-3
-    /// multipliers are left out, see the module documentation).
+    /// Unknowns in the error estimate: index at most one, and the
+    /// differential ones of index two ([`policy::index_scaled_error_test`]).
     pub(super) estimated: Vec<bool>,
     /// `sqrt(N / N_estimated)`: turns the norm over all `N` unknowns of a
     /// difference with the left-out entries zeroed into the root mean
@@ -178,7 +179,7 @@ impl<'a> Integrator<'a> {
     pub(super) fn new(sys: Formulation<'a>, options: &Options, cfg: Config) -> Self {
         let (info, Options { tol, estimate, .. }) = (sys.info(), options);
         let n = info.unknowns();
-        let estimated: Vec<bool> = info.variables.iter().map(|v| v.index <= 2).collect();
+        let estimated = policy::index_scaled_error_test(info);
         let count = estimated.iter().filter(|&&b| b).count().max(1);
         let mut matrix = Shifted::new(n);
         // `E` is constant (in `t` and `y`: `eliminate::constant_leading`
