@@ -206,12 +206,12 @@ pub const TIME: &str = "t";
 impl Model {
     /// Check a parsed model; every problem is reported, each at its token.
     ///
-    /// The phases, in order: names declared ([`declare_names`]), derived
-    /// parameters lowered ([`derive_parameters`]), definitions lowered
-    /// ([`lower_definitions`]), equations lowered and split into dynamic
-    /// rows and constraints ([`lower_equations`]), dynamic rows assigned to
-    /// the derivatives they give ([`assign_dynamics`]), equations counted
-    /// against unknowns ([`check_counts`]), invariants and the formulation
+    /// The phases, in order: names declared (`declare_names`), derived
+    /// parameters lowered (`derive_parameters`), definitions lowered
+    /// (`lower_definitions`), equations lowered and split into dynamic
+    /// rows and constraints (`lower_equations`), dynamic rows assigned to
+    /// the derivatives they give (`assign_dynamics`), equations counted
+    /// against unknowns (`check_counts`), invariants and the formulation
     /// list. Each phase reports into the same [`Errors`].
     pub fn check(ast: &ModelAst) -> Result<Model, syn::Error> {
         let _budget = expr::Budget::start(expr::WORK_BUDGET);

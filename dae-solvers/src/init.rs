@@ -133,9 +133,9 @@
 //!
 //! # Large systems
 //!
-//! From [`crate::core::matrix::SPARSE_FROM`] unknowns (with the `sparse`
+//! From 60 unknowns (`core::matrix::SPARSE_FROM`, with the `sparse`
 //! feature) neither computation factorises an N×N matrix densely where
-//! the structure allows ([`crate::linalg::sparse_lstsq`]): a least-change
+//! the structure allows (`linalg::sparse_lstsq`): a least-change
 //! step on a block of at least that many rows or columns whose non-zero
 //! rows have full rank is one sparse LU (of the block, or of
 //! `[I Jᵀ; J 0]` for a wide one), and the initial derivative of a system

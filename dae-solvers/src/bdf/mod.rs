@@ -154,7 +154,7 @@
 //! EXTREMES.md "ix2bdf13"). An update at the round-off floor of the
 //! index-scaled norm (`h^(k−1)` for index `k`, Hairer & Wanner VII.8) also
 //! counts as converged: round-off in the rows reaches an index-2 unknown
-//! multiplied by `c_J ∼ 1/h` ([`crate::multistep::newton_norm`]).
+//! multiplied by `c_J ∼ 1/h` (the engine's `multistep::newton_norm`).
 //!
 //! # Initial derivative, fixed step size, resources
 //!

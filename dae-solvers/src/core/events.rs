@@ -5,7 +5,7 @@
 //! After every accepted step `[t_{n−1}, t_n]` the driver evaluates the
 //! event functions at `t_n`. A function that changed sign in a direction
 //! its [`EventSpec`] admits has a root in the step: it is located on the
-//! method's own dense output of that step ([`Method::dense`]) by the
+//! method's own dense output of that step (its `Method::dense`) by the
 //! Illinois variant of regula falsi (the bracketing secant method of
 //! DASRT and IDA, Dahlquist & Björck §6.2.2), to a bracket of four
 //! rounding units of `t`; the reported time is the bracket's end where the
