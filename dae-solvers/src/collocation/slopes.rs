@@ -34,6 +34,7 @@
 //! (a singular block, a non-finite value) the history is cleared and the
 //! collocation polynomial serves until two step points are held again.
 
+use super::stages::zero_columns;
 use super::step::Integrator;
 use super::tableau::Collocation;
 use crate::core::hermite::StepHermite;
@@ -92,7 +93,7 @@ impl Slopes {
     }
 
     /// Whether the dense output is the Hermite polynomial where it is
-    /// ready (degree 5).
+    /// ready (degree 7 from four step points on).
     pub(super) fn active(&self) -> bool {
         !matches!(self.kind, Kind::None)
     }
@@ -112,9 +113,7 @@ impl<K: Collocation> Integrator<'_, K> {
         }
         let (m, n) = (self.m, self.n);
         let e = self.w.e_n.dense();
-        let zero: Vec<usize> = (0..n)
-            .filter(|&j| (0..m).all(|i| e[(i, j)] == 0.0))
-            .collect();
+        let zero = zero_columns(e);
         let rows: Vec<usize> = (0..m).filter(|i| !self.w.algebraic.contains(i)).collect();
         let cols: Vec<usize> = (0..n).filter(|j| !zero.contains(j)).collect();
         let buffers = |kind: Kind, unknowns: Vec<usize>| Slopes {

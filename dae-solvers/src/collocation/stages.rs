@@ -399,9 +399,7 @@ impl<K: Collocation> Integrator<'_, K> {
             ));
         }
         if self.constant_leading && !self.w.algebraic.is_empty() {
-            let zero_columns: Vec<usize> = (0..self.n)
-                .filter(|&j| (0..self.m).all(|i| e[(i, j)] == 0.0))
-                .collect();
+            let zero_columns = zero_columns(e);
             if zero_columns.len() == self.w.algebraic.len() {
                 self.w.projection_small = DenseLu::new(zero_columns.len(), Pivoting::Checked);
                 self.w.algebraic_unknowns = zero_columns;
@@ -610,4 +608,12 @@ impl<K: Collocation> Integrator<'_, K> {
         let y_lo = self.c.one.compensated.then_some(&mut w.y_lo[..]);
         kernels::advance::<K>(&w.z, h, &mut w.y, y_lo, &mut w.yp, &mut w.cont);
     }
+}
+
+/// The columns of `e` that are zero (at its point, for an `E` that is not
+/// constant): the unknowns whose derivative no equation holds.
+pub(super) fn zero_columns(e: &DMatrix<f64>) -> Vec<usize> {
+    (0..e.ncols())
+        .filter(|&j| e.column(j).iter().all(|&x| x == 0.0))
+        .collect()
 }

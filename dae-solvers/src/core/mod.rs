@@ -25,7 +25,7 @@
 //! - `lagrange`: the Lagrange polynomial on equally spaced nodes of a
 //!   step (its derivative at the nodes, its value anywhere).
 //! - `hermite`: dense output of the step points' order, the Hermite
-//!   polynomial through the last three step points' values and slopes
+//!   polynomial through the last four step points' values and slopes
 //!   (the collocation engine's, for a method not stiffly accurate).
 //! - `output`: the output grid (one rule for `t0`, `t_end` and the times
 //!   between) and dense output.
