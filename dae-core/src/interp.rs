@@ -527,6 +527,20 @@ impl DaeSystem for InterpretedSystem {
         let inputs = self.inputs(t, y, &[], &[]);
         self.values(&self.c.rhs_jacobian, &s.rhs_jacobian, inputs, values)
     }
+    fn rhs_jacobian_scatter(&self, t: f64, y: &[f64], to: &[usize], out: &mut [f64]) {
+        let at = &self.structure().rhs_jacobian;
+        let inputs = self.inputs(t, y, &[], &[]);
+        let mut s = self.scratch.borrow_mut();
+        self.c
+            .rhs_jacobian
+            .tape
+            .eval_outputs(&inputs, &mut s, |k, v| {
+                let at = to[at[k]];
+                if at != crate::system::SKIP {
+                    out[at] = v;
+                }
+            });
+    }
     fn leading_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
         let s = self.structure();
         if *pattern != s.sparsity.leading {

@@ -96,7 +96,7 @@ use crate::expr::Q;
 use crate::interp::InterpretedModel;
 use crate::system::{
     Blocks, BoxedSystem, ConstraintInfo, DaeSystem, FormulationError, FormulationInfo, Model,
-    ParameterError, Pattern, RowInfo, VarInfo,
+    ParameterError, RowInfo, VarInfo, SKIP,
 };
 use nalgebra::DMatrix;
 use std::cell::RefCell;
@@ -300,12 +300,10 @@ pub struct SensitivitySystem {
 /// ([`DaeSystem::rhs_jacobian_values`]): no dense augmented matrix is
 /// zeroed, written and gathered per stage point.
 struct Linearisation {
-    /// The augmented formulation's `∂f/∂y` pattern.
-    pattern: Pattern,
-    /// `(value, entry)`: the position in the pattern's values of each
-    /// non-zero of `[∂f/∂y | ∂f/∂p]` of the state's rows, and its place in
-    /// that matrix (column-major, `N` rows).
-    map: Vec<(usize, usize)>,
+    /// Where each value of the augmented formulation's `∂f/∂y` pattern
+    /// goes in `[∂f/∂y | ∂f/∂p]` of the state's rows (column-major, `N`
+    /// rows), or [`SKIP`] ([`DaeSystem::rhs_jacobian_scatter`]).
+    to: Vec<usize>,
 }
 
 impl Linearisation {
@@ -318,16 +316,16 @@ impl Linearisation {
         if pattern.nnz() == pattern.rows * pattern.cols {
             return None;
         }
-        let mut map = Vec::new();
+        let mut to = vec![SKIP; pattern.nnz()];
         for (oc, &ac) in cols.iter().enumerate() {
-            for at in pattern.col_ptr[ac]..pattern.col_ptr[ac + 1] {
-                let ar = pattern.row_idx[at];
+            let (from, end) = (pattern.col_ptr[ac], pattern.col_ptr[ac + 1]);
+            for (slot, &ar) in to[from..end].iter_mut().zip(&pattern.row_idx[from..end]) {
                 if let Some(r) = row_of.iter().position(|&x| x == ar) {
-                    map.push((at, oc * row_of.len() + r));
+                    *slot = oc * row_of.len() + r;
                 }
             }
         }
-        Some(Linearisation { pattern, map })
+        Some(Linearisation { to })
     }
 }
 
@@ -351,8 +349,6 @@ struct Scratch {
     /// The augmented formulation's `f` and its derivatives along `dirs`.
     fa: Vec<f64>,
     dfa: Vec<f64>,
-    /// The augmented Jacobian's values on [`Linearisation::pattern`].
-    values: Vec<f64>,
 }
 
 impl std::fmt::Debug for SensitivitySystem {
@@ -557,7 +553,6 @@ impl SensitivitySystem {
             dirs,
             fa: vec![0.0; ai.equations()],
             dfa: vec![0.0; ai.equations() * np],
-            values: vec![0.0; lin.as_ref().map_or(0, |l| l.pattern.nnz())],
         });
         Ok(SensitivitySystem {
             state,
@@ -844,13 +839,10 @@ impl DaeSystem for SensitivitySystem {
         let s = &mut *self.scratch.borrow_mut();
         self.lift(s, y);
         if let Some(lin) = &self.lin {
-            self.augmented
-                .rhs_jacobian_values(t, &s.point, &lin.pattern, &mut s.values);
             let out = out.as_mut_slice();
             out.fill(0.0);
-            for &(v, o) in &lin.map {
-                out[o] = s.values[v];
-            }
+            self.augmented
+                .rhs_jacobian_scatter(t, &s.point, &lin.to, out);
             return true;
         }
         self.augmented.rhs_jacobian(t, &s.point, &mut s.jac);

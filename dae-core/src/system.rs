@@ -374,6 +374,10 @@ impl Sparsity {
     }
 }
 
+/// The entry of a [`DaeSystem::rhs_jacobian_scatter`] map that is not
+/// written.
+pub const SKIP: usize = usize::MAX;
+
 /// A formulation `E(t, y) y' = f(t, y)` ready to integrate.
 ///
 /// All methods write into caller-owned buffers and never allocate. Slices
@@ -591,6 +595,42 @@ pub trait DaeSystem {
         gather_dense(pattern, values, |j| self.rhs_jacobian(t, y, j));
     }
 
+    /// `∂f/∂y` on this system's own pattern (`sparsity().rhs_jacobian`):
+    /// its value `v` (in the pattern's order) into `out[to[v]]`, and not
+    /// written where `to[v]` is [`SKIP`]; `to` has the pattern's `nnz()`
+    /// entries. One pass from the evaluation to where a caller keeps the
+    /// entries (a staggered corrector's `[∂f/∂y | ∂f/∂p]`, three times a
+    /// step), where [`DaeSystem::rhs_jacobian_values`] and a gather make
+    /// two and compare the pattern on each call. The default makes them
+    /// (allocating).
+    ///
+    /// ```
+    /// use dae_core::interp::InterpretedModel;
+    /// use dae_core::system::{DaeSystem, SKIP};
+    ///
+    /// let m = InterpretedModel::from_str(
+    ///     "pub M { differential { x } algebraic { z } equations { der(x) = -x * z; 0 = z - x; } }",
+    /// )
+    /// .unwrap();
+    /// let sys = m.system("rcd0").unwrap();
+    /// // The pattern's entries, column by column: (x', x), (0, x), (x', z), (0, z).
+    /// assert_eq!(sys.sparsity().rhs_jacobian.nnz(), 4);
+    /// let mut out = [0.0; 2];
+    /// // ∂x'/∂x = −z into out[1], ∂x'/∂z = −x into out[0], the rest skipped.
+    /// sys.rhs_jacobian_scatter(0.0, &[2.0, 3.0], &[1, SKIP, 0, SKIP], &mut out);
+    /// assert_eq!(out, [-2.0, -3.0]);
+    /// ```
+    fn rhs_jacobian_scatter(&self, t: f64, y: &[f64], to: &[usize], out: &mut [f64]) {
+        let pattern = self.sparsity().rhs_jacobian;
+        let mut values = vec![0.0; pattern.nnz()];
+        self.rhs_jacobian_values(t, y, &pattern, &mut values);
+        for (&at, &v) in to.iter().zip(&values) {
+            if at != SKIP {
+                out[at] = v;
+            }
+        }
+    }
+
     /// `E` at the entries of `pattern` (see
     /// [`DaeSystem::rhs_jacobian_values`]).
     fn leading_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
@@ -691,6 +731,9 @@ macro_rules! forward_dae_system {
             }
             fn rhs_jacobian_values(&self, t: f64, y: &[f64], p: &Pattern, v: &mut [f64]) {
                 (**self).rhs_jacobian_values(t, y, p, v)
+            }
+            fn rhs_jacobian_scatter(&self, t: f64, y: &[f64], to: &[usize], out: &mut [f64]) {
+                (**self).rhs_jacobian_scatter(t, y, to, out)
             }
             fn leading_values(&self, t: f64, y: &[f64], p: &Pattern, v: &mut [f64]) {
                 (**self).leading_values(t, y, p, v)

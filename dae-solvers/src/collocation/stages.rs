@@ -326,16 +326,34 @@ impl<K: Collocation> Integrator<'_, K> {
 
     /// Scaled norm of the embedded error estimate; NaN if it is not finite.
     pub(super) fn error_norm(&mut self, t: f64, h: f64, refine: bool) -> f64 {
+        let part = self.error_part();
         let (n, m) = (self.n, self.m);
         let w = &mut self.w;
         // tmp = (1/h) Σ d_i Z_i,  ez = E(y_n) tmp.
         kernels::error_combination::<K>(&w.z, h, &mut w.tmp, n);
-        w.e_n.mat_vec(&w.tmp, &mut w.ez);
+        // With the sensitivities out of the error test, the state's rows
+        // alone (`E` of a state and its sensitivities is block diagonal, its
+        // first block the state's `E₀`; the sensitivities' weights are zero
+        // in the norm, so leaving their rows out adds no term but `+0`).
+        let (n, m) = match (part, &w.stagger) {
+            (Some(Part::First), Some(st)) => {
+                let (size, e) = (st.size, w.e_n.dense().as_slice());
+                w.ez[..size].fill(0.0);
+                for (j, &v) in w.tmp[..size].iter().enumerate() {
+                    for (ez, &ej) in w.ez[..size].iter_mut().zip(&e[j * m..j * m + size]) {
+                        *ez += ej * v;
+                    }
+                }
+                (size, size)
+            }
+            _ => {
+                w.e_n.mat_vec(&w.tmp, &mut w.ez);
+                (n, m)
+            }
+        };
         for k in 0..m {
             w.err[k] = w.f0[k] + w.ez[k];
         }
-        let part = self.error_part();
-        let w = &mut self.w;
         solve_error(&mut w.stages, &mut w.err, part);
         let mut err = w.weights.norm(&w.err[..n]);
         if err >= 1.0 && refine {

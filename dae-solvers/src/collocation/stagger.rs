@@ -95,13 +95,14 @@ pub(super) struct Stagger {
 /// unknowns. The exact solve's `3N × 3N` factorisation is shared by the
 /// parameters and each then costs one solve; the iteration costs each
 /// parameter about three iterations of products, transforms and two
-/// solves. On the pendulum (`N = 5`, rcd0, BENCHMARKS.md §13f) the exact
-/// solve on the matrix's non-zeros ([`PatternLu`]: 69 of 225, 203
-/// updates where a dense LU makes 1 015) costs about 4 600 instructions
-/// an attempt for the factorisation and 1 000 for the matrix, and 2 050 a
-/// parameter for the solve, where the iteration costs about 8 400 a
-/// parameter: the exact solve is cheaper from one parameter on (§13e's
-/// dense 15 × 15 LU cost 10 600, and kept the iteration for one). The
+/// solves. On the pendulum (`N = 5`, rcd0, BENCHMARKS.md §13f, §21) the
+/// exact solve on the matrix's non-zeros ([`PatternLu`]: 69 of 225, 167
+/// updates in the variable-major order where a dense LU makes 1 015)
+/// costs about 3 200 instructions an attempt for the factorisation and
+/// 600 for the matrix, and 1 300 a parameter for the solve, where the
+/// iteration costs about 8 400 a parameter: the exact solve is cheaper
+/// from one parameter on (§13e's dense 15 × 15 LU cost 10 600, and kept
+/// the iteration for one). The
 /// factorisation grows faster than the iteration with `N`: above 12
 /// unknowns (not measured) the iteration stays.
 const DIRECT_MAX: usize = 12;
@@ -109,11 +110,10 @@ const DIRECT_MAX: usize = 12;
 /// With one parameter the exact solve is kept when its elimination makes
 /// at most this many updates per `N²` (judged on its first factorisation;
 /// the iteration otherwise). Measured on the pendulum (BENCHMARKS.md
-/// §13f): rcd0 (`N = 5`, 203 updates, 8.1 `N²`) is cheaper exact (258.5 M
-/// instructions against the iteration's 265.8 M), ggl1 (`N = 6`, about
-/// 356 updates, 9.9 `N²`) dearer (290.0 M against 258.9 M before the
-/// clearing of [`PatternLu::factor`] was made sparse). Two points: a
-/// rough boundary, not a model.
+/// §13f, §21): rcd0 (`N = 5`, 167 updates, 6.7 `N²`) is cheaper exact
+/// (236.7 M instructions; the iteration 265.8 M in §13f), ggl1 (`N = 6`)
+/// dearer (259.4 M against the iteration's 254.5 M with §21's solve).
+/// Two points: a rough boundary, not a model.
 const ONE_PARAMETER_UPDATES: usize = 9;
 
 /// The sensitivities' stage equations with the state's stages fixed,
@@ -127,40 +127,76 @@ const ONE_PARAMETER_UPDATES: usize = 9;
 /// attempt and solved once per parameter, exactly, where the iteration
 /// replaces each `J(Y_k)` by `J₀` and iterates on the difference.
 struct Direct {
-    /// The matrix (stage-major unknowns and rows), then its factors; its
-    /// pattern is `E₀`'s in every block and `J`'s in the diagonal blocks
-    /// (`N = 5` on the pendulum: 69 non-zeros of 225).
+    /// The matrix, then its factors: unknowns and rows variable-major
+    /// (the three stages of each unknown, of each equation, together; see
+    /// [`Direct::at`]); its pattern is `E₀`'s in every stage block and
+    /// `J`'s in the diagonal ones (`N = 5` on the pendulum: 69 non-zeros
+    /// of 225).
     lu: PatternLu,
-    /// The structural non-zeros `(row, column)` of `E₀` and of `J`.
-    e_entries: Vec<(usize, usize)>,
-    j_entries: Vec<(usize, usize)>,
-    /// A right-hand side, then the increments (`3N`).
+    /// Where `stage_matrix` writes: each structural non-zero of `E₀` (its
+    /// place in `E`'s storage, leading dimension `m`) with its nine
+    /// entries `(k, j)`, and each of `J` (its place in `[J | ∂f/∂p]`)
+    /// with its three diagonal-block entries.
+    e_at: Vec<EntryAt<9>>,
+    j_at: Vec<EntryAt<3>>,
+    /// One stage's right-hand side (`N`).
+    rhs: Vec<f64>,
+    /// The right-hand side by rows, then the increments by unknowns
+    /// (`3N`, variable-major).
     x: Vec<f64>,
     /// Whether its cost for one parameter has been judged
     /// ([`ONE_PARAMETER_UPDATES`]).
     judged: bool,
 }
 
+/// A structural non-zero's place in its source matrix and its `K`
+/// positions in [`Direct`]'s matrix.
+type EntryAt<const K: usize> = (usize, [u16; K]);
+
 impl Direct {
     /// The exact solve of a state of `size` unknowns whose `E₀` and `J`
     /// have the structural non-zeros of `first`'s [`DaeSystem::sparsity`]
     /// (`None` above [`PatternLu`]'s size).
-    fn new(first: &dyn DaeSystem, size: usize) -> Option<Self> {
+    fn new(first: &dyn DaeSystem, size: usize, m: usize) -> Option<Self> {
         let sparsity = first.sparsity();
-        let e_entries: Vec<_> = sparsity.leading.entries().collect();
-        let j_entries: Vec<_> = sparsity.rhs_jacobian.entries().collect();
         let (e, j) = (&sparsity.leading, &sparsity.rhs_jacobian);
+        // Variable-major columns: partial pivoting then makes 167 updates
+        // on the pendulum's rcd0 where the stage-major order makes 203
+        // (`scripts/pattern_lu_order.py`, BENCHMARKS.md §21).
         let lu = PatternLu::new(3 * size, |row, col| {
-            let (r, c) = (row % size, col % size);
-            e.contains(r, c) || (row / size == col / size && j.contains(r, c))
+            let (r, c) = (row / 3, col / 3);
+            e.contains(r, c) || (row % 3 == col % 3 && j.contains(r, c))
         })?;
+        let big = 3 * size;
+        // Positions below `PatternLu`'s capacity (45 × 45) fit in `u16`.
+        let pos = |row: usize, col: usize| (col * big + row) as u16;
+        let e_at = e
+            .entries()
+            .map(|(r, c)| {
+                let at = std::array::from_fn(|kj| pos(Self::at(r, kj / 3), Self::at(c, kj % 3)));
+                (c * m + r, at)
+            })
+            .collect();
+        let j_at = j
+            .entries()
+            .map(|(r, c)| {
+                let at = std::array::from_fn(|k| pos(Self::at(r, k), Self::at(c, k)));
+                (c * size + r, at)
+            })
+            .collect();
         Some(Direct {
             lu,
-            e_entries,
-            j_entries,
-            x: vec![0.0; 3 * size],
+            e_at,
+            j_at,
+            rhs: vec![0.0; size],
+            x: vec![0.0; big],
             judged: false,
         })
+    }
+
+    /// The row (column) of equation (unknown) `i` at stage `k`.
+    fn at(i: usize, k: usize) -> usize {
+        3 * i + k
     }
 }
 
@@ -230,7 +266,7 @@ impl Stagger {
                 1.0,
             ),
             direct: (b.size <= DIRECT_MAX)
-                .then(|| Direct::new(first, b.size))
+                .then(|| Direct::new(first, b.size, n))
                 .flatten(),
             compact: std::array::from_fn(|_| vec![0.0; 3 * b.size]),
         })
@@ -504,7 +540,7 @@ impl<K: Collocation> Integrator<'_, K> {
     /// The sensitivities' stage increments by [`Direct`]'s exact solve,
     /// with `[J | ∂f/∂p]` of [`Self::linearise`], into their rows of `Z`.
     fn solve_sensitivities(&mut self, h: f64) -> Result<(), Exact> {
-        let (n, m) = (self.n, self.m);
+        let n = self.n;
         let w = &mut self.w;
         let Some(st) = &mut w.stagger else {
             return Ok(());
@@ -515,24 +551,28 @@ impl<K: Collocation> Integrator<'_, K> {
         let size = st.size;
         let e = w.e_n.dense().as_slice();
         let lin = st.lin.each_ref().map(|l| l.as_slice());
-        let entries = (&d.e_entries[..], &d.j_entries[..]);
-        d.lu.factor(|a| stage_matrix::<K>(a, e, m, lin, entries, h, size))
+        let (e_at, j_at) = (&d.e_at[..], &d.j_at[..]);
+        d.lu.factor(|a| stage_matrix::<K>(a, e, lin, (e_at, j_at), h))
             .map_err(|_| Exact::Singular)?;
         let params = st.lin[0].ncols() - size;
         for i in 1..=params {
             let s = &w.y[size * i..size * (i + 1)];
             for (k, lin) in st.lin.iter().enumerate() {
-                let rhs = &mut d.x[k * size..(k + 1) * size];
+                let rhs = &mut d.rhs[..];
                 with_size!(size, |N| sensitivity_rhs(rhs, s, lin.as_slice(), i, N));
+                for (r, &v) in d.rhs.iter().enumerate() {
+                    d.x[Direct::at(r, k)] = v;
+                }
             }
             d.lu.solve(&mut d.x);
             // `x · 0` is zero for a finite `x` only.
             if d.x.iter().fold(0.0, |acc, &x| acc + x * 0.0) != 0.0 {
                 return Err(Exact::NonFinite);
             }
-            for (k, x) in d.x.chunks_exact(size).enumerate() {
-                let at = k * n + size * i;
-                w.z[at..at + size].copy_from_slice(x);
+            for (c, x) in d.x.chunks_exact(3).enumerate() {
+                for (k, &v) in x.iter().enumerate() {
+                    w.z[k * n + size * i + c] = v;
+                }
             }
         }
         // One parameter: the exact solve stays only where its elimination
@@ -628,37 +668,29 @@ enum Exact {
     NonFinite,
 }
 
-/// Structural non-zeros `(row, column)` of an `N × N` matrix.
-type Entries<'a> = &'a [(usize, usize)];
-
-/// [`Direct`]'s matrix into `a` (`3N × 3N`, column-major, stage-major
-/// unknowns and rows): block `(k, j)` is `(a⁻¹_kj / h) E − δ_kj J(Y_k)`,
-/// `e` is `E` column-major with leading dimension `m` (its first block
-/// `E₀`), `lin[k]` is `[J(Y_k) | ∂f/∂p]` with leading dimension `size`;
-/// only the structural non-zeros `entries` of `E₀` and `J` are written,
-/// into zeros ([`PatternLu::factor`] clears them).
+/// [`Direct`]'s matrix into `a` (`3N × 3N`, column-major, variable-major
+/// unknowns and rows): block `(k, j)` of stages is `(a⁻¹_kj / h) E −
+/// δ_kj J(Y_k)`, `e` is `E`'s storage (its first block `E₀`), `lin[k]` is
+/// `[J(Y_k) | ∂f/∂p]`; only the structural non-zeros of `E₀` and `J` are
+/// written, at the positions `e_at`, `j_at` of [`Direct`], into zeros
+/// ([`PatternLu::factor`] clears them).
 fn stage_matrix<K: Collocation>(
     a: &mut [f64],
     e: &[f64],
-    m: usize,
     lin: [&[f64]; 3],
-    (e_entries, j_entries): (Entries, Entries),
+    (e_at, j_at): (&[EntryAt<9>], &[EntryAt<3>]),
     h: f64,
-    size: usize,
 ) {
-    let big = 3 * size;
-    for &(r, c) in e_entries {
-        let ev = e[c * m + r];
-        for j in 0..3 {
-            let col = &mut a[(j * size + c) * big..(j * size + c + 1) * big];
-            for k in 0..3 {
-                col[k * size + r] = K::TABLEAU.ainv[k][j] / h * ev;
-            }
+    let coef: [f64; 9] = std::array::from_fn(|kj| K::TABLEAU.ainv[kj / 3][kj % 3] / h);
+    for &(from, at) in e_at {
+        let ev = e[from];
+        for (&pos, &c) in at.iter().zip(&coef) {
+            a[usize::from(pos)] = c * ev;
         }
     }
-    for (k, jac) in lin.iter().enumerate() {
-        for &(r, c) in j_entries {
-            a[(k * size + c) * big + k * size + r] -= jac[c * size + r];
+    for &(from, at) in j_at {
+        for (&pos, jac) in at.iter().zip(lin) {
+            a[usize::from(pos)] -= jac[from];
         }
     }
 }

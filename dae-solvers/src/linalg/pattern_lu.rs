@@ -26,12 +26,17 @@
 
 use super::{Pivoting, Singular};
 
-/// Entries a [`PatternLu`] can hold (a matrix of at most 45 × 45): its
-/// storage is an array of this power of two and every index is masked by
-/// `CAP − 1`, which is in bounds by construction, so the replay's and the
-/// solve's indexed updates carry no bounds check.
+/// Entries a [`PatternLu`] can hold (a matrix of at most 45 × 45). The
+/// solve's indices are masked by `CAP − 1`, in bounds by construction, so
+/// its indexed updates carry no bounds check.
 pub(crate) const CAP: usize = 2048;
 const MASK: usize = CAP - 1;
+/// Entries of the storage: every `u16` position of the replay's record
+/// ([`Record::flat`]) is in bounds by its type, so the replay's updates
+/// carry neither a bounds check nor a mask (three instructions of about
+/// thirteen an update). Only the first `n²` entries are ever touched; the
+/// rest (512 KB, allocated zeroed) stays untouched.
+const STORE: usize = 1 << 16;
 /// Matrices of at most this many entries (2 KB) are cleared whole by
 /// [`PatternLu::clear`]: a vector `memset` of about 250 instructions at
 /// 15 × 15, where clearing the pendulum's 100-odd touched entries one by
@@ -39,22 +44,24 @@ const MASK: usize = CAP - 1;
 /// callgrind counts byte by byte (2 600 instructions at 18 × 18), and the
 /// touched entries alone are cleared.
 const CLEAR_WHOLE: usize = 256;
-/// Rows of the largest matrix, a power of two, for the solve's scratch.
+/// Rows of the largest matrix.
 const ROWS_CAP: usize = 64;
-const ROWS: usize = ROWS_CAP - 1;
+/// Entries of the solve's scratch: every `u8` row of the record is in
+/// bounds by its type.
+const ROWS_STORE: usize = 1 << 8;
 
 /// LU factors of an `n × n` matrix with a fixed pattern (see the [module
 /// documentation](self)).
 pub(crate) struct PatternLu {
     n: usize,
     /// The matrix (column-major, rows as written), then its factors.
-    a: Box<[f64; CAP]>,
+    a: Box<[f64; STORE]>,
     /// Structural non-zeros of the matrix (column-major).
     pattern: Vec<bool>,
     /// The elimination last recorded, if any.
     record: Option<Record>,
     /// Scratch for the solution by rows.
-    by_rows: Box<[f64; ROWS_CAP]>,
+    by_rows: Box<[f64; ROWS_STORE]>,
     /// How many factorisations recorded their elimination afresh.
     pub(crate) recorded: usize,
 }
@@ -66,17 +73,35 @@ struct Record {
     /// Rows below the pivots (not yet pivoted, structural non-zeros in
     /// the pivot's column), step by step.
     lower: Vec<usize>,
-    /// Offsets `j n` of the columns `j > k` where pivot row `k` has a
-    /// structural non-zero, step by step.
-    right: Vec<usize>,
     /// Rows of the earlier pivots with a structural non-zero in each
     /// column (the entries of `U` above its diagonal), step by step.
     upper: Vec<usize>,
     /// Every position the elimination reads or writes (the pattern and
     /// its fill): the entries to clear before the next matrix is written.
     touched: Vec<usize>,
+    /// The replay's operations as positions in the matrix, step by step
+    /// ([`Step::flat`]): the multipliers `l_ik` of each column, then the
+    /// updates `(a_ij, l_ik, u_kj)` in the order the record made them.
+    /// One flat loop over them costs about half the nested loops' index
+    /// arithmetic on the pendulum's 15 × 15 stage system, where most
+    /// pivot rows reach two or three columns (BENCHMARKS.md §21).
+    multipliers: Vec<u16>,
+    flat: Vec<[u16; 3]>,
+    /// The solve's forward substitution, `x_row −= a_at x_from` in order
+    /// ([`Solve`]), and its back substitution's updates `(a_at, row)`,
+    /// step by step ([`Step::back`]).
+    forward: Vec<Solve>,
+    back: Vec<(u16, u8)>,
     /// Updates `a_ij −= l_ik u_kj` of one elimination.
     updates: usize,
+}
+
+/// One update `x_row −= a_at x_from` of the forward substitution.
+#[derive(Clone, Copy)]
+struct Solve {
+    at: u16,
+    row: u8,
+    from: u8,
 }
 
 /// The elimination of column `k`.
@@ -85,23 +110,32 @@ struct Step {
     column: usize,
     /// The pivot's row.
     pivot: usize,
-    /// Its rows in [`Record::lower`], columns in [`Record::right`] and
-    /// rows in [`Record::upper`].
+    /// Its rows in [`Record::lower`] and in [`Record::upper`].
     lower: std::ops::Range<usize>,
-    right: std::ops::Range<usize>,
     upper: std::ops::Range<usize>,
+    /// Its multipliers' positions in [`Record::multipliers`] and its
+    /// updates in [`Record::flat`].
+    multipliers: std::ops::Range<usize>,
+    flat: std::ops::Range<usize>,
+    /// The pivot's position, and its row of the back substitution's
+    /// updates in [`Record::back`].
+    diag: u16,
+    back: std::ops::Range<usize>,
 }
 
 impl PatternLu {
     /// Storage for an `n × n` matrix whose structural non-zeros are
     /// `pattern(i, j)`; `None` for a matrix of more than [`CAP`] entries.
     pub(crate) fn new(n: usize, pattern: impl Fn(usize, usize) -> bool) -> Option<Self> {
-        (n * n <= CAP && n <= ROWS_CAP).then(|| PatternLu {
+        if n * n > CAP || n > ROWS_CAP {
+            return None;
+        }
+        Some(PatternLu {
             n,
-            a: Box::new([0.0; CAP]),
+            a: vec![0.0; STORE].into_boxed_slice().try_into().ok()?,
             pattern: (0..n * n).map(|at| pattern(at % n, at / n)).collect(),
             record: None,
-            by_rows: Box::new([0.0; ROWS_CAP]),
+            by_rows: Box::new([0.0; ROWS_STORE]),
             recorded: 0,
         })
     }
@@ -160,19 +194,15 @@ impl PatternLu {
         let x = &mut *self.by_rows;
         // L y = P b, in place by rows (in `x`).
         x[..n].copy_from_slice(b);
-        for step in &rec.steps {
-            let bk = x[step.pivot & ROWS];
-            for &i in &rec.lower[step.lower.clone()] {
-                x[i & ROWS] -= a[(step.column + i) & MASK] * bk;
-            }
+        for op in &rec.forward {
+            x[usize::from(op.row)] -= a[usize::from(op.at)] * x[usize::from(op.from)];
         }
         // U x = y, column by column from the last.
         for (step, bk) in rec.steps.iter().zip(b).rev() {
-            let (ck, p) = (step.column, step.pivot);
-            let xk = x[p & ROWS] / a[(ck + p) & MASK];
+            let xk = x[step.pivot & (ROWS_STORE - 1)] / a[usize::from(step.diag)];
             *bk = xk;
-            for &r in &rec.upper[step.upper.clone()] {
-                x[r & ROWS] -= a[(ck + r) & MASK] * xk;
+            for &(at, r) in &rec.back[step.back.clone()] {
+                x[usize::from(r)] -= a[usize::from(at)] * xk;
             }
         }
     }
@@ -181,11 +211,9 @@ impl PatternLu {
 /// The elimination of `rec` on `a`; `false` (with `a` partly eliminated)
 /// when a recorded pivot is no longer the largest of its column's
 /// candidates, or is zero or not finite.
-fn replay(rec: &Record, a: &mut [f64; CAP]) -> bool {
+fn replay(rec: &Record, a: &mut [f64; STORE]) -> bool {
     for step in &rec.steps {
-        let (ck, p) = (step.column, step.pivot);
-        let lower = &rec.lower[step.lower.clone()];
-        let pivot = a[(ck + p) & MASK];
+        let pivot = a[(step.column + step.pivot) & MASK];
         if Pivoting::Checked.singular(pivot.abs()) {
             return false;
         }
@@ -193,8 +221,8 @@ fn replay(rec: &Record, a: &mut [f64; CAP]) -> bool {
         // (checked after scaling: a refused replay is written afresh).
         let inv = 1.0 / pivot;
         let mut largest = 0.0f64;
-        for &i in lower {
-            let v = &mut a[(ck + i) & MASK];
+        for &at in &rec.multipliers[step.multipliers.clone()] {
+            let v = &mut a[usize::from(at)];
             if v.abs() > largest {
                 largest = v.abs();
             }
@@ -203,12 +231,9 @@ fn replay(rec: &Record, a: &mut [f64; CAP]) -> bool {
         if largest > pivot.abs() {
             return false;
         }
-        for &off in &rec.right[step.right.clone()] {
-            let u = a[(off + p) & MASK];
-            for &i in lower {
-                let l = a[(ck + i) & MASK];
-                a[(off + i) & MASK] -= l * u;
-            }
+        for &[at, l, u] in &rec.flat[step.flat.clone()] {
+            let lu = a[usize::from(l)] * a[usize::from(u)];
+            a[usize::from(at)] -= lu;
         }
     }
     true
@@ -222,9 +247,12 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
     let mut rec = Record {
         steps: Vec::with_capacity(n),
         lower: Vec::new(),
-        right: Vec::new(),
         upper: Vec::new(),
         touched: Vec::new(),
+        multipliers: Vec::new(),
+        flat: Vec::new(),
+        forward: Vec::new(),
+        back: Vec::new(),
         updates: 0,
     };
     for k in 0..n {
@@ -246,7 +274,9 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
         for &i in &lower {
             a[ck + i] *= inv;
         }
-        let right_from = rec.right.len();
+        // Offsets `j n` of the columns `j > k` where the pivot row has a
+        // structural non-zero.
+        let mut right = Vec::new();
         for j in k + 1..n {
             if !nz[j * n + p] {
                 continue;
@@ -256,8 +286,19 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
                 a[j * n + i] -= a[ck + i] * u;
                 nz[j * n + i] = true;
             }
-            rec.right.push(j * n);
+            right.push(j * n);
             rec.updates += lower.len();
+        }
+        let (mult_from, flat_from) = (rec.multipliers.len(), rec.flat.len());
+        // Positions below `CAP` (at most 45 × 45 entries) fit in `u16`.
+        let at = |pos: usize| pos as u16;
+        rec.multipliers.extend(lower.iter().map(|&i| at(ck + i)));
+        for &off in &right {
+            rec.flat.extend(
+                lower
+                    .iter()
+                    .map(|&i| [at(off + i), at(ck + i), at(off + p)]),
+            );
         }
         let lower_from = rec.lower.len();
         rec.lower.extend(lower);
@@ -265,8 +306,11 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
             column: ck,
             pivot: p,
             lower: lower_from..rec.lower.len(),
-            right: right_from..rec.right.len(),
             upper: 0..0,
+            multipliers: mult_from..rec.multipliers.len(),
+            flat: flat_from..rec.flat.len(),
+            diag: at(ck + p),
+            back: 0..0,
         });
     }
     // U's entries above the diagonal, column by column: the earlier pivot
@@ -280,6 +324,20 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
             }
         }
         rec.steps[k].upper = from..rec.upper.len();
+    }
+    // The substitutions' updates as positions (below `CAP`: `u16`) and
+    // rows (below `ROWS_CAP`: `u8`).
+    for step in &mut rec.steps {
+        let (ck, p) = (step.column, step.pivot as u8);
+        for &i in &rec.lower[step.lower.clone()] {
+            let (at, row) = ((ck + i) as u16, i as u8);
+            rec.forward.push(Solve { at, row, from: p });
+        }
+        let from = rec.back.len();
+        for &r in &rec.upper[step.upper.clone()] {
+            rec.back.push(((ck + r) as u16, r as u8));
+        }
+        step.back = from..rec.back.len();
     }
     rec.touched = (0..n * n).filter(|&at| nz[at]).collect();
     Ok(rec)
