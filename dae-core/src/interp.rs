@@ -541,6 +541,26 @@ impl DaeSystem for InterpretedSystem {
                 }
             });
     }
+    fn rhs_jacobian_scatter3(
+        &self,
+        t: [f64; 3],
+        y: [&[f64]; 3],
+        to: &[usize],
+        mut out: [&mut [f64]; 3],
+    ) {
+        let at = &self.structure().rhs_jacobian;
+        let inputs = [0, 1, 2].map(|l| self.inputs(t[l], y[l], &[], &[]));
+        let mut s = self.scratch.borrow_mut();
+        self.c
+            .rhs_jacobian
+            .tape
+            .eval_outputs_lanes(&inputs, &mut s, |l, k, v| {
+                let at = to[at[k]];
+                if at != crate::system::SKIP {
+                    out[l][at] = v;
+                }
+            });
+    }
     fn leading_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
         let s = self.structure();
         if *pattern != s.sparsity.leading {

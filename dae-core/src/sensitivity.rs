@@ -332,6 +332,8 @@ impl Linearisation {
 struct Scratch {
     /// The augmented point `[y, p]` (the parameters' columns set once).
     point: Vec<f64>,
+    /// Three more such points ([`DaeSystem::first_block_linearisations`]).
+    points: [Vec<f64>; 3],
     /// The augmented formulation's Jacobian (rows × unknowns).
     jac: DMatrix<f64>,
     /// The augmented constraint chain's Jacobian.
@@ -543,6 +545,7 @@ impl SensitivitySystem {
         let lin_cols: Vec<usize> = var_cols.iter().chain(&param_cols).copied().collect();
         let lin = Linearisation::new(&*augmented, &lin_cols, &row_of);
         let scratch = RefCell::new(Scratch {
+            points: [point.clone(), point.clone(), point.clone()],
             point,
             jac: DMatrix::zeros(ai.equations(), na),
             cjac: DMatrix::zeros(k, na),
@@ -857,6 +860,43 @@ impl DaeSystem for SensitivitySystem {
                 *v = col[ar];
             }
         }
+        true
+    }
+
+    /// The three points' linearisations in one pass of the augmented
+    /// formulation's Jacobian ([`DaeSystem::rhs_jacobian_scatter3`]) where
+    /// its pattern is known; three calls otherwise.
+    fn first_block_linearisations(
+        &self,
+        t: [f64; 3],
+        y: [&[f64]; 3],
+        out: &mut [DMatrix<f64>; 3],
+    ) -> bool {
+        let (n, np) = (self.var_cols.len(), self.param_cols.len());
+        let fits = y.iter().zip(out.iter()).all(|(y, out)| {
+            y.len() == n && out.nrows() == self.row_of.len() && out.ncols() == n + np
+        });
+        let Some(lin) = self.lin.as_ref().filter(|_| fits) else {
+            return t
+                .into_iter()
+                .zip(y)
+                .zip(out.iter_mut())
+                .all(|((t, y), out)| self.first_block_linearisation(t, y, out));
+        };
+        let s = &mut *self.scratch.borrow_mut();
+        for (point, y) in s.points.iter_mut().zip(y) {
+            for (j, &c) in self.var_cols.iter().enumerate() {
+                point[c] = y[j];
+            }
+        }
+        let out = out.each_mut().map(|out| {
+            let out = out.as_mut_slice();
+            out.fill(0.0);
+            out
+        });
+        let points = s.points.each_ref().map(|p| &p[..]);
+        self.augmented
+            .rhs_jacobian_scatter3(t, points, &lin.to, out);
         true
     }
 

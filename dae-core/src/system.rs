@@ -545,6 +545,22 @@ pub trait DaeSystem {
         false
     }
 
+    /// [`DaeSystem::first_block_linearisation`] at three points `(t[l],
+    /// y[l])` into `out[l]`; `false` when the system offers none. The
+    /// default makes three calls; a state with sensitivities evaluates the
+    /// three in one pass ([`DaeSystem::rhs_jacobian_scatter3`]).
+    fn first_block_linearisations(
+        &self,
+        t: [f64; 3],
+        y: [&[f64]; 3],
+        out: &mut [DMatrix<f64>; 3],
+    ) -> bool {
+        t.into_iter()
+            .zip(y)
+            .zip(out.iter_mut())
+            .all(|((t, y), out)| self.first_block_linearisation(t, y, out))
+    }
+
     /// `f(t, y)` into `f` (length M) and its derivatives along `count`
     /// directions in the unknowns: `df[k M..(k + 1) M] = (∂f/∂y) dy_k`
     /// with `dy_k = dy[k N..(k + 1) N]` — the right-hand sides of forward
@@ -628,6 +644,22 @@ pub trait DaeSystem {
             if at != SKIP {
                 out[at] = v;
             }
+        }
+    }
+
+    /// [`DaeSystem::rhs_jacobian_scatter`] at three points `(t[l], y[l])`
+    /// into `out[l]` (a three-stage method's stage points). The default
+    /// makes three calls; the interpreter evaluates its tape once for the
+    /// three (`Tape::eval_outputs_lanes`), the same values bit for bit.
+    fn rhs_jacobian_scatter3(
+        &self,
+        t: [f64; 3],
+        y: [&[f64]; 3],
+        to: &[usize],
+        out: [&mut [f64]; 3],
+    ) {
+        for ((t, y), out) in t.into_iter().zip(y).zip(out) {
+            self.rhs_jacobian_scatter(t, y, to, out);
         }
     }
 
@@ -718,6 +750,14 @@ macro_rules! forward_dae_system {
             fn first_block_linearisation(&self, t: f64, y: &[f64], out: &mut DMatrix<f64>) -> bool {
                 (**self).first_block_linearisation(t, y, out)
             }
+            fn first_block_linearisations(
+                &self,
+                t: [f64; 3],
+                y: [&[f64]; 3],
+                out: &mut [DMatrix<f64>; 3],
+            ) -> bool {
+                (**self).first_block_linearisations(t, y, out)
+            }
             fn rhs_tangents(
                 &self,
                 t: f64,
@@ -734,6 +774,15 @@ macro_rules! forward_dae_system {
             }
             fn rhs_jacobian_scatter(&self, t: f64, y: &[f64], to: &[usize], out: &mut [f64]) {
                 (**self).rhs_jacobian_scatter(t, y, to, out)
+            }
+            fn rhs_jacobian_scatter3(
+                &self,
+                t: [f64; 3],
+                y: [&[f64]; 3],
+                to: &[usize],
+                out: [&mut [f64]; 3],
+            ) {
+                (**self).rhs_jacobian_scatter3(t, y, to, out)
             }
             fn leading_values(&self, t: f64, y: &[f64], p: &Pattern, v: &mut [f64]) {
                 (**self).leading_values(t, y, p, v)

@@ -301,6 +301,201 @@ impl Plan {
     }
 }
 
+impl Plan {
+    /// [`Plan::eval`] at `L` points at once: slot `i` of point `l` in
+    /// `s[i L + l]` (`s` at least `L` [`Plan::slots`] long). Each run is
+    /// dispatched, and each node's operand slots read, once for the `L`
+    /// points; each point's value is computed by the same operations in the
+    /// same order as [`Plan::eval`] computes it, bit for bit. A staggered
+    /// corrector's three stage-point Jacobians (BENCHMARKS.md §21) cost
+    /// about half of three evaluations.
+    pub(super) fn eval_lanes<const L: usize>(&self, inputs: &[Inputs<'_>; L], s: &mut [f64]) {
+        for (lanes, &c) in s.chunks_exact_mut(L).zip(&self.consts) {
+            lanes.fill(c);
+        }
+        let mut at = self.consts.len() * L;
+        let (mut a, mut r) = (0, 0);
+        for run in &self.runs {
+            let len = run.len as usize;
+            let (done, rest) = s.split_at_mut(at);
+            let out = &mut rest[..len * L];
+            at += len * L;
+            let mut args = |per: usize| {
+                let x = &self.args[a..a + per * len];
+                a += per * len;
+                x
+            };
+            match run.kind {
+                Kind::Var => gather_lanes(out, args(1), inputs.each_ref().map(|i| i.y)),
+                Kind::Der => gather_lanes(out, args(1), inputs.each_ref().map(|i| i.yp)),
+                Kind::Param => gather_lanes(out, args(1), inputs.each_ref().map(|i| i.p)),
+                Kind::Dir => gather_lanes(out, args(1), inputs.each_ref().map(|i| i.z)),
+                Kind::Time => {
+                    let _ = args(1);
+                    for o in out.chunks_exact_mut(L) {
+                        for (o, inputs) in o.iter_mut().zip(inputs) {
+                            *o = inputs.t;
+                        }
+                    }
+                }
+                Kind::Add(k) => {
+                    let k = k as usize;
+                    let c = &self.reals[r..r + (k + 1) * len];
+                    r += (k + 1) * len;
+                    let x = args(k);
+                    match k {
+                        0 => {
+                            for (o, &c) in out.chunks_exact_mut(L).zip(c) {
+                                o.fill(c);
+                            }
+                        }
+                        1 => add_lanes::<1, L>(out, x, c, done),
+                        2 => add_lanes::<2, L>(out, x, c, done),
+                        3 => add_lanes::<3, L>(out, x, c, done),
+                        UNROLLED => add_lanes::<UNROLLED, L>(out, x, c, done),
+                        _ => add_n_lanes::<L>(out, x, c, done, k),
+                    }
+                }
+                Kind::Mul(k) => {
+                    let k = k as usize;
+                    let x = args(k);
+                    match k {
+                        0 => out.fill(1.0),
+                        2 => mul_lanes::<2, L>(out, x, done),
+                        3 => mul_lanes::<3, L>(out, x, done),
+                        _ => mul_n_lanes::<L>(out, x, done, k),
+                    }
+                }
+                Kind::Div => binary_lanes::<L>(out, args(2), done, |a, b| a / b),
+                Kind::Powi(2) => unary_lanes::<L>(out, args(1), done, |v| v * v),
+                Kind::Powi(e) => unary_lanes::<L>(out, args(1), done, |v| v.powi(e)),
+                Kind::Sqrt => unary_lanes::<L>(out, args(1), done, f64::sqrt),
+                Kind::Powf => {
+                    let c = &self.reals[r..r + len];
+                    r += len;
+                    for ((o, &x), &c) in out.chunks_exact_mut(L).zip(args(1)).zip(c) {
+                        let v = &done[x as usize * L..][..L];
+                        for (o, &v) in o.iter_mut().zip(v) {
+                            *o = v.powf(c);
+                        }
+                    }
+                }
+                Kind::Pow => binary_lanes::<L>(out, args(2), done, f64::powf),
+                Kind::Func(f) => match f {
+                    Func::Sin => unary_lanes::<L>(out, args(1), done, f64::sin),
+                    Func::Cos => unary_lanes::<L>(out, args(1), done, f64::cos),
+                    Func::Tan => unary_lanes::<L>(out, args(1), done, f64::tan),
+                    Func::Exp => unary_lanes::<L>(out, args(1), done, f64::exp),
+                    Func::Ln => unary_lanes::<L>(out, args(1), done, f64::ln),
+                },
+            }
+        }
+    }
+}
+
+/// [`gather`] at `L` points, point `l` from `from[l]`.
+#[inline(always)]
+fn gather_lanes<const L: usize>(out: &mut [f64], at: &[u32], from: [&[f64]; L]) {
+    for (o, &k) in out.chunks_exact_mut(L).zip(at) {
+        for (o, from) in o.iter_mut().zip(from) {
+            *o = from[k as usize];
+        }
+    }
+}
+
+/// [`unary`] at `L` points.
+#[inline(always)]
+fn unary_lanes<const L: usize>(out: &mut [f64], x: &[u32], v: &[f64], f: impl Fn(f64) -> f64) {
+    for (o, &x) in out.chunks_exact_mut(L).zip(x) {
+        let v = &v[x as usize * L..][..L];
+        for (o, &v) in o.iter_mut().zip(v) {
+            *o = f(v);
+        }
+    }
+}
+
+/// `f(a, b)` of two operands at `L` points.
+#[inline(always)]
+fn binary_lanes<const L: usize>(
+    out: &mut [f64],
+    x: &[u32],
+    v: &[f64],
+    f: impl Fn(f64, f64) -> f64,
+) {
+    for (o, x) in out.chunks_exact_mut(L).zip(x.chunks_exact(2)) {
+        let (a, b) = (&v[x[0] as usize * L..][..L], &v[x[1] as usize * L..][..L]);
+        for ((o, &a), &b) in o.iter_mut().zip(a).zip(b) {
+            *o = f(a, b);
+        }
+    }
+}
+
+/// [`add`] at `L` points.
+#[inline(always)]
+fn add_lanes<const K: usize, const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64]) {
+    for ((o, x), c) in out
+        .chunks_exact_mut(L)
+        .zip(x.chunks_exact(K))
+        .zip(c.chunks_exact(K + 1))
+    {
+        let mut acc = [c[0]; L];
+        for k in 0..K {
+            let v = &v[x[k] as usize * L..][..L];
+            for (acc, &v) in acc.iter_mut().zip(v) {
+                *acc += c[k + 1] * v;
+            }
+        }
+        o.copy_from_slice(&acc);
+    }
+}
+
+/// [`add_n`] at `L` points.
+fn add_n_lanes<const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64], k: usize) {
+    for ((o, x), c) in out
+        .chunks_exact_mut(L)
+        .zip(x.chunks_exact(k))
+        .zip(c.chunks_exact(k + 1))
+    {
+        let mut acc = [c[0]; L];
+        for (&x, &w) in x.iter().zip(&c[1..]) {
+            let v = &v[x as usize * L..][..L];
+            for (acc, &v) in acc.iter_mut().zip(v) {
+                *acc += w * v;
+            }
+        }
+        o.copy_from_slice(&acc);
+    }
+}
+
+/// [`mul`] at `L` points.
+#[inline(always)]
+fn mul_lanes<const K: usize, const L: usize>(out: &mut [f64], x: &[u32], v: &[f64]) {
+    for (o, x) in out.chunks_exact_mut(L).zip(x.chunks_exact(K)) {
+        let mut acc = [1.0; L];
+        for &x in x {
+            let v = &v[x as usize * L..][..L];
+            for (acc, &v) in acc.iter_mut().zip(v) {
+                *acc *= v;
+            }
+        }
+        o.copy_from_slice(&acc);
+    }
+}
+
+/// [`mul_n`] at `L` points.
+fn mul_n_lanes<const L: usize>(out: &mut [f64], x: &[u32], v: &[f64], k: usize) {
+    for (o, x) in out.chunks_exact_mut(L).zip(x.chunks_exact(k)) {
+        let mut acc = [1.0; L];
+        for &x in x {
+            let v = &v[x as usize * L..][..L];
+            for (acc, &v) in acc.iter_mut().zip(v) {
+                *acc *= v;
+            }
+        }
+        o.copy_from_slice(&acc);
+    }
+}
+
 /// The live nodes other than constants ordered by level, kind and tape
 /// order, as `(level, kind, node)`: two stable counting sorts (by kind,
 /// then by level) of the nodes in tape order, linear in their number.

@@ -525,16 +525,17 @@ impl<K: Collocation> Integrator<'_, K> {
             return false;
         };
         let size = st.size;
-        for (k, (&ck, lin)) in K::TABLEAU.c.iter().zip(&mut st.lin).enumerate() {
+        for k in 0..3 {
             let point = &mut w.ys[k * n..k * n + size];
             for ((p, &y), &z) in point.iter_mut().zip(&w.y).zip(&w.z[k * n..]) {
                 *p = y + z;
             }
-            if !self.sys.first_block_linearisation(t + ck * h, point, lin) {
-                return false;
-            }
         }
-        true
+        let c = &K::TABLEAU.c;
+        let points = [0, 1, 2].map(|k| &w.ys[k * n..k * n + size]);
+        let times = [0, 1, 2].map(|k| t + c[k] * h);
+        self.sys
+            .first_block_linearisations(times, points, &mut st.lin)
     }
 
     /// The sensitivities' stage increments by [`Direct`]'s exact solve,
