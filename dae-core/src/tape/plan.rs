@@ -349,10 +349,10 @@ impl Plan {
                                 o.fill(c);
                             }
                         }
-                        1 => add_lanes::<1, L>(out, x, c, done),
-                        2 => add_lanes::<2, L>(out, x, c, done),
-                        3 => add_lanes::<3, L>(out, x, c, done),
-                        UNROLLED => add_lanes::<UNROLLED, L>(out, x, c, done),
+                        1 => add_lanes::<L>(out, x, c, done, 1),
+                        2 => add_lanes::<L>(out, x, c, done, 2),
+                        3 => add_lanes::<L>(out, x, c, done, 3),
+                        UNROLLED => add_lanes::<L>(out, x, c, done, UNROLLED),
                         _ => add_n_lanes::<L>(out, x, c, done, k),
                     }
                 }
@@ -361,8 +361,8 @@ impl Plan {
                     let x = args(k);
                     match k {
                         0 => out.fill(1.0),
-                        2 => mul_lanes::<2, L>(out, x, done),
-                        3 => mul_lanes::<3, L>(out, x, done),
+                        2 => mul_lanes::<L>(out, x, done, 2),
+                        3 => mul_lanes::<L>(out, x, done, 3),
                         _ => mul_n_lanes::<L>(out, x, done, k),
                     }
                 }
@@ -430,27 +430,10 @@ fn binary_lanes<const L: usize>(
     }
 }
 
-/// [`add`] at `L` points.
+/// [`add`] at `L` points: sums of `k` terms (a constant where inlined
+/// with one).
 #[inline(always)]
-fn add_lanes<const K: usize, const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64]) {
-    for ((o, x), c) in out
-        .chunks_exact_mut(L)
-        .zip(x.chunks_exact(K))
-        .zip(c.chunks_exact(K + 1))
-    {
-        let mut acc = [c[0]; L];
-        for k in 0..K {
-            let v = &v[x[k] as usize * L..][..L];
-            for (acc, &v) in acc.iter_mut().zip(v) {
-                *acc += c[k + 1] * v;
-            }
-        }
-        o.copy_from_slice(&acc);
-    }
-}
-
-/// [`add_n`] at `L` points.
-fn add_n_lanes<const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64], k: usize) {
+fn add_lanes<const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64], k: usize) {
     for ((o, x), c) in out
         .chunks_exact_mut(L)
         .zip(x.chunks_exact(k))
@@ -467,10 +450,16 @@ fn add_n_lanes<const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64],
     }
 }
 
-/// [`mul`] at `L` points.
+/// [`add_lanes`] for sums of more terms than [`UNROLLED`] (not inlined).
+fn add_n_lanes<const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64], k: usize) {
+    add_lanes::<L>(out, x, c, v, k)
+}
+
+/// [`mul`] at `L` points: products of `k` factors (a constant where
+/// inlined with one).
 #[inline(always)]
-fn mul_lanes<const K: usize, const L: usize>(out: &mut [f64], x: &[u32], v: &[f64]) {
-    for (o, x) in out.chunks_exact_mut(L).zip(x.chunks_exact(K)) {
+fn mul_lanes<const L: usize>(out: &mut [f64], x: &[u32], v: &[f64], k: usize) {
+    for (o, x) in out.chunks_exact_mut(L).zip(x.chunks_exact(k)) {
         let mut acc = [1.0; L];
         for &x in x {
             let v = &v[x as usize * L..][..L];
@@ -482,18 +471,9 @@ fn mul_lanes<const K: usize, const L: usize>(out: &mut [f64], x: &[u32], v: &[f6
     }
 }
 
-/// [`mul_n`] at `L` points.
+/// [`mul_lanes`] for products of other lengths (not inlined).
 fn mul_n_lanes<const L: usize>(out: &mut [f64], x: &[u32], v: &[f64], k: usize) {
-    for (o, x) in out.chunks_exact_mut(L).zip(x.chunks_exact(k)) {
-        let mut acc = [1.0; L];
-        for &x in x {
-            let v = &v[x as usize * L..][..L];
-            for (acc, &v) in acc.iter_mut().zip(v) {
-                *acc *= v;
-            }
-        }
-        o.copy_from_slice(&acc);
-    }
+    mul_lanes::<L>(out, x, v, k)
 }
 
 /// The live nodes other than constants ordered by level, kind and tape
