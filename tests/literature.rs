@@ -163,6 +163,43 @@ fn bdf_on_the_index2_circuit_as_written_is_accurate() {
     accurate_at_every_tolerance("mna_cv_loop", "bdf", "ori2");
 }
 
+/// Jay's index-2 problem as written (`ori2`) with `bdf`. DASSL's estimate
+/// leaves `z` out and misses the part of `y`'s error that `z` carries
+/// back through the constraint; the run stayed at order one from the
+/// start, the step near `√tol` (56 … 24 249 steps at 1e-4 … 1e-10, scd
+/// 2.3 … 4.8; SUNDIALS IDA alike, 22 014 steps at 1e-10). Checked against
+/// the propagated estimate at the ratio of a model as written
+/// (`multistep::propagate::MISSED_INDEX2_AS_WRITTEN`), every run switches
+/// to it: measured 46 … 230 steps, accurate at 1e-4, 1e-5 and 1e-10 (scd
+/// 2.43, 3.37, 8.26), 0.3 … 0.6 digits short in `z` at 1e-6 … 1e-9
+/// (EXTREMES.md "jay15").
+#[test]
+fn bdf_on_jays_index2_problem_as_written_does_not_crawl() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/literature/jay_index2.toml");
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let inputs = inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
+    for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10] {
+        let record =
+            run(&inputs.spec(&scene, "bdf", "ori2", tol)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(record.status, "ok", "{tol:e}: {:?}", record.error);
+        let steps = record.stats.steps;
+        assert!(steps <= 250, "{tol:e}: {steps} steps");
+        assert!(
+            record.stats.propagated_from.is_some_and(|s| s < steps),
+            "{tol:e}: {:?}",
+            record.stats
+        );
+        if [1e-4, 1e-5, 1e-10].contains(&tol) {
+            let need = -tol.log10() - 2.0;
+            let scd = record.scd;
+            assert!(
+                scd.is_some_and(|d| d >= need),
+                "{tol:e}: scd {scd:?} < {need}"
+            );
+        }
+    }
+}
+
 /// `solver(formulation)` on `scenes/literature/NAME.toml` at every tolerance
 /// of the map: it reaches the end with scd ≥ −log10(tol) − 2.
 fn accurate_at_every_tolerance(name: &str, solver: &str, formulation: &str) {
@@ -210,8 +247,10 @@ fn gauss_between_its_steps_is_as_accurate_as_at_them() {
 /// run crawl (12 080 steps at 1e-8, the step limit at 1e-10). Out of the
 /// estimate (DASPK): the circuit accurate at 1e-4 … 1e-6 (measured 3.05,
 /// 3.84, 4.34) and both runs short at every tolerance (measured 42 … 188
-/// and 68 … 473 steps; EXTREMES.md "ms14"). Jay at 1e-7 still drifts
-/// (2 039 steps), not pinned.
+/// and 68 … 473 steps; EXTREMES.md "ms14"). Jay at 1e-7 drifted (2 039
+/// steps, scd 2.54) until the check against the propagated estimate took
+/// the ratio of a model as written (EXTREMES.md "jay15"): 89 steps, and
+/// 1e-6, 1e-7 accurate (measured 4.11, 5.08).
 #[test]
 fn mebdf_on_index2_forms_as_written_leaves_the_algebraic_unknown_out() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/literature");
@@ -221,7 +260,7 @@ fn mebdf_on_index2_forms_as_written_leaves_the_algebraic_unknown_out() {
             &[1e-4, 1e-5, 1e-6, 1e-8, 1e-10][..],
             400,
         ),
-        ("jay_index2.toml", &[1e-6, 1e-8, 1e-9, 1e-10][..], 1_000),
+        ("jay_index2.toml", &[1e-6, 1e-7, 1e-8, 1e-9, 1e-10][..], 200),
     ];
     for (file, tols, max_steps) in cases {
         let scene = Scene::load(dir.join(file)).unwrap_or_else(|e| panic!("{e}"));
@@ -232,7 +271,11 @@ fn mebdf_on_index2_forms_as_written_leaves_the_algebraic_unknown_out() {
             assert_eq!(record.status, "ok", "{file} {tol:e}: {:?}", record.error);
             let steps = record.stats.steps;
             assert!(steps <= max_steps, "{file} {tol:e}: {steps} steps");
-            if file == "mna_cv_loop.toml" && tol >= 1e-6 {
+            let accurate = match file {
+                "mna_cv_loop.toml" => tol >= 1e-6,
+                _ => tol >= 1e-7,
+            };
+            if accurate {
                 let need = -tol.log10() - 2.0;
                 let scd = record.scd;
                 assert!(
