@@ -404,6 +404,29 @@ impl InterpretedSystem {
         })
     }
 
+    /// `∂f/∂y` at `L` points in one pass of its tape, its value `v` at
+    /// point `l` into `out[l][to[v]]` ([`DaeSystem::rhs_jacobian_scatter`]).
+    fn scatter_jacobian<const L: usize>(
+        &self,
+        t: [f64; L],
+        y: [&[f64]; L],
+        to: &[usize],
+        mut out: [&mut [f64]; L],
+    ) {
+        let at = &self.structure().rhs_jacobian;
+        let inputs: [Inputs<'_>; L] = std::array::from_fn(|l| self.inputs(t[l], y[l], &[], &[]));
+        let mut s = self.scratch.borrow_mut();
+        self.c
+            .rhs_jacobian
+            .tape
+            .eval_outputs_lanes(&inputs, &mut s, |l, k, v| {
+                let at = to[at[k]];
+                if at != crate::system::SKIP {
+                    out[l][at] = v;
+                }
+            });
+    }
+
     /// The outputs of `sp` into `values` at positions `at`.
     fn values(&self, sp: &Sparse, at: &[usize], inputs: Inputs<'_>, values: &mut [f64]) {
         let mut s = self.scratch.borrow_mut();
@@ -528,38 +551,16 @@ impl DaeSystem for InterpretedSystem {
         self.values(&self.c.rhs_jacobian, &s.rhs_jacobian, inputs, values)
     }
     fn rhs_jacobian_scatter(&self, t: f64, y: &[f64], to: &[usize], out: &mut [f64]) {
-        let at = &self.structure().rhs_jacobian;
-        let inputs = self.inputs(t, y, &[], &[]);
-        let mut s = self.scratch.borrow_mut();
-        self.c
-            .rhs_jacobian
-            .tape
-            .eval_outputs(&inputs, &mut s, |k, v| {
-                let at = to[at[k]];
-                if at != crate::system::SKIP {
-                    out[at] = v;
-                }
-            });
+        self.scatter_jacobian([t], [y], to, [out])
     }
     fn rhs_jacobian_scatter3(
         &self,
         t: [f64; 3],
         y: [&[f64]; 3],
         to: &[usize],
-        mut out: [&mut [f64]; 3],
+        out: [&mut [f64]; 3],
     ) {
-        let at = &self.structure().rhs_jacobian;
-        let inputs = [0, 1, 2].map(|l| self.inputs(t[l], y[l], &[], &[]));
-        let mut s = self.scratch.borrow_mut();
-        self.c
-            .rhs_jacobian
-            .tape
-            .eval_outputs_lanes(&inputs, &mut s, |l, k, v| {
-                let at = to[at[k]];
-                if at != crate::system::SKIP {
-                    out[l][at] = v;
-                }
-            });
+        self.scatter_jacobian(t, y, to, out)
     }
     fn leading_values(&self, t: f64, y: &[f64], pattern: &Pattern, values: &mut [f64]) {
         let s = self.structure();

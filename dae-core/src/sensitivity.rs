@@ -639,11 +639,12 @@ impl SensitivitySystem {
         self.param_cols.len()
     }
 
-    /// The augmented point `[y, p]` of the state's `y` into the scratch
-    /// (the parameters' columns hold their values from the start).
-    fn lift(&self, s: &mut Scratch, y: &[f64]) {
+    /// The augmented point `[y, p]` of the state's `y` into `point`, a
+    /// scratch point (the parameters' columns hold their values from the
+    /// start).
+    fn lift(&self, point: &mut [f64], y: &[f64]) {
         for (j, &c) in self.var_cols.iter().enumerate() {
-            s.point[c] = y[j];
+            point[c] = y[j];
         }
     }
 
@@ -725,7 +726,7 @@ impl DaeSystem for SensitivitySystem {
         j.fill(0.0);
         // The diagonal blocks: the augmented Jacobian's state rows and
         // columns (the one the sensitivity rows are formed with).
-        self.lift(s, &y[..n]);
+        self.lift(&mut s.point, &y[..n]);
         self.augmented.rhs_jacobian(t, &s.point, &mut s.jac);
         for (r, &ar) in self.row_of.iter().enumerate() {
             for (c, &ac) in self.var_cols.iter().enumerate() {
@@ -768,7 +769,7 @@ impl DaeSystem for SensitivitySystem {
         let k = self.state.info().constraints.len();
         self.state.constraints(t, &y[..n], &mut g[..k]);
         let s = &mut *self.scratch.borrow_mut();
-        self.lift(s, &y[..n]);
+        self.lift(&mut s.point, &y[..n]);
         self.augmented
             .constraints_jacobian(t, &s.point, &mut s.cjac);
         for (i, &pc) in self.param_cols.iter().enumerate() {
@@ -840,7 +841,7 @@ impl DaeSystem for SensitivitySystem {
             return false;
         }
         let s = &mut *self.scratch.borrow_mut();
-        self.lift(s, y);
+        self.lift(&mut s.point, y);
         if let Some(lin) = &self.lin {
             let out = out.as_mut_slice();
             out.fill(0.0);
@@ -885,9 +886,7 @@ impl DaeSystem for SensitivitySystem {
         };
         let s = &mut *self.scratch.borrow_mut();
         for (point, y) in s.points.iter_mut().zip(y) {
-            for (j, &c) in self.var_cols.iter().enumerate() {
-                point[c] = y[j];
-            }
+            self.lift(point, y);
         }
         let out = out.each_mut().map(|out| {
             let out = out.as_mut_slice();

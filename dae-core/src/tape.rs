@@ -444,21 +444,7 @@ impl Tape {
         scratch: &mut Vec<f64>,
         mut put: impl FnMut(usize, f64),
     ) {
-        let plan = self.plan.get_or_init(|| plan::Plan::new(self));
-        if !plan.fits(self) {
-            self.eval(inputs, scratch);
-            for (k, &o) in self.outputs.iter().enumerate() {
-                put(k, scratch[o as usize]);
-            }
-            return;
-        }
-        if scratch.len() < plan.slots() {
-            scratch.resize(plan.slots(), 0.0);
-        }
-        plan.eval(inputs, scratch);
-        for (k, &o) in plan.outputs().iter().enumerate() {
-            put(k, scratch[o as usize]);
-        }
+        self.eval_outputs_lanes(std::array::from_ref(inputs), scratch, |_, k, v| put(k, v))
     }
 
     /// [`Tape::eval_outputs`] at `L` points at once: output `k` at point
@@ -490,7 +476,10 @@ impl Tape {
         let plan = self.plan.get_or_init(|| plan::Plan::new(self));
         if !plan.fits(self) {
             for (l, inputs) in inputs.iter().enumerate() {
-                self.eval_outputs(inputs, scratch, |k, v| put(l, k, v));
+                self.eval(inputs, scratch);
+                for (k, &o) in self.outputs.iter().enumerate() {
+                    put(l, k, scratch[o as usize]);
+                }
             }
             return;
         }

@@ -213,100 +213,11 @@ impl Plan {
         &self.outputs
     }
 
-    /// Evaluate every planned node into `s` (at least [`Plan::slots`] long).
-    pub(super) fn eval(&self, inputs: &Inputs<'_>, s: &mut [f64]) {
-        let mut at = self.consts.len();
-        s[..at].copy_from_slice(&self.consts);
-        let (mut a, mut r) = (0, 0);
-        for run in &self.runs {
-            let len = run.len as usize;
-            let (done, rest) = s.split_at_mut(at);
-            let out = &mut rest[..len];
-            at += len;
-            // Operands of one node, for the kinds with a fixed count.
-            let mut args = |per: usize| {
-                let x = &self.args[a..a + per * len];
-                a += per * len;
-                x
-            };
-            match run.kind {
-                Kind::Var => gather(out, args(1), inputs.y),
-                Kind::Der => gather(out, args(1), inputs.yp),
-                Kind::Param => gather(out, args(1), inputs.p),
-                Kind::Dir => gather(out, args(1), inputs.z),
-                Kind::Time => {
-                    let _ = args(1);
-                    out.fill(inputs.t);
-                }
-                Kind::Add(k) => {
-                    let k = k as usize;
-                    let c = &self.reals[r..r + (k + 1) * len];
-                    r += (k + 1) * len;
-                    let x = args(k);
-                    match k {
-                        0 => out.copy_from_slice(c),
-                        1 => add::<1>(out, x, c, done),
-                        2 => add::<2>(out, x, c, done),
-                        3 => add::<3>(out, x, c, done),
-                        UNROLLED => add::<UNROLLED>(out, x, c, done),
-                        _ => add_n(out, x, c, done, k),
-                    }
-                }
-                Kind::Mul(k) => {
-                    let k = k as usize;
-                    let x = args(k);
-                    match k {
-                        0 => out.fill(1.0),
-                        2 => mul::<2>(out, x, done),
-                        3 => mul::<3>(out, x, done),
-                        UNROLLED => mul::<UNROLLED>(out, x, done),
-                        _ => mul_n(out, x, done, k),
-                    }
-                }
-                Kind::Div => {
-                    for (o, x) in out.iter_mut().zip(args(2).chunks_exact(2)) {
-                        *o = done[x[0] as usize] / done[x[1] as usize];
-                    }
-                }
-                Kind::Powi(2) => {
-                    // `powi(2)` is one multiplication, `x · x`, exactly.
-                    for (o, &x) in out.iter_mut().zip(args(1)) {
-                        let v = done[x as usize];
-                        *o = v * v;
-                    }
-                }
-                Kind::Powi(e) => unary(out, args(1), done, |v| v.powi(e)),
-                Kind::Sqrt => unary(out, args(1), done, f64::sqrt),
-                Kind::Powf => {
-                    let c = &self.reals[r..r + len];
-                    r += len;
-                    for ((o, &x), &c) in out.iter_mut().zip(args(1)).zip(c) {
-                        *o = done[x as usize].powf(c);
-                    }
-                }
-                Kind::Pow => {
-                    for (o, x) in out.iter_mut().zip(args(2).chunks_exact(2)) {
-                        *o = done[x[0] as usize].powf(done[x[1] as usize]);
-                    }
-                }
-                Kind::Func(f) => match f {
-                    Func::Sin => unary(out, args(1), done, f64::sin),
-                    Func::Cos => unary(out, args(1), done, f64::cos),
-                    Func::Tan => unary(out, args(1), done, f64::tan),
-                    Func::Exp => unary(out, args(1), done, f64::exp),
-                    Func::Ln => unary(out, args(1), done, f64::ln),
-                },
-            }
-        }
-    }
-}
-
-impl Plan {
-    /// [`Plan::eval`] at `L` points at once: slot `i` of point `l` in
+    /// Evaluate every planned node at `L` points at once: slot `i` of point `l` in
     /// `s[i L + l]` (`s` at least `L` [`Plan::slots`] long). Each run is
     /// dispatched, and each node's operand slots read, once for the `L`
     /// points; each point's value is computed by the same operations in the
-    /// same order as [`Plan::eval`] computes it, bit for bit. A staggered
+    /// same order as [`Tape::eval`] computes it, bit for bit. A staggered
     /// corrector's three stage-point Jacobians (BENCHMARKS.md §21) cost
     /// about half of three evaluations.
     pub(super) fn eval_lanes<const L: usize>(&self, inputs: &[Inputs<'_>; L], s: &mut [f64]) {
@@ -363,6 +274,7 @@ impl Plan {
                         0 => out.fill(1.0),
                         2 => mul_lanes::<L>(out, x, done, 2),
                         3 => mul_lanes::<L>(out, x, done, 3),
+                        UNROLLED => mul_lanes::<L>(out, x, done, UNROLLED),
                         _ => mul_n_lanes::<L>(out, x, done, k),
                     }
                 }
@@ -393,7 +305,7 @@ impl Plan {
     }
 }
 
-/// [`gather`] at `L` points, point `l` from `from[l]`.
+/// `out[j L + l] = from[l][at[j]]`: the inputs at `L` points.
 #[inline(always)]
 fn gather_lanes<const L: usize>(out: &mut [f64], at: &[u32], from: [&[f64]; L]) {
     for (o, &k) in out.chunks_exact_mut(L).zip(at) {
@@ -403,7 +315,7 @@ fn gather_lanes<const L: usize>(out: &mut [f64], at: &[u32], from: [&[f64]; L]) 
     }
 }
 
-/// [`unary`] at `L` points.
+/// `out[j L + l] = f(v[x[j] L + l])`.
 #[inline(always)]
 fn unary_lanes<const L: usize>(out: &mut [f64], x: &[u32], v: &[f64], f: impl Fn(f64) -> f64) {
     for (o, &x) in out.chunks_exact_mut(L).zip(x) {
@@ -430,8 +342,9 @@ fn binary_lanes<const L: usize>(
     }
 }
 
-/// [`add`] at `L` points: sums of `k` terms (a constant where inlined
-/// with one).
+/// Sums of `k` terms, `c_0 + c_1 x_1 + …`, at `L` points, added left to
+/// right as [`Tape::eval`] adds them (`k` a constant where inlined with
+/// one).
 #[inline(always)]
 fn add_lanes<const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64], k: usize) {
     for ((o, x), c) in out
@@ -455,8 +368,9 @@ fn add_n_lanes<const L: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64],
     add_lanes::<L>(out, x, c, v, k)
 }
 
-/// [`mul`] at `L` points: products of `k` factors (a constant where
-/// inlined with one).
+/// Products of `k` factors at `L` points, multiplied left to right from 1
+/// as [`Tape::eval`] multiplies them (`k` a constant where inlined with
+/// one).
 #[inline(always)]
 fn mul_lanes<const L: usize>(out: &mut [f64], x: &[u32], v: &[f64], k: usize) {
     for (o, x) in out.chunks_exact_mut(L).zip(x.chunks_exact(k)) {
@@ -519,71 +433,4 @@ fn counting_sort<T: Copy>(items: &[T], keys: usize, key: impl Fn(&T) -> usize) -
         start[k] += 1;
     }
     out
-}
-
-/// `out[j] = from[at[j]]`.
-#[inline(always)]
-fn gather(out: &mut [f64], at: &[u32], from: &[f64]) {
-    for (o, &k) in out.iter_mut().zip(at) {
-        *o = from[k as usize];
-    }
-}
-
-/// `out[j] = f(v[x[j]])`.
-#[inline(always)]
-fn unary(out: &mut [f64], x: &[u32], v: &[f64], f: impl Fn(f64) -> f64) {
-    for (o, &x) in out.iter_mut().zip(x) {
-        *o = f(v[x as usize]);
-    }
-}
-
-/// Sums of `K` terms: `c_0 + c_1 x_1 + …`, added left to right as
-/// [`Tape::eval`] adds them.
-#[inline(always)]
-fn add<const K: usize>(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64]) {
-    for ((o, x), c) in out
-        .iter_mut()
-        .zip(x.chunks_exact(K))
-        .zip(c.chunks_exact(K + 1))
-    {
-        let mut acc = c[0];
-        for k in 0..K {
-            acc += c[k + 1] * v[x[k] as usize];
-        }
-        *o = acc;
-    }
-}
-
-/// [`add`] for `k` terms not known when compiling.
-fn add_n(out: &mut [f64], x: &[u32], c: &[f64], v: &[f64], k: usize) {
-    for ((o, x), c) in out
-        .iter_mut()
-        .zip(x.chunks_exact(k))
-        .zip(c.chunks_exact(k + 1))
-    {
-        *o = x
-            .iter()
-            .zip(&c[1..])
-            .fold(c[0], |acc, (&x, &w)| acc + w * v[x as usize]);
-    }
-}
-
-/// Products of `K` factors, multiplied left to right from 1 as
-/// [`Tape::eval`] multiplies them.
-#[inline(always)]
-fn mul<const K: usize>(out: &mut [f64], x: &[u32], v: &[f64]) {
-    for (o, x) in out.iter_mut().zip(x.chunks_exact(K)) {
-        let mut acc = 1.0;
-        for &x in x {
-            acc *= v[x as usize];
-        }
-        *o = acc;
-    }
-}
-
-/// [`mul`] for `k` factors not known when compiling.
-fn mul_n(out: &mut [f64], x: &[u32], v: &[f64], k: usize) {
-    for (o, x) in out.iter_mut().zip(x.chunks_exact(k)) {
-        *o = x.iter().fold(1.0, |acc, &x| acc * v[x as usize]);
-    }
 }

@@ -70,33 +70,30 @@ pub(crate) struct PatternLu {
 struct Record {
     /// Each column's elimination step, in order.
     steps: Vec<Step>,
-    /// Rows below the pivots (not yet pivoted, structural non-zeros in
-    /// the pivot's column), step by step.
-    lower: Vec<usize>,
-    /// Rows of the earlier pivots with a structural non-zero in each
-    /// column (the entries of `U` above its diagonal), step by step.
-    upper: Vec<usize>,
     /// Every position the elimination reads or writes (the pattern and
     /// its fill): the entries to clear before the next matrix is written.
     touched: Vec<usize>,
-    /// The replay's operations as positions in the matrix, step by step
-    /// ([`Step::flat`]): the multipliers `l_ik` of each column, then the
-    /// updates `(a_ij, l_ik, u_kj)` in the order the record made them.
-    /// One flat loop over them costs about half the nested loops' index
-    /// arithmetic on the pendulum's 15 × 15 stage system, where most
-    /// pivot rows reach two or three columns (BENCHMARKS.md §21).
-    multipliers: Vec<u16>,
+    /// The multipliers `l_ik` of each column, step by step
+    /// ([`Step::lower`]): their positions, which the replay scales, and
+    /// the forward substitution's updates `x_row −= a_at x_from` in order
+    /// ([`Solve`]).
+    lower: Vec<Solve>,
+    /// The replay's updates `(a_ij, l_ik, u_kj)` as positions in the
+    /// matrix, in the order the record made them, step by step
+    /// ([`Step::flat`]). One flat loop over them costs about half the
+    /// nested loops' index arithmetic on the pendulum's 15 × 15 stage
+    /// system, where most pivot rows reach two or three columns
+    /// (BENCHMARKS.md §21).
     flat: Vec<[u16; 3]>,
-    /// The solve's forward substitution, `x_row −= a_at x_from` in order
-    /// ([`Solve`]), and its back substitution's updates `(a_at, row)`,
-    /// step by step ([`Step::back`]).
-    forward: Vec<Solve>,
+    /// The back substitution's updates `(a_at, row)` (the entries of `U`
+    /// above its diagonal), step by step ([`Step::back`]).
     back: Vec<(u16, u8)>,
     /// Updates `a_ij −= l_ik u_kj` of one elimination.
     updates: usize,
 }
 
-/// One update `x_row −= a_at x_from` of the forward substitution.
+/// A multiplier at `at` (row `row`, pivot row `from`): one update
+/// `x_row −= a_at x_from` of the forward substitution.
 #[derive(Clone, Copy)]
 struct Solve {
     at: u16,
@@ -110,12 +107,9 @@ struct Step {
     column: usize,
     /// The pivot's row.
     pivot: usize,
-    /// Its rows in [`Record::lower`] and in [`Record::upper`].
+    /// Its multipliers in [`Record::lower`] and its updates in
+    /// [`Record::flat`].
     lower: std::ops::Range<usize>,
-    upper: std::ops::Range<usize>,
-    /// Its multipliers' positions in [`Record::multipliers`] and its
-    /// updates in [`Record::flat`].
-    multipliers: std::ops::Range<usize>,
     flat: std::ops::Range<usize>,
     /// The pivot's position, and its row of the back substitution's
     /// updates in [`Record::back`].
@@ -194,7 +188,7 @@ impl PatternLu {
         let x = &mut *self.by_rows;
         // L y = P b, in place by rows (in `x`).
         x[..n].copy_from_slice(b);
-        for op in &rec.forward {
+        for op in &rec.lower {
             x[usize::from(op.row)] -= a[usize::from(op.at)] * x[usize::from(op.from)];
         }
         // U x = y, column by column from the last.
@@ -221,8 +215,8 @@ fn replay(rec: &Record, a: &mut [f64; STORE]) -> bool {
         // (checked after scaling: a refused replay is written afresh).
         let inv = 1.0 / pivot;
         let mut largest = 0.0f64;
-        for &at in &rec.multipliers[step.multipliers.clone()] {
-            let v = &mut a[usize::from(at)];
+        for op in &rec.lower[step.lower.clone()] {
+            let v = &mut a[usize::from(op.at)];
             if v.abs() > largest {
                 largest = v.abs();
             }
@@ -247,11 +241,8 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
     let mut rec = Record {
         steps: Vec::with_capacity(n),
         lower: Vec::new(),
-        upper: Vec::new(),
         touched: Vec::new(),
-        multipliers: Vec::new(),
         flat: Vec::new(),
-        forward: Vec::new(),
         back: Vec::new(),
         updates: 0,
     };
@@ -289,10 +280,15 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
             right.push(j * n);
             rec.updates += lower.len();
         }
-        let (mult_from, flat_from) = (rec.multipliers.len(), rec.flat.len());
-        // Positions below `CAP` (at most 45 × 45 entries) fit in `u16`.
+        let (lower_from, flat_from) = (rec.lower.len(), rec.flat.len());
+        // Positions below `CAP` (at most 45 × 45 entries) fit in `u16`,
+        // rows below `ROWS_CAP` in `u8`.
         let at = |pos: usize| pos as u16;
-        rec.multipliers.extend(lower.iter().map(|&i| at(ck + i)));
+        rec.lower.extend(lower.iter().map(|&i| Solve {
+            at: at(ck + i),
+            row: i as u8,
+            from: p as u8,
+        }));
         for &off in &right {
             rec.flat.extend(
                 lower
@@ -300,14 +296,10 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
                     .map(|&i| [at(off + i), at(ck + i), at(off + p)]),
             );
         }
-        let lower_from = rec.lower.len();
-        rec.lower.extend(lower);
         rec.steps.push(Step {
             column: ck,
             pivot: p,
             lower: lower_from..rec.lower.len(),
-            upper: 0..0,
-            multipliers: mult_from..rec.multipliers.len(),
             flat: flat_from..rec.flat.len(),
             diag: at(ck + p),
             back: 0..0,
@@ -316,28 +308,14 @@ fn record(a: &mut [f64], pattern: &[bool], n: usize) -> Result<Record, Singular>
     // U's entries above the diagonal, column by column: the earlier pivot
     // rows with a non-zero in the column (fill included).
     for k in 0..n {
-        let from = rec.upper.len();
+        let (ck, from) = (k * n, rec.back.len());
         for m in 0..k {
             let r = rec.steps[m].pivot;
-            if nz[k * n + r] {
-                rec.upper.push(r);
+            if nz[ck + r] {
+                rec.back.push(((ck + r) as u16, r as u8));
             }
         }
-        rec.steps[k].upper = from..rec.upper.len();
-    }
-    // The substitutions' updates as positions (below `CAP`: `u16`) and
-    // rows (below `ROWS_CAP`: `u8`).
-    for step in &mut rec.steps {
-        let (ck, p) = (step.column, step.pivot as u8);
-        for &i in &rec.lower[step.lower.clone()] {
-            let (at, row) = ((ck + i) as u16, i as u8);
-            rec.forward.push(Solve { at, row, from: p });
-        }
-        let from = rec.back.len();
-        for &r in &rec.upper[step.upper.clone()] {
-            rec.back.push(((ck + r) as u16, r as u8));
-        }
-        step.back = from..rec.back.len();
+        rec.steps[k].back = from..rec.back.len();
     }
     rec.touched = (0..n * n).filter(|&at| nz[at]).collect();
     Ok(rec)
